@@ -1,0 +1,37 @@
+// Subcommand registry: each app/cmd_*.cpp registers one subcommand with a static Command.
+#pragma once
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace evflow::app {
+
+using Args = std::vector<std::string>;
+
+struct CommandInfo {
+  std::string summary;
+  std::function<int(const Args&)> run;
+};
+
+std::map<std::string, CommandInfo>& commands();
+
+struct Command {
+  Command(const std::string& name, const std::string& summary, std::function<int(const Args&)> run) {
+    commands()[name] = {summary, std::move(run)};
+  }
+};
+
+// Small argument helpers: "--key value" and "--flag".
+struct ArgParser {
+  explicit ArgParser(const Args& a) : args(a) {}
+  Args args;
+  bool flag(const std::string& name);
+  std::string value(const std::string& name, const std::string& def = "");
+  long long integer(const std::string& name, long long def);
+  double number(const std::string& name, double def);
+  std::vector<std::string> positional() const;  // what is left after flags and values were taken
+  void reject_unknown() const;                  // throws on any leftover --option
+};
+
+}  // namespace evflow::app

@@ -1,0 +1,88 @@
+// evflow: the command-line program. `evflow --help` lists the subcommands.
+#include <cstdio>
+#include <exception>
+#include <stdexcept>
+
+#include "cli.h"
+
+namespace evflow::app {
+
+std::map<std::string, CommandInfo>& commands() {
+  static std::map<std::string, CommandInfo> m;
+  return m;
+}
+
+bool ArgParser::flag(const std::string& name) {
+  for (size_t i = 0; i < args.size(); ++i)
+    if (args[i] == name) { args.erase(args.begin() + i); return true; }
+  return false;
+}
+
+std::string ArgParser::value(const std::string& name, const std::string& def) {
+  for (size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == name) {
+      if (i + 1 >= args.size()) throw std::invalid_argument(name + " needs a value");
+      std::string v = args[i + 1];
+      args.erase(args.begin() + i, args.begin() + i + 2);
+      return v;
+    }
+    if (args[i].rfind(name + "=", 0) == 0) {
+      std::string v = args[i].substr(name.size() + 1);
+      args.erase(args.begin() + i);
+      return v;
+    }
+  }
+  return def;
+}
+
+long long ArgParser::integer(const std::string& name, long long def) {
+  std::string v = value(name);
+  if (v.empty()) return def;
+  try { size_t pos; long long r = std::stoll(v, &pos); if (pos != v.size()) throw 1; return r; }
+  catch (...) { throw std::invalid_argument(name + " expects an integer, got '" + v + "'"); }
+}
+
+double ArgParser::number(const std::string& name, double def) {
+  std::string v = value(name);
+  if (v.empty()) return def;
+  try { size_t pos; double r = std::stod(v, &pos); if (pos != v.size()) throw 1; return r; }
+  catch (...) { throw std::invalid_argument(name + " expects a number, got '" + v + "'"); }
+}
+
+std::vector<std::string> ArgParser::positional() const {
+  std::vector<std::string> out;
+  for (auto& a : args) if (a.rfind("--", 0) != 0) out.push_back(a);
+  return out;
+}
+
+void ArgParser::reject_unknown() const {
+  for (auto& a : args) if (a.rfind("--", 0) == 0) throw std::invalid_argument("unknown option " + a);
+}
+
+}  // namespace evflow::app
+
+static void usage() {
+  std::printf("evflow — sharp 3D Gaussian splats from motion-blurred images and events\n\n"
+              "usage: evflow <command> [options]   (evflow <command> --help for its options)\n\ncommands:\n");
+  for (auto& [name, info] : evflow::app::commands()) std::printf("  %-10s %s\n", name.c_str(), info.summary.c_str());
+}
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
+    usage();
+    return argc < 2 ? 2 : 0;
+  }
+  auto& cmds = evflow::app::commands();
+  auto it = cmds.find(argv[1]);
+  if (it == cmds.end()) {
+    std::fprintf(stderr, "evflow: unknown command '%s'\n\n", argv[1]);
+    usage();
+    return 2;
+  }
+  try {
+    return it->second.run(evflow::app::Args(argv + 2, argv + argc));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "evflow %s: error: %s\n", argv[1], e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,144 @@
+#include "gpu/buffer.h"
+
+#include <cstring>
+#include <utility>
+
+namespace evflow::gpu {
+
+Buffer::Buffer(Context& ctx, uint64_t bytes, std::string name) : ctx_(&ctx), name_(std::move(name)) { allocate(bytes); }
+
+Buffer::~Buffer() { release(); }
+
+Buffer::Buffer(Buffer&& o) noexcept { *this = std::move(o); }
+
+Buffer& Buffer::operator=(Buffer&& o) noexcept {
+  if (this != &o) {
+    release();
+    ctx_ = o.ctx_;
+    name_ = std::move(o.name_);
+    size_ = o.size_;
+    buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
+    memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
+    mapped_ = std::exchange(o.mapped_, nullptr);
+    o.size_ = 0;
+  }
+  return *this;
+}
+
+void Buffer::release() {
+  if (!ctx_) return;
+  if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
+  if (memory_) vkFreeMemory(ctx_->device(), memory_, nullptr);
+  buffer_ = VK_NULL_HANDLE;
+  memory_ = VK_NULL_HANDLE;
+  mapped_ = nullptr;
+  size_ = 0;
+}
+
+void Buffer::allocate(uint64_t bytes) {
+  bytes = std::max<uint64_t>(16, (bytes + 15) & ~uint64_t(15));
+  if (bytes > ctx_->caps().max_allocation_size)
+    throw Error("buffer '" + name_ + "' needs " + std::to_string(bytes) + " bytes, above this device's largest allocation (" +
+                std::to_string(ctx_->caps().max_allocation_size) + " bytes)");
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = bytes;
+  bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  EVF_VK(vkCreateBuffer(ctx_->device(), &bci, nullptr, &buffer_));
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(ctx_->device(), buffer_, &req);
+  VkMemoryPropertyFlags required = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+  VkMemoryPropertyFlags preferred = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+  if (ctx_->caps().unified_memory) {
+    required = preferred = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    preferred |= VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+  }
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex = ctx_->memory_type(req.memoryTypeBits, required, preferred);
+  VkResult r = vkAllocateMemory(ctx_->device(), &mai, nullptr, &memory_);
+  if (r != VK_SUCCESS)
+    throw Error("out of device memory allocating buffer '" + name_ + "' of " + std::to_string(bytes) + " bytes");
+  EVF_VK(vkBindBufferMemory(ctx_->device(), buffer_, memory_, 0));
+  size_ = bytes;
+  if (ctx_->caps().unified_memory) EVF_VK(vkMapMemory(ctx_->device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+  if (ctx_->options().poison) {
+    if (mapped_) {
+      std::memset(mapped_, 0xFF, size_);
+    } else {
+      std::vector<uint8_t> p(size_, 0xFF);
+      staged_copy(true, p.data(), size_, 0);
+    }
+  }
+}
+
+void Buffer::ensure(uint64_t bytes) {
+  if (bytes <= size_) return;
+  uint64_t want = bytes + bytes / 4;
+  release();
+  allocate(want);
+}
+
+void Buffer::upload(const void* data, uint64_t bytes, uint64_t offset) {
+  if (offset + bytes > size_)
+    throw Error("upload of " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " overflows buffer '" + name_ + "'");
+  if (mapped_) std::memcpy(static_cast<char*>(mapped_) + offset, data, bytes);
+  else staged_copy(true, const_cast<void*>(data), bytes, offset);
+}
+
+void Buffer::download(void* data, uint64_t bytes, uint64_t offset) const {
+  if (offset + bytes > size_)
+    throw Error("download of " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " overflows buffer '" + name_ + "'");
+  if (mapped_) std::memcpy(data, static_cast<const char*>(mapped_) + offset, bytes);
+  else staged_copy(false, data, bytes, offset);
+}
+
+// For devices whose device-local memory is not host-visible: a host-visible staging buffer and
+// one blocking copy. Only used off the hot path (uploads of parameters, readback of results).
+void Buffer::staged_copy(bool to_device, void* host, uint64_t bytes, uint64_t offset) const {
+  VkDevice dev = ctx_->device();
+  VkBuffer staging;
+  VkDeviceMemory mem;
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = std::max<uint64_t>(bytes, 16);
+  bci.usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  EVF_VK(vkCreateBuffer(dev, &bci, nullptr, &staging));
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(dev, staging, &req);
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex = ctx_->memory_type(req.memoryTypeBits,
+                                          VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                                          VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+  EVF_VK(vkAllocateMemory(dev, &mai, nullptr, &mem));
+  EVF_VK(vkBindBufferMemory(dev, staging, mem, 0));
+  void* p;
+  EVF_VK(vkMapMemory(dev, mem, 0, VK_WHOLE_SIZE, 0, &p));
+  if (to_device) std::memcpy(p, host, bytes);
+  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  cai.commandPool = ctx_->command_pool();
+  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  cai.commandBufferCount = 1;
+  VkCommandBuffer cb;
+  EVF_VK(vkAllocateCommandBuffers(dev, &cai, &cb));
+  VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  vkBeginCommandBuffer(cb, &bi);
+  VkBufferCopy region{};
+  region.size = bytes;
+  if (to_device) { region.dstOffset = offset; vkCmdCopyBuffer(cb, staging, buffer_, 1, &region); }
+  else { region.srcOffset = offset; vkCmdCopyBuffer(cb, buffer_, staging, 1, &region); }
+  vkEndCommandBuffer(cb);
+  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cb;
+  EVF_VK(vkQueueSubmit(ctx_->queue(), 1, &si, VK_NULL_HANDLE));
+  EVF_VK(vkQueueWaitIdle(ctx_->queue()));
+  if (!to_device) std::memcpy(host, p, bytes);
+  vkFreeCommandBuffers(dev, ctx_->command_pool(), 1, &cb);
+  vkUnmapMemory(dev, mem);
+  vkDestroyBuffer(dev, staging, nullptr);
+  vkFreeMemory(dev, mem, nullptr);
+}
+
+}  // namespace evflow::gpu

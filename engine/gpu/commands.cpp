@@ -1,0 +1,149 @@
+#include "gpu/commands.h"
+
+#include <algorithm>
+
+namespace evflow::gpu {
+
+Commands::Commands(Context& ctx) : ctx_(ctx) {
+  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  cai.commandPool = ctx.command_pool();
+  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  cai.commandBufferCount = 1;
+  EVF_VK(vkAllocateCommandBuffers(ctx.device(), &cai, &cb_));
+  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  EVF_VK(vkCreateFence(ctx.device(), &fci, nullptr, &fence_));
+  if (ctx.caps().timestamps) {
+    VkQueryPoolCreateInfo qci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    qci.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    qci.queryCount = query_capacity_;
+    EVF_VK(vkCreateQueryPool(ctx.device(), &qci, nullptr, &queries_));
+  }
+  begin();
+}
+
+Commands::~Commands() {
+  VkDevice d = ctx_.device();
+  if (recording_) vkEndCommandBuffer(cb_);
+  if (queries_) vkDestroyQueryPool(d, queries_, nullptr);
+  vkDestroyFence(d, fence_, nullptr);
+  vkFreeCommandBuffers(d, ctx_.command_pool(), 1, &cb_);
+}
+
+void Commands::begin() {
+  VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  EVF_VK(vkBeginCommandBuffer(cb_, &bi));
+  recording_ = true;
+  empty_ = true;
+  marks_.clear();
+  if (queries_) {
+    vkCmdResetQueryPool(cb_, queries_, 0, query_capacity_);
+    vkCmdWriteTimestamp(cb_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries_, 0);
+  }
+}
+
+Groups Commands::linear_groups(uint64_t n) const {
+  Groups g;
+  if (n == 0) return {0, 1, 1};
+  const uint64_t mx = ctx_.caps().max_workgroup_count[0];
+  if (n <= mx) { g.x = static_cast<uint32_t>(n); return g; }
+  g.x = static_cast<uint32_t>(mx);
+  uint64_t y = (n + mx - 1) / mx;
+  if (y > ctx_.caps().max_workgroup_count[1]) throw Error("dispatch of " + std::to_string(n) + " workgroups exceeds the device grid");
+  g.y = static_cast<uint32_t>(y);
+  return g;
+}
+
+void Commands::barrier() {
+  VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
+                     VK_ACCESS_TRANSFER_WRITE_BIT;
+  const VkPipelineStageFlags st = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+  vkCmdPipelineBarrier(cb_, st, st, 0, 1, &mb, 0, nullptr, 0, nullptr);
+}
+
+void Commands::dispatch(const std::string& name, std::initializer_list<BufferRef> bindings, const void* push,
+                        uint32_t push_bytes, Groups g) {
+  if (g.x == 0 || g.y == 0 || g.z == 0) return;
+  const Kernel& k = ctx_.kernel(name);
+  if (bindings.size() != k.binding_count())
+    throw Error("kernel '" + name + "' takes " + std::to_string(k.binding_count()) + " buffers, given " +
+                std::to_string(bindings.size()));
+  std::vector<VkDescriptorBufferInfo> infos;
+  infos.reserve(bindings.size());
+  for (const BufferRef& r : bindings) {
+    if (!r.buffer || !r.buffer->valid()) throw Error("kernel '" + name + "': an unallocated buffer was bound");
+    uint64_t range = r.range ? r.range : r.buffer->size() - r.offset;
+    ctx_.check_binding_size(range, "buffer '" + r.buffer->name() + "' in kernel '" + name + "'");
+    infos.push_back({r.buffer->handle(), r.offset, range});
+  }
+  std::vector<VkWriteDescriptorSet> writes(infos.size());
+  for (size_t i = 0; i < infos.size(); ++i) {
+    writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    writes[i].dstBinding = static_cast<uint32_t>(i);
+    writes[i].descriptorCount = 1;
+    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].pBufferInfo = &infos[i];
+  }
+  static PFN_vkCmdPushDescriptorSetKHR push_fn = nullptr;
+  if (!push_fn)
+    push_fn = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(ctx_.device(), "vkCmdPushDescriptorSetKHR"));
+  vkCmdBindPipeline(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.pipeline());
+  if (!writes.empty())
+    push_fn(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.layout(), 0, static_cast<uint32_t>(writes.size()), writes.data());
+  uint8_t pc[kPushConstantBytes] = {};
+  if (push_bytes > kPushConstantBytes) throw Error("push constants above 128 bytes for kernel '" + name + "'");
+  if (push_bytes) std::copy_n(static_cast<const uint8_t*>(push), push_bytes, pc);
+  vkCmdPushConstants(cb_, k.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, kPushConstantBytes, pc);
+  vkCmdDispatch(cb_, g.x, g.y, g.z);
+  barrier();
+  empty_ = false;
+}
+
+void Commands::fill(const Buffer& b, uint32_t value, uint64_t offset, uint64_t bytes) {
+  uint64_t n = bytes ? bytes : b.size() - offset;
+  n &= ~uint64_t(3);
+  if (n == 0) return;
+  vkCmdFillBuffer(cb_, b.handle(), offset, n, value);
+  barrier();
+  empty_ = false;
+}
+
+void Commands::copy(const Buffer& src, const Buffer& dst, uint64_t bytes, uint64_t so, uint64_t doff) {
+  if (!bytes) return;
+  VkBufferCopy r{so, doff, bytes};
+  vkCmdCopyBuffer(cb_, src.handle(), dst.handle(), 1, &r);
+  barrier();
+  empty_ = false;
+}
+
+void Commands::mark(const std::string& name) {
+  if (!queries_) return;
+  if (marks_.size() + 1 >= query_capacity_) return;
+  marks_.push_back(name);
+  vkCmdWriteTimestamp(cb_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries_, static_cast<uint32_t>(marks_.size()));
+}
+
+void Commands::submit() {
+  EVF_VK(vkEndCommandBuffer(cb_));
+  recording_ = false;
+  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cb_;
+  EVF_VK(vkQueueSubmit(ctx_.queue(), 1, &si, fence_));
+  EVF_VK(vkWaitForFences(ctx_.device(), 1, &fence_, VK_TRUE, UINT64_MAX));
+  EVF_VK(vkResetFences(ctx_.device(), 1, &fence_));
+  stage_ms_.clear();
+  if (queries_ && !marks_.empty()) {
+    std::vector<uint64_t> ts(marks_.size() + 1);
+    EVF_VK(vkGetQueryPoolResults(ctx_.device(), queries_, 0, static_cast<uint32_t>(ts.size()), ts.size() * 8, ts.data(), 8,
+                                 VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    for (size_t i = 0; i < marks_.size(); ++i)
+      stage_ms_.emplace_back(marks_[i], double(ts[i + 1] - ts[i]) * ctx_.caps().timestamp_period_ns * 1e-6);
+  }
+  EVF_VK(vkResetCommandBuffer(cb_, 0));
+  begin();
+}
+
+}  // namespace evflow::gpu

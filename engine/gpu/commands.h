@@ -1,0 +1,65 @@
+// Commands: records dispatches into one command buffer, inserts a full compute/transfer memory
+// barrier after each command (so stages never race), writes named timestamps, and submits.
+#pragma once
+#include <initializer_list>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "gpu/buffer.h"
+#include "gpu/kernel.h"
+
+namespace evflow::gpu {
+
+struct Groups {
+  uint32_t x = 1, y = 1, z = 1;
+};
+
+class Commands {
+ public:
+  explicit Commands(Context& ctx);
+  ~Commands();
+  Commands(const Commands&) = delete;
+  Commands& operator=(const Commands&) = delete;
+
+  Context& context() const { return ctx_; }
+
+  // Workgroup grid for `n_groups` linear groups: x up to the device limit, then y. Shaders
+  // recover the linear index with evf_linear_group() (shaders/common/dispatch.glsl).
+  Groups linear_groups(uint64_t n_groups) const;
+  static uint32_t div_up(uint64_t n, uint32_t d) { return static_cast<uint32_t>((n + d - 1) / d); }
+
+  void dispatch(const std::string& kernel, std::initializer_list<BufferRef> bindings, const void* push, uint32_t push_bytes,
+                Groups groups);
+  template <class PC>
+  void dispatch(const std::string& kernel, std::initializer_list<BufferRef> bindings, const PC& pc, Groups groups) {
+    static_assert(sizeof(PC) <= kPushConstantBytes, "push constants above 128 bytes");
+    dispatch(kernel, bindings, &pc, sizeof(PC), groups);
+  }
+  void fill(const Buffer& b, uint32_t value, uint64_t offset = 0, uint64_t bytes = 0);
+  void copy(const Buffer& src, const Buffer& dst, uint64_t bytes, uint64_t src_offset = 0, uint64_t dst_offset = 0);
+
+  // Ends the stage `name`: its time is from the previous mark (or the start) to here.
+  void mark(const std::string& name);
+
+  // Submits, waits, and makes the buffer ready for recording again.
+  void submit();
+
+  // Stage times (ms) of the last submit, in recording order.
+  const std::vector<std::pair<std::string, double>>& stage_ms() const { return stage_ms_; }
+
+ private:
+  void begin();
+  void barrier();
+  Context& ctx_;
+  VkCommandBuffer cb_ = VK_NULL_HANDLE;
+  VkFence fence_ = VK_NULL_HANDLE;
+  VkQueryPool queries_ = VK_NULL_HANDLE;
+  uint32_t query_capacity_ = 256;
+  std::vector<std::string> marks_;
+  std::vector<std::pair<std::string, double>> stage_ms_;
+  bool recording_ = false;
+  bool empty_ = true;
+};
+
+}  // namespace evflow::gpu

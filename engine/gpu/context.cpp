@@ -1,0 +1,316 @@
+#include "gpu/context.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "gpu/kernel.h"
+
+namespace evflow::gpu {
+
+void check(VkResult r, const char* what) {
+  if (r != VK_SUCCESS) throw Error(std::string("Vulkan call failed (VkResult ") + std::to_string(r) + "): " + what);
+}
+
+static bool env_flag(const char* name) {
+  const char* v = std::getenv(name);
+  return v && *v && std::strcmp(v, "0") != 0;
+}
+
+ContextOptions ContextOptions::from_env() {
+  ContextOptions o;
+  if (const char* d = std::getenv("EVF_DEVICE")) o.device = d;
+  o.validation = env_flag("EVF_VALIDATION");
+  o.poison = env_flag("EVF_POISON");
+  return o;
+}
+
+static VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                     VkDebugUtilsMessageTypeFlagsEXT,
+                                                     const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                                     void* user) {
+  auto* ctx = static_cast<Context*>(user);
+  std::string msg = (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) ? "validation error: " : "validation warning: ";
+  msg += data->pMessage ? data->pMessage : "(no message)";
+  ctx->report_validation(msg);
+  return VK_FALSE;
+}
+
+static std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+static VkInstance make_instance(bool validation, VkDebugUtilsMessengerCreateInfoEXT* dbg) {
+  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+  app.pApplicationName = "evflow";
+  app.apiVersion = VK_API_VERSION_1_2;
+  std::vector<const char*> layers, exts;
+  if (validation) {
+    uint32_t n = 0;
+    vkEnumerateInstanceLayerProperties(&n, nullptr);
+    std::vector<VkLayerProperties> props(n);
+    vkEnumerateInstanceLayerProperties(&n, props.data());
+    bool found = std::any_of(props.begin(), props.end(), [](auto& p) {
+      return std::strcmp(p.layerName, "VK_LAYER_KHRONOS_validation") == 0;
+    });
+    if (!found)
+      throw Error("validation requested but VK_LAYER_KHRONOS_validation is not installed "
+                  "(Debian package vulkan-validationlayers)");
+    layers.push_back("VK_LAYER_KHRONOS_validation");
+    exts.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+  }
+  VkInstanceCreateInfo ci{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+  ci.pApplicationInfo = &app;
+  ci.enabledLayerCount = static_cast<uint32_t>(layers.size());
+  ci.ppEnabledLayerNames = layers.data();
+  ci.enabledExtensionCount = static_cast<uint32_t>(exts.size());
+  ci.ppEnabledExtensionNames = exts.data();
+  if (validation) ci.pNext = dbg;
+  VkInstance inst = VK_NULL_HANDLE;
+  VkResult r = vkCreateInstance(&ci, nullptr, &inst);
+  if (r == VK_ERROR_INCOMPATIBLE_DRIVER)
+    throw Error("no Vulkan driver found: install mesa-vulkan-drivers (lavapipe) or a GPU driver");
+  check(r, "vkCreateInstance");
+  return inst;
+}
+
+static bool has_extension(VkPhysicalDevice pd, const char* name) {
+  uint32_t n = 0;
+  vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, nullptr);
+  std::vector<VkExtensionProperties> props(n);
+  vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, props.data());
+  return std::any_of(props.begin(), props.end(), [&](auto& p) { return std::strcmp(p.extensionName, name) == 0; });
+}
+
+static int compute_family(VkPhysicalDevice pd) {
+  uint32_t n = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+  std::vector<VkQueueFamilyProperties> q(n);
+  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, q.data());
+  for (uint32_t i = 0; i < n; ++i)
+    if (q[i].queueFlags & VK_QUEUE_COMPUTE_BIT) return static_cast<int>(i);
+  return -1;
+}
+
+static int type_rank(VkPhysicalDeviceType t) {
+  switch (t) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
+    default: return 4;
+  }
+}
+
+std::vector<std::string> Context::list_devices() {
+  VkInstance inst = make_instance(false, nullptr);
+  uint32_t n = 0;
+  vkEnumeratePhysicalDevices(inst, &n, nullptr);
+  std::vector<VkPhysicalDevice> pds(n);
+  vkEnumeratePhysicalDevices(inst, &n, pds.data());
+  std::vector<std::string> out;
+  for (uint32_t i = 0; i < n; ++i) {
+    VkPhysicalDeviceProperties p;
+    vkGetPhysicalDeviceProperties(pds[i], &p);
+    out.push_back(std::to_string(i) + ": " + p.deviceName + " (Vulkan " + std::to_string(VK_API_VERSION_MAJOR(p.apiVersion)) +
+                  "." + std::to_string(VK_API_VERSION_MINOR(p.apiVersion)) + ")");
+  }
+  vkDestroyInstance(inst, nullptr);
+  return out;
+}
+
+Context::Context(const ContextOptions& opts) : opts_(opts) {
+  VkDebugUtilsMessengerCreateInfoEXT dbg{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+  dbg.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+  dbg.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                    VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+  dbg.pfnUserCallback = debug_callback;
+  dbg.pUserData = this;
+  instance_ = make_instance(opts_.validation, &dbg);
+  if (opts_.validation) {
+    auto fn = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
+    if (!fn) throw Error("vkCreateDebugUtilsMessengerEXT is unavailable");
+    EVF_VK(fn(instance_, &dbg, nullptr, &messenger_));
+  }
+
+  uint32_t n = 0;
+  vkEnumeratePhysicalDevices(instance_, &n, nullptr);
+  std::vector<VkPhysicalDevice> pds(n);
+  vkEnumeratePhysicalDevices(instance_, &n, pds.data());
+  // Candidates: Vulkan >= 1.2, a compute queue, push descriptors.
+  std::vector<std::pair<VkPhysicalDevice, VkPhysicalDeviceProperties>> cands;
+  std::string rejected;
+  for (auto pd : pds) {
+    VkPhysicalDeviceProperties p;
+    vkGetPhysicalDeviceProperties(pd, &p);
+    std::string why;
+    if (p.apiVersion < VK_API_VERSION_1_2) why = "Vulkan < 1.2";
+    else if (compute_family(pd) < 0) why = "no compute queue";
+    else if (!has_extension(pd, VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME)) why = "no VK_KHR_push_descriptor";
+    if (!why.empty()) { rejected += std::string(" ") + p.deviceName + " (" + why + ");"; continue; }
+    cands.emplace_back(pd, p);
+  }
+  if (cands.empty()) throw Error("no usable Vulkan device (need 1.2+, compute, push descriptors):" + rejected);
+  int chosen = -1;
+  if (opts_.device.empty()) {
+    chosen = 0;
+    for (size_t i = 1; i < cands.size(); ++i)
+      if (type_rank(cands[i].second.deviceType) < type_rank(cands[chosen].second.deviceType)) chosen = static_cast<int>(i);
+  } else if (std::all_of(opts_.device.begin(), opts_.device.end(), ::isdigit)) {
+    size_t idx = std::stoul(opts_.device);
+    if (idx >= cands.size()) throw Error("--device " + opts_.device + ": only " + std::to_string(cands.size()) + " usable device(s)");
+    chosen = static_cast<int>(idx);
+  } else {
+    for (size_t i = 0; i < cands.size(); ++i)
+      if (lower(cands[i].second.deviceName).find(lower(opts_.device)) != std::string::npos) { chosen = static_cast<int>(i); break; }
+    if (chosen < 0) throw Error("--device '" + opts_.device + "' matches no usable device");
+  }
+  physical_ = cands[chosen].first;
+  const auto& props = cands[chosen].second;
+  queue_family_ = static_cast<uint32_t>(compute_family(physical_));
+
+  // Capabilities.
+  VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+  VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  p2.pNext = &sub;
+  vkGetPhysicalDeviceProperties2(physical_, &p2);
+  caps_.name = props.deviceName;
+  caps_.api_version = props.apiVersion;
+  caps_.type = props.deviceType;
+  caps_.subgroup_size = sub.subgroupSize;
+  caps_.subgroup_arithmetic = (sub.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
+                              (sub.supportedOperations & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&
+                              (sub.supportedOperations & VK_SUBGROUP_FEATURE_BASIC_BIT);
+  for (int i = 0; i < 3; ++i) caps_.max_workgroup_count[i] = props.limits.maxComputeWorkGroupCount[i];
+  caps_.max_workgroup_invocations = props.limits.maxComputeWorkGroupInvocations;
+  caps_.max_shared_memory = props.limits.maxComputeSharedMemorySize;
+  caps_.max_storage_buffer_range = props.limits.maxStorageBufferRange;
+  caps_.min_storage_offset_alignment = props.limits.minStorageBufferOffsetAlignment;
+  caps_.timestamps = props.limits.timestampComputeAndGraphics;
+  caps_.timestamp_period_ns = props.limits.timestampPeriod;
+  VkPhysicalDeviceMaintenance3Properties m3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+  VkPhysicalDeviceProperties2 p3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  p3.pNext = &m3;
+  vkGetPhysicalDeviceProperties2(physical_, &p3);
+  caps_.max_allocation_size = m3.maxMemoryAllocationSize;
+  if (!caps_.subgroup_arithmetic)
+    throw Error(caps_.name + ": subgroup arithmetic in compute shaders is required and missing");
+
+  const bool has_atomic_float = has_extension(physical_, VK_EXT_SHADER_ATOMIC_FLOAT_EXTENSION_NAME);
+  VkPhysicalDeviceShaderAtomicFloatFeaturesEXT af{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
+  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+  f2.pNext = &f12;
+  if (has_atomic_float) f12.pNext = &af;
+  vkGetPhysicalDeviceFeatures2(physical_, &f2);
+  caps_.shared_float_atomic_add = has_atomic_float && af.shaderSharedFloat32AtomicAdd;
+  caps_.buffer_float_atomic_add = has_atomic_float && af.shaderBufferFloat32AtomicAdd;
+  if (std::getenv("EVF_FORCE_CAS")) { caps_.shared_float_atomic_add = false; caps_.buffer_float_atomic_add = false; }
+
+  vkGetPhysicalDeviceMemoryProperties(physical_, &mem_props_);
+  caps_.unified_memory = true;
+  for (uint32_t i = 0; i < mem_props_.memoryTypeCount; ++i) {
+    auto f = mem_props_.memoryTypes[i].propertyFlags;
+    if ((f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)) caps_.unified_memory = false;
+  }
+
+  // Device with only the features we use.
+  VkPhysicalDeviceShaderAtomicFloatFeaturesEXT af_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
+  af_on.shaderSharedFloat32AtomicAdd = caps_.shared_float_atomic_add;
+  af_on.shaderBufferFloat32AtomicAdd = caps_.buffer_float_atomic_add;
+  VkPhysicalDeviceVulkan12Features f12_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  f12_on.hostQueryReset = f12.hostQueryReset;
+  if (has_atomic_float && (af_on.shaderSharedFloat32AtomicAdd || af_on.shaderBufferFloat32AtomicAdd)) f12_on.pNext = &af_on;
+  VkPhysicalDeviceFeatures2 f2_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+  f2_on.pNext = &f12_on;
+  std::vector<const char*> dev_exts = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+  if (f12_on.pNext) dev_exts.push_back(VK_EXT_SHADER_ATOMIC_FLOAT_EXTENSION_NAME);
+  float prio = 1.0f;
+  VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+  qci.queueFamilyIndex = queue_family_;
+  qci.queueCount = 1;
+  qci.pQueuePriorities = &prio;
+  VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+  dci.pNext = &f2_on;
+  dci.queueCreateInfoCount = 1;
+  dci.pQueueCreateInfos = &qci;
+  dci.enabledExtensionCount = static_cast<uint32_t>(dev_exts.size());
+  dci.ppEnabledExtensionNames = dev_exts.data();
+  EVF_VK(vkCreateDevice(physical_, &dci, nullptr, &device_));
+  vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
+  VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pci.queueFamilyIndex = queue_family_;
+  EVF_VK(vkCreateCommandPool(device_, &pci, nullptr, &pool_));
+  if (opts_.verbose)
+    std::fprintf(stderr, "evflow: device %s, subgroup %u, storage range %llu MiB, shared float atomics %s\n",
+                 caps_.name.c_str(), caps_.subgroup_size,
+                 static_cast<unsigned long long>(caps_.max_storage_buffer_range >> 20),
+                 caps_.shared_float_atomic_add ? "yes" : "no (CAS)");
+}
+
+Context::~Context() {
+  if (device_) vkDeviceWaitIdle(device_);
+  kernels_.clear();
+  if (pool_) vkDestroyCommandPool(device_, pool_, nullptr);
+  if (device_) vkDestroyDevice(device_, nullptr);
+  if (messenger_) {
+    auto fn = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+    if (fn) fn(instance_, messenger_, nullptr);
+  }
+  if (instance_) vkDestroyInstance(instance_, nullptr);
+}
+
+uint32_t Context::memory_type(uint32_t bits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const {
+  int fallback = -1;
+  for (uint32_t i = 0; i < mem_props_.memoryTypeCount; ++i) {
+    if (!(bits & (1u << i))) continue;
+    auto f = mem_props_.memoryTypes[i].propertyFlags;
+    if ((f & required) != required) continue;
+    if ((f & preferred) == preferred) return i;
+    if (fallback < 0) fallback = static_cast<int>(i);
+  }
+  if (fallback < 0) throw Error("no Vulkan memory type with the required properties");
+  return static_cast<uint32_t>(fallback);
+}
+
+const Kernel& Context::kernel(const std::string& name) {
+  auto it = kernels_.find(name);
+  if (it != kernels_.end()) return *it->second;
+  auto k = std::make_unique<Kernel>(*this, name);
+  auto& ref = *k;
+  kernels_[name] = std::move(k);
+  return ref;
+}
+
+void Context::report_validation(const std::string& msg) {
+  std::lock_guard<std::mutex> lock(msg_mutex_);
+  messages_.push_back(msg);
+  ++message_total_;
+  if (opts_.verbose || std::getenv("EVF_VALIDATION_PRINT")) std::fprintf(stderr, "%s\n", msg.c_str());
+}
+
+std::vector<std::string> Context::take_validation_messages() {
+  std::lock_guard<std::mutex> lock(msg_mutex_);
+  std::vector<std::string> out;
+  out.swap(messages_);
+  return out;
+}
+
+size_t Context::validation_message_count() const {
+  std::lock_guard<std::mutex> lock(msg_mutex_);
+  return message_total_;
+}
+
+void Context::check_binding_size(uint64_t bytes, const std::string& what) const {
+  if (bytes > caps_.max_storage_buffer_range)
+    throw Error(what + " needs a " + std::to_string(bytes) + "-byte storage binding, above this device's maxStorageBufferRange of " +
+                std::to_string(caps_.max_storage_buffer_range) + " bytes (" + caps_.name + ")");
+}
+
+}  // namespace evflow::gpu

@@ -1,0 +1,105 @@
+// engine/gpu: the only layer that touches raw Vulkan objects.
+// Context owns the instance, the chosen device, its compute queue, a command pool and the
+// validation messenger. Everything above speaks in Buffer, Kernel and Commands.
+#pragma once
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace evflow::gpu {
+
+struct Error : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void check(VkResult r, const char* what);
+#define EVF_VK(call) ::evflow::gpu::check((call), #call)
+
+struct ContextOptions {
+  // "" = automatic (a GPU when present, else lavapipe); a number = device index;
+  // anything else = a case-insensitive substring of the device name.
+  std::string device;
+  bool validation = false;  // enable VK_LAYER_KHRONOS_validation and collect its messages
+  bool poison = false;      // fill fresh buffers with 0xFFFFFFFF (NaN) instead of leaving them
+  bool verbose = false;
+  // Defaults that read the environment: EVF_DEVICE, EVF_VALIDATION=1, EVF_POISON=1.
+  static ContextOptions from_env();
+};
+
+struct DeviceCaps {
+  std::string name;
+  uint32_t api_version = 0;
+  VkPhysicalDeviceType type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
+  uint32_t subgroup_size = 0;
+  uint32_t max_workgroup_count[3] = {0, 0, 0};
+  uint32_t max_workgroup_invocations = 0;
+  uint32_t max_shared_memory = 0;
+  uint64_t max_storage_buffer_range = 0;
+  uint64_t max_allocation_size = 0;
+  uint64_t min_storage_offset_alignment = 0;
+  bool shared_float_atomic_add = false;
+  bool buffer_float_atomic_add = false;
+  bool subgroup_arithmetic = false;
+  bool timestamps = false;
+  double timestamp_period_ns = 1.0;
+  bool unified_memory = false;  // every device-local heap is host-visible (lavapipe, iGPUs)
+};
+
+class Kernel;
+
+class Context {
+ public:
+  explicit Context(const ContextOptions& opts = ContextOptions::from_env());
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  static std::vector<std::string> list_devices();
+
+  const DeviceCaps& caps() const { return caps_; }
+  const ContextOptions& options() const { return opts_; }
+  VkDevice device() const { return device_; }
+  VkPhysicalDevice physical() const { return physical_; }
+  VkQueue queue() const { return queue_; }
+  uint32_t queue_family() const { return queue_family_; }
+  VkCommandPool command_pool() const { return pool_; }
+
+  // Memory type index with the required flags (and preferred ones when possible).
+  uint32_t memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
+                       VkMemoryPropertyFlags preferred) const;
+
+  // Kernels are created once per context and cached by embedded name ("splat/project").
+  const Kernel& kernel(const std::string& name);
+
+  // Validation messages (warnings and errors) seen since the last call.
+  std::vector<std::string> take_validation_messages();
+  size_t validation_message_count() const;
+  void report_validation(const std::string& msg);
+
+  // Throws a clear error when a binding of `bytes` would exceed the device's storage range.
+  void check_binding_size(uint64_t bytes, const std::string& what) const;
+
+ private:
+  ContextOptions opts_;
+  DeviceCaps caps_;
+  VkInstance instance_ = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+  VkPhysicalDevice physical_ = VK_NULL_HANDLE;
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkQueue queue_ = VK_NULL_HANDLE;
+  uint32_t queue_family_ = 0;
+  VkCommandPool pool_ = VK_NULL_HANDLE;
+  VkPhysicalDeviceMemoryProperties mem_props_{};
+  std::map<std::string, std::unique_ptr<Kernel>> kernels_;
+  mutable std::mutex msg_mutex_;
+  std::vector<std::string> messages_;
+  size_t message_total_ = 0;
+};
+
+}  // namespace evflow::gpu
