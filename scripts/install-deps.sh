@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages EvFlow needs, only those missing. Run as root (or with sudo).
+set -euo pipefail
+PKGS=(cmake g++ make pkg-config
+      libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
+      libglfw3-dev libglm-dev libtinygltf-dev nlohmann-json3-dev libopenimageio-dev
+      libhdf5-dev hdf5-filter-plugin-blosc-serial catch2 xvfb xauth)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "evflow: installing ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
