@@ -1,0 +1,128 @@
+#include "io/image.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "io/atomic_file.h"
+
+namespace evflow::io {
+
+namespace fs = std::filesystem;
+
+float srgb_to_linear(float v) {
+  return v <= 0.04045f ? v / 12.92f : static_cast<float>(std::pow((double(v) + 0.055) / 1.055, 2.4));
+}
+
+float linear_to_srgb(float v) {
+  return v <= 0.0031308f ? v * 12.92f : static_cast<float>(1.055 * std::pow(double(v), 1.0 / 2.4) - 0.055);
+}
+
+namespace {
+
+[[noreturn]] void fail(const fs::path& path, const std::string& what) {
+  throw std::runtime_error(path.string() + ": " + what);
+}
+
+std::string oiio_error(const std::string& e) {
+  std::string s = e.empty() ? OIIO::geterror() : e;
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  return s.empty() ? "unknown OpenImageIO error" : s;
+}
+
+void check_image(const fs::path& path, const Image& im) {
+  if (im.channels != 1 && im.channels != 3 && im.channels != 4)
+    fail(path, "cannot write an image with " + std::to_string(im.channels) + " channels (1, 3 or 4)");
+  if (im.width == 0 || im.height == 0) fail(path, "cannot write an empty image");
+  if (im.data.size() != size_t(im.width) * im.height * im.channels)
+    fail(path, "image data has " + std::to_string(im.data.size()) + " values, expected " +
+                   std::to_string(size_t(im.width) * im.height * im.channels));
+}
+
+void write_with_oiio(const fs::path& path, const Image& im, OIIO::TypeDesc type, const void* pixels) {
+  write_file_atomic(path, [&](const fs::path& tmp) {
+    auto out = OIIO::ImageOutput::create(tmp.string());
+    if (!out) fail(path, "no image writer for this extension: " + oiio_error(""));
+    OIIO::ImageSpec spec(int(im.width), int(im.height), int(im.channels), type);
+    if (type == OIIO::TypeDesc::FLOAT) spec.attribute("compression", "zip");
+    if (!out->open(tmp.string(), spec)) fail(path, "cannot create image: " + oiio_error(out->geterror()));
+    bool ok = out->write_image(type, pixels);
+    std::string err = ok ? "" : out->geterror();
+    ok = out->close() && ok;
+    if (!ok) fail(path, "cannot write image: " + oiio_error(err.empty() ? out->geterror() : err));
+  });
+}
+
+}  // namespace
+
+Image read_image(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) fail(path, "image file is missing");
+  auto in = OIIO::ImageInput::open(path.string());
+  if (!in) fail(path, "cannot open image: " + oiio_error(""));
+  const OIIO::ImageSpec& spec = in->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
+    fail(path, "unsupported image geometry");
+  const int nc = spec.nchannels;
+  const size_t npx = size_t(spec.width) * size_t(spec.height);
+  std::vector<float> raw(npx * nc);
+  if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, raw.data())) {
+    std::string e = in->geterror();
+    fail(path, "cannot read image (truncated or corrupt?): " + oiio_error(e));
+  }
+  in->close();
+  const bool is_float = spec.format.basetype == OIIO::TypeDesc::FLOAT || spec.format.basetype == OIIO::TypeDesc::HALF ||
+                        spec.format.basetype == OIIO::TypeDesc::DOUBLE;
+  Image im(uint32_t(spec.width), uint32_t(spec.height), 3);
+  // 8-bit files: a 256-entry table; other integer depths: the formula.
+  float lut[256];
+  const bool eight = spec.format.basetype == OIIO::TypeDesc::UINT8;
+  if (eight)
+    for (int i = 0; i < 256; ++i) lut[i] = srgb_to_linear(float(i) / 255.f);
+  for (size_t i = 0; i < npx; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      float v = raw[i * nc + std::min(c, nc >= 3 ? c : 0)];
+      if (!is_float) {
+        if (eight) {
+          v = lut[std::clamp(int(std::lround(v * 255.f)), 0, 255)];
+        } else {
+          v = srgb_to_linear(v);
+        }
+      }
+      im.data[i * 3 + c] = v;
+    }
+  }
+  return im;
+}
+
+void write_png(const fs::path& path, const Image& im) {
+  check_image(path, im);
+  std::vector<uint8_t> px(im.data.size());
+  for (size_t i = 0; i < px.size(); ++i) {
+    float v = im.data[i];
+    if (!(v > 0.f)) v = 0.f;  // also maps NaN to 0
+    // alpha (4th channel) is stored linearly, colour is sRGB-encoded
+    const bool alpha = im.channels == 4 && i % 4 == 3;
+    float e = alpha ? std::min(v, 1.f) : linear_to_srgb(std::min(v, 1.f));
+    px[i] = static_cast<uint8_t>(std::lround(e * 255.f));
+  }
+  write_with_oiio(path, im, OIIO::TypeDesc::UINT8, px.data());
+}
+
+void write_exr(const fs::path& path, const Image& im) {
+  check_image(path, im);
+  write_with_oiio(path, im, OIIO::TypeDesc::FLOAT, im.data.data());
+}
+
+void write_image(const fs::path& path, const Image& im) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".png") return write_png(path, im);
+  if (ext == ".exr") return write_exr(path, im);
+  fail(path, "unsupported image extension '" + ext + "' for writing (use .png or .exr)");
+}
+
+}  // namespace evflow::io
