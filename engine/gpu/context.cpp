@@ -184,7 +184,8 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   caps_.subgroup_size = sub.subgroupSize;
   caps_.subgroup_arithmetic = (sub.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
                               (sub.supportedOperations & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&
-                              (sub.supportedOperations & VK_SUBGROUP_FEATURE_BASIC_BIT);
+                              (sub.supportedOperations & VK_SUBGROUP_FEATURE_BASIC_BIT) &&
+                              (sub.supportedOperations & VK_SUBGROUP_FEATURE_VOTE_BIT);
   for (int i = 0; i < 3; ++i) caps_.max_workgroup_count[i] = props.limits.maxComputeWorkGroupCount[i];
   caps_.max_workgroup_invocations = props.limits.maxComputeWorkGroupInvocations;
   caps_.max_shared_memory = props.limits.maxComputeSharedMemorySize;
@@ -198,7 +199,7 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   vkGetPhysicalDeviceProperties2(physical_, &p3);
   caps_.max_allocation_size = m3.maxMemoryAllocationSize;
   if (!caps_.subgroup_arithmetic)
-    throw Error(caps_.name + ": subgroup arithmetic in compute shaders is required and missing");
+    throw Error(caps_.name + ": subgroup basic, vote and arithmetic operations in compute shaders are required and missing");
 
   const bool has_atomic_float = has_extension(physical_, VK_EXT_SHADER_ATOMIC_FLOAT_EXTENSION_NAME);
   VkPhysicalDeviceShaderAtomicFloatFeaturesEXT af{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};

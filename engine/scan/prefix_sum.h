@@ -1,0 +1,24 @@
+// Exclusive prefix sum of a uint buffer on the GPU (multi-level: blocks of 1024, then the block
+// sums, recursively). Correct for any subgroup size: it uses shared memory only.
+#pragma once
+#include <deque>
+
+#include "gpu/commands.h"
+
+namespace evflow {
+
+class PrefixSum {
+ public:
+  explicit PrefixSum(gpu::Context& ctx) : ctx_(ctx) {}
+  // out[i] = in[0] + ... + in[i-1] for i < n_out, reading in[i] for i < n_in (zero beyond), so
+  // n_out = n_in + 1 leaves the total in out[n_in]. `in` and `out` may be the same buffer.
+  void record(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in, uint32_t n_out);
+
+ private:
+  void record_level(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in, uint32_t n_out,
+                    size_t level);
+  gpu::Context& ctx_;
+  std::deque<gpu::Buffer> sums_;  // deque: references stay valid while deeper levels are added
+};
+
+}  // namespace evflow

@@ -1,0 +1,36 @@
+#include "sort/radix_sort.h"
+
+#include "sort/sort_layout.h"
+
+namespace evflow {
+
+using namespace shaderio;
+
+RadixSort::RadixSort(gpu::Context& ctx)
+    : ctx_(ctx), scan_(ctx), keys_tmp_(ctx, 16, "sort_keys_tmp"), values_tmp_(ctx, 16, "sort_values_tmp"),
+      counts_(ctx, 16, "sort_counts") {}
+
+std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Commands& cmd, const gpu::Buffer& keys,
+                                                                     const gpu::Buffer& values, uint32_t n, uint32_t bits) {
+  if (n <= 1 || bits == 0) return {&keys, &values};
+  keys_tmp_.ensure(uint64_t(n) * 4);
+  values_tmp_.ensure(uint64_t(n) * 4);
+  const uint32_t blocks = gpu::Commands::div_up(n, kSortBlock);
+  const uint32_t n_counts = blocks * kSortBins;
+  counts_.ensure(uint64_t(n_counts + 1) * 4);
+  const gpu::Buffer* kin = &keys;
+  const gpu::Buffer* vin = &values;
+  const gpu::Buffer* kout = &keys_tmp_;
+  const gpu::Buffer* vout = &values_tmp_;
+  for (uint32_t shift = 0; shift < bits; shift += 4) {
+    SortPC pc{n, shift, blocks, 0};
+    cmd.dispatch("sort/radix_count", {*kin, counts_}, pc, cmd.linear_groups(blocks));
+    scan_.record(cmd, counts_, counts_, n_counts, n_counts);
+    cmd.dispatch("sort/radix_scatter", {*kin, *vin, *kout, *vout, counts_}, pc, cmd.linear_groups(blocks));
+    std::swap(kin, kout);
+    std::swap(vin, vout);
+  }
+  return {kin, vin};
+}
+
+}  // namespace evflow

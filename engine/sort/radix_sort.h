@@ -1,0 +1,26 @@
+// Stable LSD radix sort of (key, value) uint pairs on the GPU, 4 bits per pass, sorting only the
+// low `bits` bits of the keys (rounded up to a multiple of 4: bits above must be zero). Ping-pongs between the caller's buffers and internal ones; the
+// result is in the buffers returned by record().
+#pragma once
+#include <utility>
+
+#include "gpu/commands.h"
+#include "scan/prefix_sum.h"
+
+namespace evflow {
+
+class RadixSort {
+ public:
+  explicit RadixSort(gpu::Context& ctx);
+  // Records the passes; returns the buffers holding the sorted keys and values (either the
+  // inputs or the internal scratch buffers, depending on the pass count).
+  std::pair<const gpu::Buffer*, const gpu::Buffer*> record(gpu::Commands& cmd, const gpu::Buffer& keys,
+                                                            const gpu::Buffer& values, uint32_t n, uint32_t bits);
+
+ private:
+  gpu::Context& ctx_;
+  PrefixSum scan_;
+  gpu::Buffer keys_tmp_, values_tmp_, counts_;
+};
+
+}  // namespace evflow

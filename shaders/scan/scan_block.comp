@@ -1,0 +1,42 @@
+#version 450
+// Exclusive scan within blocks of 1024 elements. One invocation scans 4 consecutive elements;
+// the workgroup combines the 256 partial sums in shared memory; the block total goes to sums[].
+#extension GL_GOOGLE_include_directive : require
+#include "scan/scan_layout.h"
+#include "common/dispatch.glsl"
+layout(local_size_x = 256) in;
+layout(std430, binding = 0) readonly buffer In { uint values_in[]; };
+layout(std430, binding = 1) writeonly buffer Out { uint values_out[]; };
+layout(std430, binding = 2) writeonly buffer Sums { uint block_sums[]; };
+layout(push_constant) uniform PC { ScanPC pc; };
+shared uint partial[2][256];
+
+void main() {
+  uint block = evf_linear_group();
+  uint lid = gl_LocalInvocationIndex;
+  uint base = block * kScanBlock + lid * kScanItems;
+  uint v[4];
+  uint sum = 0;
+  for (uint k = 0; k < 4; ++k) {
+    uint i = base + k;
+    v[k] = (i < pc.n_in) ? values_in[i] : 0u;
+    sum += v[k];
+  }
+  partial[0][lid] = sum;
+  barrier();
+  uint src = 0;
+  for (uint off = 1; off < 256; off <<= 1) {
+    uint x = partial[src][lid];
+    if (lid >= off) x += partial[src][lid - off];
+    partial[1 - src][lid] = x;
+    src = 1 - src;
+    barrier();
+  }
+  uint run = partial[src][lid] - sum;  // exclusive prefix of this invocation
+  for (uint k = 0; k < 4; ++k) {
+    uint i = base + k;
+    if (i < pc.n_out) values_out[i] = run;
+    run += v[k];
+  }
+  if (lid == 255) block_sums[block] = partial[src][255];
+}

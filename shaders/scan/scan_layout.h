@@ -1,0 +1,15 @@
+// Exclusive prefix sum of uint arrays: layouts shared by engine/scan and shaders/scan.
+#ifndef EVF_SCAN_LAYOUT_H
+#define EVF_SCAN_LAYOUT_H
+#include "common/shared_prelude.h"
+EVF_NAMESPACE_BEGIN
+EVF_CONST(uint, kScanGroupSize, 256u)
+EVF_CONST(uint, kScanItems, 4u)
+EVF_CONST(uint, kScanBlock, 1024u)  // kScanGroupSize * kScanItems
+struct ScanPC {
+  uint n_out;   // elements written: out[i] = sum(in[0..i)) for i < n_out
+  uint n_in;    // elements read: in[i] for i < n_in, zero beyond
+  uint pad0, pad1;
+};
+EVF_NAMESPACE_END
+#endif

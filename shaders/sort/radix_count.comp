@@ -1,0 +1,31 @@
+#version 450
+// Radix sort pass, step 1: digit histogram of one block of 4096 keys.
+// One invocation reads 16 consecutive keys; counts meet in shared memory; the histogram is
+// written digit-major (counts[digit * num_blocks + block]) so one exclusive scan over it gives
+// every (digit, block) its global output offset.
+#extension GL_GOOGLE_include_directive : require
+#include "sort/sort_layout.h"
+#include "common/dispatch.glsl"
+layout(local_size_x = 256) in;
+layout(std430, binding = 0) readonly buffer Keys { uint keys[]; };
+layout(std430, binding = 1) writeonly buffer Counts { uint counts[]; };
+layout(push_constant) uniform PC { SortPC pc; };
+shared uint hist[16];
+
+void main() {
+  uint block = evf_linear_group();
+  uint lid = gl_LocalInvocationIndex;
+  if (lid < 16) hist[lid] = 0;
+  barrier();
+  uint local[16];
+  for (uint d = 0; d < 16; ++d) local[d] = 0;
+  uint base = block * kSortBlock + lid * kSortItems;
+  for (uint k = 0; k < kSortItems; ++k) {
+    uint i = base + k;
+    if (i < pc.n) local[(keys[i] >> pc.shift) & 15u] += 1;
+  }
+  for (uint d = 0; d < 16; ++d)
+    if (local[d] != 0) atomicAdd(hist[d], local[d]);
+  barrier();
+  if (lid < 16) counts[lid * pc.num_blocks + block] = hist[lid];
+}

@@ -1,0 +1,69 @@
+#version 450
+// Radix sort pass, step 2: stable scatter of one block of 4096 pairs.
+// One invocation owns 16 consecutive pairs. Its per-digit counts go to shared memory as a
+// [digit][invocation] table; an exclusive scan of that table (digit-major) gives each
+// invocation, for each digit, how many earlier pairs of the block share that digit. The
+// invocation then writes its pairs in order, so equal digits keep their input order (stable).
+// Uses shared memory only: correct for any subgroup size.
+#extension GL_GOOGLE_include_directive : require
+#include "sort/sort_layout.h"
+#include "common/dispatch.glsl"
+layout(local_size_x = 256) in;
+layout(std430, binding = 0) readonly buffer KeysIn { uint keys_in[]; };
+layout(std430, binding = 1) readonly buffer ValuesIn { uint values_in[]; };
+layout(std430, binding = 2) writeonly buffer KeysOut { uint keys_out[]; };
+layout(std430, binding = 3) writeonly buffer ValuesOut { uint values_out[]; };
+layout(std430, binding = 4) readonly buffer Offsets { uint global_offset[]; };  // scanned counts
+layout(push_constant) uniform PC { SortPC pc; };
+
+shared uint table[16 * 256];   // [digit][invocation], then its exclusive scan
+shared uint partial[2][256];
+
+void main() {
+  uint block = evf_linear_group();
+  uint lid = gl_LocalInvocationIndex;
+  uint base = block * kSortBlock + lid * kSortItems;
+  uint local[16];
+  for (uint d = 0; d < 16; ++d) local[d] = 0;
+  for (uint k = 0; k < kSortItems; ++k) {
+    uint i = base + k;
+    if (i < pc.n) local[(keys_in[i] >> pc.shift) & 15u] += 1;
+  }
+  for (uint d = 0; d < 16; ++d) table[d * 256 + lid] = local[d];
+  barrier();
+  // Scan of the 4096-entry table: invocation lid sums entries [lid*16, lid*16+16).
+  uint sum = 0;
+  for (uint k = 0; k < 16; ++k) sum += table[lid * 16 + k];
+  partial[0][lid] = sum;
+  barrier();
+  uint src = 0;
+  for (uint off = 1; off < 256; off <<= 1) {
+    uint x = partial[src][lid];
+    if (lid >= off) x += partial[src][lid - off];
+    partial[1 - src][lid] = x;
+    src = 1 - src;
+    barrier();
+  }
+  uint run = partial[src][lid] - sum;
+  for (uint k = 0; k < 16; ++k) {
+    uint v = table[lid * 16 + k];
+    table[lid * 16 + k] = run;
+    run += v;
+  }
+  barrier();
+  // Position of pair: offset of (digit, block) + rank among the block's pairs of that digit.
+  uint dest[16];
+  for (uint d = 0; d < 16; ++d)
+    dest[d] = global_offset[d * pc.num_blocks + block] + table[d * 256 + lid] - table[d * 256];
+  for (uint k = 0; k < kSortItems; ++k) {
+    uint i = base + k;
+    if (i < pc.n) {
+      uint key = keys_in[i];
+      uint d = (key >> pc.shift) & 15u;
+      uint o = dest[d];
+      dest[d] = o + 1;
+      keys_out[o] = key;
+      values_out[o] = values_in[i];
+    }
+  }
+}
