@@ -279,8 +279,7 @@ H5Events read_events_h5(const fs::path& path, const H5ReadOptions& opt) {
       else fail(path, "event " + std::to_string(first + i) + " has polarity " + std::to_string(b[i]) + " (expected 0/1 or -1/1)");
     }
   });
-  const double sp = seconds_per(opt.unit);
-  const double units_per_s = 1.0 / sp;
+  const double units_per_s = opt.unit == TimeUnit::s ? 1.0 : opt.unit == TimeUnit::ms ? 1e3 : opt.unit == TimeUnit::us ? 1e6 : 1e9;
   if (dt.cls == H5T_FLOAT) {
     read_blocks<double>(path, dt, H5T_NATIVE_DOUBLE, [&](const double* b, size_t first, size_t cnt) {
       for (size_t i = 0; i < cnt; ++i) ev.t[first + i] = b[i] / units_per_s + double(off) / 1e6;
