@@ -210,7 +210,7 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   vkGetPhysicalDeviceFeatures2(physical_, &f2);
   caps_.shared_float_atomic_add = has_atomic_float && af.shaderSharedFloat32AtomicAdd;
   caps_.buffer_float_atomic_add = has_atomic_float && af.shaderBufferFloat32AtomicAdd;
-  if (std::getenv("EVF_FORCE_CAS")) { caps_.shared_float_atomic_add = false; caps_.buffer_float_atomic_add = false; }
+  if (opts_.force_cas || std::getenv("EVF_FORCE_CAS")) { caps_.shared_float_atomic_add = false; caps_.buffer_float_atomic_add = false; }
 
   vkGetPhysicalDeviceMemoryProperties(physical_, &mem_props_);
   caps_.unified_memory = true;

@@ -28,6 +28,7 @@ struct ContextOptions {
   bool validation = false;  // enable VK_LAYER_KHRONOS_validation and collect its messages
   bool poison = false;      // fill fresh buffers with 0xFFFFFFFF (NaN) instead of leaving them
   bool verbose = false;
+  bool force_cas = false;   // use the compare-and-swap path even where float atomics exist
   // Defaults that read the environment: EVF_DEVICE, EVF_VALIDATION=1, EVF_POISON=1.
   static ContextOptions from_env();
 };

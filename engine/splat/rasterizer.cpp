@@ -1,0 +1,266 @@
+#include "splat/rasterizer.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "splat/splat_layout.h"
+
+namespace evflow {
+
+using namespace shaderio;
+
+static constexpr uint32_t kBandCoeffs[4] = {1, 3, 5, 7};
+
+static gpu::Buffer make(gpu::Context& ctx, uint64_t bytes, const std::string& name) { return gpu::Buffer(ctx, bytes, name); }
+
+GaussianBuffers::GaussianBuffers(gpu::Context& ctx, size_t n, int degree, const std::string& prefix)
+    : count(n),
+      sh_degree(degree),
+      means(make(ctx, n * 12, prefix + "means")),
+      log_scales(make(ctx, n * 12, prefix + "log_scales")),
+      quats(make(ctx, n * 16, prefix + "quats")),
+      opacity_logits(make(ctx, n * 4, prefix + "opacity_logits")),
+      sh{make(ctx, n * 12, prefix + "sh0"), make(ctx, degree >= 1 ? n * 36 : 16, prefix + "sh1"),
+         make(ctx, degree >= 2 ? n * 60 : 16, prefix + "sh2"), make(ctx, degree >= 3 ? n * 84 : 16, prefix + "sh3")} {
+  if (n > max_count(ctx, degree))
+    throw gpu::Error(std::to_string(n) + " Gaussians at SH degree " + std::to_string(degree) + " do not fit " +
+                     ctx.caps().name + "'s storage binding limit of " +
+                     std::to_string(ctx.caps().max_storage_buffer_range) + " bytes; the largest supported count is " +
+                     std::to_string(max_count(ctx, degree)));
+}
+
+size_t GaussianBuffers::max_count(const gpu::Context& ctx, int degree) {
+  // The widest per-Gaussian buffer: the degree-3 band (84 B), else quats (16 B) or the
+  // projection/intersection state of the rasterizer (16 B per Gaussian).
+  uint64_t widest = degree >= 3 ? 84 : degree >= 2 ? 60 : degree >= 1 ? 36 : 16;
+  return static_cast<size_t>(ctx.caps().max_storage_buffer_range / widest);
+}
+
+void GaussianBuffers::upload(const GaussianCloud& c) {
+  if (c.size() != count || c.sh_degree != sh_degree)
+    throw gpu::Error("GaussianBuffers::upload: cloud of " + std::to_string(c.size()) + " at degree " +
+                     std::to_string(c.sh_degree) + " into buffers for " + std::to_string(count) + " at degree " +
+                     std::to_string(sh_degree));
+  if (!count) return;
+  means.write(c.means);
+  log_scales.write(c.log_scales);
+  quats.write(c.quats);
+  opacity_logits.write(c.opacity_logits);
+  const int K = c.coeffs();
+  for (int l = 0; l <= sh_degree; ++l) {
+    const uint32_t first = l * l, nb = kBandCoeffs[l];
+    std::vector<float> band(count * nb * 3);
+    for (size_t g = 0; g < count; ++g)
+      std::memcpy(&band[g * nb * 3], &c.sh[(g * K + first) * 3], nb * 3 * sizeof(float));
+    sh[l].write(band);
+  }
+}
+
+GaussianCloud GaussianBuffers::download() const {
+  GaussianCloud c;
+  c.resize(count, sh_degree);
+  if (!count) return c;
+  c.means = means.read<float>(count * 3);
+  c.log_scales = log_scales.read<float>(count * 3);
+  c.quats = quats.read<float>(count * 4);
+  c.opacity_logits = opacity_logits.read<float>(count);
+  const int K = c.coeffs();
+  for (int l = 0; l <= sh_degree; ++l) {
+    const uint32_t first = l * l, nb = kBandCoeffs[l];
+    auto band = sh[l].read<float>(count * nb * 3);
+    for (size_t g = 0; g < count; ++g)
+      std::memcpy(&c.sh[(g * K + first) * 3], &band[g * nb * 3], nb * 3 * sizeof(float));
+  }
+  return c;
+}
+
+Rasterizer::Rasterizer(gpu::Context& ctx)
+    : ctx_(ctx),
+      cmd_(ctx),
+      scan_(ctx),
+      sort_(ctx),
+      proj_mean_conic_(ctx, 16, "proj_mean_conic"),
+      proj_misc_(ctx, 16, "proj_misc"),
+      proj_color_(ctx, 16, "proj_color"),
+      tile_rect_(ctx, 16, "tile_rect"),
+      tiles_touched_(ctx, 16, "tiles_touched"),
+      isect_offset_(ctx, 16, "isect_offset"),
+      keys_(ctx, 16, "keys"),
+      slot_from_isect_(ctx, 16, "slot_from_isect"),
+      gaussian_id_from_slot_(ctx, 16, "gaussian_id_from_slot"),
+      isect_grad_(ctx, 16, "isect_grad"),
+      tile_range_(ctx, 16, "tile_range"),
+      final_T_(ctx, 16, "final_T"),
+      last_isect_(ctx, 16, "last_isect"),
+      out_{gpu::Buffer(ctx, 16, "out_rgb"), gpu::Buffer(ctx, 16, "out_alpha"), gpu::Buffer(ctx, 16, "out_depth")},
+      grad2d_norm_(ctx, 16, "grad2d_norm"),
+      pose_partial_(ctx, 16, "pose_partial"),
+      pose_(ctx, 32, "pose_gradient") {}
+
+static uint32_t bit_width(uint32_t v) {
+  uint32_t b = 0;
+  while (v) { ++b; v >>= 1; }
+  return b;
+}
+
+void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const RenderSettings& s) {
+  if (cam.width == 0 || cam.height == 0) throw gpu::Error("render: camera has zero size");
+  width_ = cam.width;
+  height_ = cam.height;
+  tiles_x_ = (width_ + kTileSize - 1) / kTileSize;
+  tiles_y_ = (height_ + kTileSize - 1) / kTileSize;
+  const uint32_t tile_bits = bit_width(tiles_x_ * tiles_y_);  // 2^tile_bits > number of tiles
+  if (tile_bits > 24) throw gpu::Error("render: image of " + std::to_string(width_) + "x" + std::to_string(height_) + " has too many tiles");
+  depth_bits_ = std::min(23u, 32u - tile_bits);
+  sort_bits_ = tile_bits + depth_bits_;
+  const int degree = s.sh_degree < 0 ? params.sh_degree : std::min(s.sh_degree, params.sh_degree);
+
+  ProjectPC pp{};
+  for (int r = 0; r < 3; ++r) {
+    glm::vec4 row(float(cam.R[r * 3]), float(cam.R[r * 3 + 1]), float(cam.R[r * 3 + 2]), float(cam.t[r]));
+    (r == 0 ? pp.cam.row0 : r == 1 ? pp.cam.row1 : pp.cam.row2) = row;
+  }
+  pp.cam.intrin = glm::vec4(float(cam.fx), float(cam.fy), float(cam.cx), float(cam.cy));
+  pp.cam.width = width_;
+  pp.cam.height = height_;
+  pp.cam.near_plane = float(cam.near_plane);
+  pp.cam.far_plane = float(std::min(cam.far_plane, 3.0e38));
+  pp.num_gaussians = static_cast<uint32_t>(params.count);
+  pp.sh_degree = static_cast<uint32_t>(degree);
+  pp.flags = (s.antialiased ? kFlagAntialiased : 0u) | (uint32_t(params.sh_degree) << 8);
+  pp.tiles_x = tiles_x_;
+  pp.tiles_y = tiles_y_;
+  pp.depth_bits = depth_bits_;
+  pp.num_isects = 0;
+  pp.sentinel_key = sort_bits_ >= 32 ? 0xFFFFFFFFu : ((1u << sort_bits_) - 1u);
+  static_assert(sizeof(ProjectPC) <= 128 && sizeof(RasterPC) <= 128);
+  std::memcpy(project_pc_.data(), &pp, sizeof(pp));
+
+  RasterPC rp{};
+  rp.background = glm::vec4(s.background[0], s.background[1], s.background[2], 0.0f);
+  rp.width = width_;
+  rp.height = height_;
+  rp.tiles_x = tiles_x_;
+  rp.tiles_y = tiles_y_;
+  rp.depth_bits = depth_bits_;
+  std::memcpy(raster_pc_.data(), &rp, sizeof(rp));
+}
+
+void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings) {
+  set_pc(params, cam, settings);
+  stage_ms_.clear();
+  count_ = params.count;
+  const size_t n = params.count;
+  const uint64_t pixels = uint64_t(width_) * height_;
+  const uint32_t num_tiles = tiles_x_ * tiles_y_;
+  proj_mean_conic_.ensure(n * 16);
+  proj_misc_.ensure(n * 16);
+  proj_color_.ensure(n * 16);
+  tile_rect_.ensure(n * 16);
+  tiles_touched_.ensure(n * 4);
+  isect_offset_.ensure((n + 1) * 4);
+  tile_range_.ensure(uint64_t(num_tiles) * 8);
+  out_.rgb.ensure(pixels * 12);
+  out_.alpha.ensure(pixels * 4);
+  out_.depth.ensure(pixels * 4);
+  final_T_.ensure(pixels * 4);
+  last_isect_.ensure(pixels * 4);
+
+  auto* pp = reinterpret_cast<ProjectPC*>(project_pc_.data());
+  const gpu::Buffer& dummy = params.sh[0];
+  auto band = [&](int l) -> const gpu::Buffer& { return l <= params.sh_degree ? params.sh[l] : dummy; };
+  cmd_.dispatch("splat/project",
+                {params.means, params.log_scales, params.quats, params.opacity_logits, band(0), band(1), band(2), band(3),
+                 proj_mean_conic_, proj_misc_, proj_color_, tile_rect_, tiles_touched_},
+                project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
+  cmd_.mark("project");
+  scan_.record(cmd_, tiles_touched_, isect_offset_, uint32_t(n), uint32_t(n + 1));
+  cmd_.mark("scan");
+  cmd_.submit();
+  stage_ms_ = cmd_.stage_ms();
+  num_isects_ = n ? isect_offset_.read_one<uint32_t>(n) : 0;
+  const uint32_t m = num_isects_;
+  pp->num_isects = m;
+  auto* rp = reinterpret_cast<RasterPC*>(raster_pc_.data());
+  rp->num_isects = m;
+
+  const uint64_t max_range = ctx_.caps().max_storage_buffer_range;
+  if (uint64_t(m) * 4 > max_range)
+    throw gpu::Error(std::to_string(m) + " tile intersections exceed the storage binding limit of " + ctx_.caps().name +
+                     " (" + std::to_string(max_range / 4) + " at most)");
+  keys_.ensure(uint64_t(m) * 4);
+  slot_from_isect_.ensure(uint64_t(m) * 4);
+  gaussian_id_from_slot_.ensure(uint64_t(m) * 4);
+  if (m) {
+    cmd_.dispatch("splat/emit",
+                  {proj_mean_conic_, proj_misc_, tile_rect_, isect_offset_, keys_, slot_from_isect_, gaussian_id_from_slot_},
+                  project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
+  }
+  cmd_.mark("emit");
+  auto [sorted_keys, sorted_slots] = sort_.record(cmd_, keys_, slot_from_isect_, m, sort_bits_);
+  sorted_slots_ = sorted_slots;
+  cmd_.mark("sort");
+  cmd_.fill(tile_range_, 0);
+  cmd_.dispatch("splat/tile_ranges", {*sorted_keys, tile_range_}, raster_pc_.data(), sizeof(RasterPC),
+                cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
+  cmd_.dispatch("splat/rasterize",
+                {tile_range_, *sorted_slots_, gaussian_id_from_slot_, proj_mean_conic_, proj_misc_, proj_color_, out_.rgb,
+                 out_.alpha, out_.depth, final_T_, last_isect_},
+                raster_pc_.data(), sizeof(RasterPC), cmd_.linear_groups(num_tiles));
+  cmd_.mark("rasterize");
+  cmd_.submit();
+  for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
+}
+
+void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
+                          GaussianBuffers& grads) {
+  if (params.count != count_) throw gpu::Error("Rasterizer::backward: parameters differ from the last forward");
+  if (grads.count != params.count || grads.sh_degree != params.sh_degree)
+    throw gpu::Error("Rasterizer::backward: gradient buffers do not match the parameters");
+  const uint64_t pixels = uint64_t(width_) * height_;
+  if (v_rgb.size() < pixels * 12 || v_alpha.size() < pixels * 4)
+    throw gpu::Error("Rasterizer::backward: v_rgb / v_alpha are smaller than the image");
+  const size_t n = params.count;
+  const uint32_t m = num_isects_;
+  const uint64_t align = std::max<uint64_t>(256, ctx_.caps().min_storage_offset_alignment);
+  grad_plane_stride_ = ((std::max<uint64_t>(m, 1) * 4 + align - 1) / align) * align;
+  isect_grad_.ensure(grad_plane_stride_ * 9);
+  grad2d_norm_.ensure(n * 4);
+  const uint32_t groups = gpu::Commands::div_up(n, kProjectGroupSize);
+  pose_partial_.ensure(uint64_t(std::max<uint32_t>(groups, 1)) * 24);
+  auto plane = [&](int k) { return gpu::BufferRef(isect_grad_, grad_plane_stride_ * k, grad_plane_stride_); };
+  stage_ms_.erase(std::remove_if(stage_ms_.begin(), stage_ms_.end(),
+                                 [](auto& s) { return s.first.find("backward") != std::string::npos; }),
+                  stage_ms_.end());
+
+  const std::string raster_bwd = ctx_.caps().shared_float_atomic_add ? "splat/rasterize_bwd" : "splat/rasterize_bwd_cas";
+  cmd_.dispatch(raster_bwd,
+                {tile_range_, *sorted_slots_, gaussian_id_from_slot_, proj_mean_conic_, proj_misc_, proj_color_, final_T_,
+                 last_isect_, v_rgb, v_alpha, plane(0), plane(1), plane(2), plane(3), plane(4), plane(5), plane(6), plane(7),
+                 plane(8)},
+                raster_pc_.data(), sizeof(RasterPC), cmd_.linear_groups(tiles_x_ * tiles_y_));
+  cmd_.mark("rasterize backward");
+  const gpu::Buffer& dummy = params.sh[0];
+  auto band = [&](const GaussianBuffers& b, int l) -> const gpu::Buffer& { return l <= b.sh_degree ? b.sh[l] : b.sh[0]; };
+  (void)dummy;
+  cmd_.dispatch("splat/project_bwd",
+                {params.means, params.log_scales, params.quats, params.opacity_logits, band(params, 0), band(params, 1),
+                 band(params, 2), band(params, 3), isect_offset_, gaussian_id_from_slot_, plane(0), plane(1), plane(2),
+                 plane(3), plane(4), plane(5), plane(6), plane(7), plane(8), grads.means, grads.log_scales, grads.quats,
+                 grads.opacity_logits, band(grads, 0), band(grads, 1), band(grads, 2), band(grads, 3), grad2d_norm_,
+                 pose_partial_},
+                project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(groups));
+  ReducePC rp{groups, 0, 0, 0};
+  cmd_.dispatch("splat/pose_reduce", {pose_partial_, pose_}, rp, gpu::Groups{1, 1, 1});
+  cmd_.mark("project backward");
+  cmd_.submit();
+  for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
+}
+
+std::array<float, 6> Rasterizer::pose_gradient() const {
+  std::array<float, 6> g;
+  pose_.download(g.data(), 24);
+  return g;
+}
+
+}  // namespace evflow

@@ -1,0 +1,47 @@
+#version 450
+// Key emission: one invocation per Gaussian. Writes one (key, slot) pair per tile its support
+// meets, at slots [offset[g], offset[g+1]) — the same exact test as project.comp counted.
+// key = tile id << depth_bits | top bits of the depth remapped to [1, 2).
+#extension GL_GOOGLE_include_directive : require
+#include "splat/splat_layout.h"
+#include "common/dispatch.glsl"
+#include "splat/splat_math.glsl"
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) readonly buffer ProjA { vec4 proj_mean_conic[]; };
+layout(std430, binding = 1) readonly buffer ProjB { vec4 proj_misc[]; };
+layout(std430, binding = 2) readonly buffer Rect { uvec4 tile_rect[]; };
+layout(std430, binding = 3) readonly buffer Offsets { uint isect_offset[]; };   // [N+1]
+layout(std430, binding = 4) writeonly buffer Keys { uint keys[]; };
+layout(std430, binding = 5) writeonly buffer Values { uint slot_from_isect[]; };
+layout(std430, binding = 6) writeonly buffer Gid { uint gaussian_id_from_slot[]; };
+layout(push_constant) uniform PC { ProjectPC pc; };
+
+void main() {
+  uint g = evf_linear_invocation(128);
+  if (g >= pc.num_gaussians) return;
+  uint begin = isect_offset[g], end = isect_offset[g + 1];
+  if (begin == end) return;
+  vec4 a = proj_mean_conic[g], b = proj_misc[g];
+  vec2 mean2d = a.xy;
+  vec3 conic = vec3(a.zw, b.x);
+  float q_max = b.w;
+  float zr = (2.0 * b.z + 1.0) / (b.z + 1.0);  // monotonic map of depth into [1, 2)
+  uint depth_key = (floatBitsToUint(zr) & 0x7FFFFFu) >> (23u - pc.depth_bits);
+  uvec4 r = tile_rect[g];
+  uint slot = begin;
+  for (uint ty = r.y; ty < r.w; ++ty)
+    for (uint tx = r.x; tx < r.z; ++tx) {
+      vec2 lo = vec2(tx * kTileSize, ty * kTileSize) + 0.5, hi = lo + float(kTileSize - 1);
+      if (slot < end && ellipse_meets_rect(mean2d, conic, q_max, lo, hi)) {
+        keys[slot] = ((ty * pc.tiles_x + tx) << pc.depth_bits) | depth_key;
+        slot_from_isect[slot] = slot;
+        gaussian_id_from_slot[slot] = g;
+        slot++;
+      }
+    }
+  for (; slot < end; ++slot) {  // only if the two passes disagreed: never read as a tile
+    keys[slot] = pc.sentinel_key;
+    slot_from_isect[slot] = slot;
+    gaussian_id_from_slot[slot] = 0xFFFFFFFFu;
+  }
+}

@@ -1,0 +1,156 @@
+#version 450
+// Projection backward: one invocation per Gaussian. Sums the Gaussian's intersection slots in
+// order (deterministic), then chains v_mean2d, v_conic, v_opacity and v_colour back to its
+// parameters, and its share of the camera-pose gradient (se(3), translation first, exact:
+// through the camera-space mean, the rotated covariance and the SH view direction), which the
+// workgroup reduces to one partial 6-vector.
+#extension GL_GOOGLE_include_directive : require
+#include "splat/splat_layout.h"
+#include "common/dispatch.glsl"
+#include "splat/splat_math.glsl"
+layout(local_size_x = 128) in;
+#include "splat/params.glsl"
+layout(std430, binding = 8) readonly buffer Offsets { uint isect_offset[]; };
+layout(std430, binding = 9) readonly buffer Gid { uint gaussian_id_from_slot[]; };
+layout(std430, binding = 10) readonly buffer G0 { float g_mean_x[]; };
+layout(std430, binding = 11) readonly buffer G1 { float g_mean_y[]; };
+layout(std430, binding = 12) readonly buffer G2 { float g_conic_x[]; };
+layout(std430, binding = 13) readonly buffer G3 { float g_conic_y[]; };
+layout(std430, binding = 14) readonly buffer G4 { float g_conic_z[]; };
+layout(std430, binding = 15) readonly buffer G5 { float g_opacity[]; };
+layout(std430, binding = 16) readonly buffer G6 { float g_red[]; };
+layout(std430, binding = 17) readonly buffer G7 { float g_green[]; };
+layout(std430, binding = 18) readonly buffer G8 { float g_blue[]; };
+layout(std430, binding = 19) writeonly buffer VMeans { float v_means[]; };
+layout(std430, binding = 20) writeonly buffer VLogScales { float v_log_scales[]; };
+layout(std430, binding = 21) writeonly buffer VQuats { float v_quats[]; };
+layout(std430, binding = 22) writeonly buffer VOpacities { float v_opacity_logits[]; };
+layout(std430, binding = 23) writeonly buffer VSh0 { float v_sh0[]; };
+layout(std430, binding = 24) writeonly buffer VSh1 { float v_sh1[]; };
+layout(std430, binding = 25) writeonly buffer VSh2 { float v_sh2[]; };
+layout(std430, binding = 26) writeonly buffer VSh3 { float v_sh3[]; };
+layout(std430, binding = 27) writeonly buffer Grad2d { float grad2d_norm[]; };
+layout(std430, binding = 28) writeonly buffer PosePartial { float pose_partial[]; };  // [groups][6]
+layout(push_constant) uniform PC { ProjectPC pc; };
+
+shared float red[6][128];
+
+void store_sh(uint g, uint k, vec3 v) {
+  if (k == 0) { v_sh0[3 * g] = v.x; v_sh0[3 * g + 1] = v.y; v_sh0[3 * g + 2] = v.z; return; }
+  uint i;
+  if (k < 4) { i = (g * 3 + (k - 1)) * 3; v_sh1[i] = v.x; v_sh1[i + 1] = v.y; v_sh1[i + 2] = v.z; return; }
+  if (k < 9) { i = (g * 5 + (k - 4)) * 3; v_sh2[i] = v.x; v_sh2[i + 1] = v.y; v_sh2[i + 2] = v.z; return; }
+  i = (g * 7 + (k - 9)) * 3;
+  v_sh3[i] = v.x; v_sh3[i + 1] = v.y; v_sh3[i + 2] = v.z;
+}
+
+void main() {
+  uint g = evf_linear_invocation(128);
+  uint lid = gl_LocalInvocationIndex;
+  float pose[6] = float[6](0, 0, 0, 0, 0, 0);
+  if (g < pc.num_gaussians) {
+    uint buffer_degree = (pc.flags >> 8) & 3u;
+    uint K_buf = (buffer_degree + 1) * (buffer_degree + 1);
+    uint K = (pc.sh_degree + 1) * (pc.sh_degree + 1);
+    // Sum of this Gaussian's per-tile gradients, in slot order.
+    vec2 v_mean2d = vec2(0.0);
+    vec3 v_conic = vec3(0.0), v_color = vec3(0.0);
+    float v_opac = 0.0;
+    uint begin = isect_offset[g], end = isect_offset[g + 1];
+    for (uint s = begin; s < end; ++s) {
+      if (gaussian_id_from_slot[s] != g) continue;
+      v_mean2d += vec2(g_mean_x[s], g_mean_y[s]);
+      v_conic += vec3(g_conic_x[s], g_conic_y[s], g_conic_z[s]);
+      v_opac += g_opacity[s];
+      v_color += vec3(g_red[s], g_green[s], g_blue[s]);
+    }
+    vec3 v_mean = vec3(0.0), v_ls = vec3(0.0);
+    vec4 v_q = vec4(0.0);
+    float v_logit = 0.0;
+    for (uint k = K; k < K_buf; ++k) store_sh(g, k, vec3(0.0));
+    if (begin == end) {
+      for (uint k = 0; k < K; ++k) store_sh(g, k, vec3(0.0));
+    } else {
+      // Recompute the forward intermediates.
+      Camera cam = camera_from(pc.cam);
+      vec3 mean = load_vec3(g, 0), log_scale = load_vec3(g, 1);
+      vec4 q = load_quat(g);
+      vec4 qn = normalize(q);
+      vec3 p = cam.R * mean + cam.t;
+      mat3 Sigma = covariance_3d(log_scale, qn);
+      mat3 Sigma_c = cam.R * Sigma * transpose(cam.R);
+      mat3x2 J = ewa_jacobian(p, cam);
+      mat2 cov = J * Sigma_c * transpose(J);
+      vec3 cov2d = vec3(cov[0][0], cov[0][1], cov[1][1]);
+      float sig = 1.0 / (1.0 + exp(-opacity_logits[g]));
+      bool aa = (pc.flags & kFlagAntialiased) != 0;
+
+      // Colour: rgb = max(sum_k Y_k sh_k + 0.5, 0).
+      vec3 campos = camera_center(cam);
+      vec3 dvec = mean - campos;
+      float dlen = length(dvec);
+      vec3 dir = dvec / dlen;
+      float Y[16];
+      sh_basis(dir, pc.sh_degree, Y);
+      vec3 raw = vec3(0.5);
+      for (uint k = 0; k < K; ++k) raw += Y[k] * load_sh(g, k);
+      vec3 v_raw = v_color * vec3(greaterThan(raw, vec3(0.0)));
+      float w[16];
+      for (uint k = 0; k < 16; ++k) w[k] = 0.0;
+      for (uint k = 0; k < K; ++k) {
+        store_sh(g, k, Y[k] * v_raw);
+        w[k] = dot(load_sh(g, k), v_raw);
+      }
+      vec3 v_dir = sh_basis_vjp(dir, pc.sh_degree, w);
+      vec3 v_dvec = (v_dir - dir * dot(dir, v_dir)) / dlen;
+      v_mean += v_dvec;
+      vec3 v_campos = -v_dvec;
+
+      // Opacity (and the antialiasing compensation).
+      float comp = aa ? aa_compensation(cov2d) : 1.0;
+      v_logit = v_opac * comp * sig * (1.0 - sig);
+      vec3 v_cov2d = aa ? aa_compensation_vjp(cov2d, v_opac * sig) : vec3(0.0);
+      // Conic.
+      v_cov2d += conic_vjp(cov2d, v_conic);
+      // cov2d = J Sigma_c J^T.
+      mat2 G = mat2(v_cov2d.x, 0.5 * v_cov2d.y, 0.5 * v_cov2d.y, v_cov2d.z);
+      mat3x2 v_J = 2.0 * (G * J * Sigma_c);
+      mat3 v_Sigma_c = transpose(J) * G * J;
+      vec3 v_p = ewa_jacobian_vjp(p, cam, v_J);
+      // mean2d = (fx x/z + cx, fy y/z + cy).
+      float iz = 1.0 / p.z;
+      v_p.x += v_mean2d.x * cam.intrin.x * iz;
+      v_p.y += v_mean2d.y * cam.intrin.y * iz;
+      v_p.z -= (v_mean2d.x * cam.intrin.x * p.x + v_mean2d.y * cam.intrin.y * p.y) * iz * iz;
+      // p = R mean + t;  Sigma_c = R Sigma R^T.
+      v_mean += transpose(cam.R) * v_p;
+      mat3 v_Sigma = transpose(cam.R) * v_Sigma_c * cam.R;
+      vec4 v_qn;
+      covariance_3d_vjp(log_scale, qn, v_Sigma, v_ls, v_qn);
+      v_q = normalize_vjp(q, v_qn);
+
+      // Pose, w2c' = Exp(-delta) w2c: d p = -rho - phi x p, d Sigma_c = -[phi]x Sigma_c + Sigma_c [phi]x,
+      // d campos = R^T rho. With N = p v_p^T + 2 Sigma_c v_Sigma_c: dL/dphi = -(N12-N21, N20-N02, N01-N10).
+      vec3 v_rho = -v_p + cam.R * v_campos;
+      mat3 N = outerProduct(p, v_p) + 2.0 * (Sigma_c * v_Sigma_c);
+      pose[0] = v_rho.x; pose[1] = v_rho.y; pose[2] = v_rho.z;
+      pose[3] = -(N[2][1] - N[1][2]);
+      pose[4] = -(N[0][2] - N[2][0]);
+      pose[5] = -(N[1][0] - N[0][1]);
+    }
+    v_means[3 * g] = v_mean.x; v_means[3 * g + 1] = v_mean.y; v_means[3 * g + 2] = v_mean.z;
+    v_log_scales[3 * g] = v_ls.x; v_log_scales[3 * g + 1] = v_ls.y; v_log_scales[3 * g + 2] = v_ls.z;
+    v_quats[4 * g] = v_q.x; v_quats[4 * g + 1] = v_q.y; v_quats[4 * g + 2] = v_q.z; v_quats[4 * g + 3] = v_q.w;
+    v_opacity_logits[g] = v_logit;
+    grad2d_norm[g] = length(v_mean2d);
+  }
+  // Workgroup reduction of the pose contributions (fixed order: deterministic).
+  for (uint k = 0; k < 6; ++k) red[k][lid] = pose[k];
+  barrier();
+  for (uint s = 64u; s > 0u; s >>= 1) {
+    if (lid < s)
+      for (uint k = 0; k < 6; ++k) red[k][lid] += red[k][lid + s];
+    barrier();
+  }
+  if (lid < 6) pose_partial[evf_linear_group() * 6 + lid] = red[lid][0];
+}

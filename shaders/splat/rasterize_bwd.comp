@@ -1,0 +1,134 @@
+#version 450
+// Backward rasterization: one workgroup per 16x16 tile, one invocation per pixel, walking the
+// tile's Gaussians back to front from each pixel's final transmittance and last blended index.
+// Per Gaussian, the 256 pixels' gradients are summed inside the workgroup (subgroupAdd, then
+// one shared-memory add per subgroup) and written once to the Gaussian's intersection slot:
+// no global atomics, so project_bwd sums each Gaussian's slots in a fixed order.
+// EVF_CAS_ATOMICS builds the variant for devices without shared float atomics.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#ifndef EVF_CAS_ATOMICS
+#extension GL_EXT_shader_atomic_float : require
+#endif
+#include "splat/splat_layout.h"
+#include "common/dispatch.glsl"
+#include "splat/splat_math.glsl"
+layout(local_size_x = 16, local_size_y = 16) in;
+#include "splat/raster_io.glsl"
+layout(std430, binding = 6) readonly buffer InT { float final_T[]; };
+layout(std430, binding = 7) readonly buffer InLast { uint last_isect[]; };
+layout(std430, binding = 8) readonly buffer VRgb { float v_rgb[]; };      // [3][H][W]
+layout(std430, binding = 9) readonly buffer VAlpha { float v_alpha[]; };  // [H][W]
+// Per-slot gradients, one plane per quantity: v_mean2d.xy, v_conic.xyz, v_opacity, v_rgb.
+layout(std430, binding = 10) writeonly buffer G0 { float g_mean_x[]; };
+layout(std430, binding = 11) writeonly buffer G1 { float g_mean_y[]; };
+layout(std430, binding = 12) writeonly buffer G2 { float g_conic_x[]; };
+layout(std430, binding = 13) writeonly buffer G3 { float g_conic_y[]; };
+layout(std430, binding = 14) writeonly buffer G4 { float g_conic_z[]; };
+layout(std430, binding = 15) writeonly buffer G5 { float g_opacity[]; };
+layout(std430, binding = 16) writeonly buffer G6 { float g_red[]; };
+layout(std430, binding = 17) writeonly buffer G7 { float g_green[]; };
+layout(std430, binding = 18) writeonly buffer G8 { float g_blue[]; };
+layout(push_constant) uniform PC { RasterPC pc; };
+
+#ifdef EVF_CAS_ATOMICS
+shared uint acc[256 * 9];
+void acc_add(uint i, float v) {
+  uint old = acc[i];
+  for (;;) {
+    uint prev = atomicCompSwap(acc[i], old, floatBitsToUint(uintBitsToFloat(old) + v));
+    if (prev == old) break;
+    old = prev;
+  }
+}
+float acc_get(uint i) { return uintBitsToFloat(acc[i]); }
+void acc_zero(uint i) { acc[i] = 0u; }
+#else
+shared float acc[256 * 9];
+void acc_add(uint i, float v) { atomicAdd(acc[i], v); }
+float acc_get(uint i) { return acc[i]; }
+void acc_zero(uint i) { acc[i] = 0.0; }
+#endif
+
+void main() {
+  ivec2 tile = tile_of_group(pc.tiles_x);
+  ivec2 pix = tile * int(kTileSize) + ivec2(gl_LocalInvocationID.xy);
+  bool inside = pix.x < int(pc.width) && pix.y < int(pc.height);
+  vec2 centre = vec2(pix) + 0.5;
+  uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
+  uint hw = pc.width * pc.height, pi = inside ? uint(pix.y) * pc.width + uint(pix.x) : 0u;
+  float T = inside ? final_T[pi] : 1.0;
+  float T_final = T;
+  uint last = inside ? last_isect[pi] : range.x;
+  vec3 v_C = inside ? vec3(v_rgb[pi], v_rgb[hw + pi], v_rgb[2 * hw + pi]) : vec3(0.0);
+  float v_A = inside ? v_alpha[pi] : 0.0;
+  vec3 S = pc.background.rgb * T_final;  // colour of everything behind the current Gaussian
+  uint lid = gl_LocalInvocationIndex;
+  uint count = range.y - range.x;
+  for (uint nb = (count + 255u) / 256u; nb > 0u; --nb) {
+    uint start = range.x + (nb - 1u) * 256u;
+    uint n = min(256u, range.y - start);
+    barrier();
+    if (lid < n) load_batch_entry(lid, start + lid);
+    for (uint k = 0; k < 9; ++k) acc_zero(lid * 9 + k);
+    barrier();
+    for (uint jj = n; jj > 0u; --jj) {
+      uint j = jj - 1u;
+      bool contrib = inside && start + j < last;
+      float g[9] = float[9](0, 0, 0, 0, 0, 0, 0, 0, 0);
+      if (contrib) {
+        vec4 a = batch_mean_conic[j], b = batch_misc[j];
+        vec3 conic = vec3(a.zw, b.x);
+        vec2 d = a.xy - centre;
+        float power = splat_power(conic, d);
+        float G = exp(power);
+        float raw = b.y * G;
+        float alpha = min(kAlphaMax, raw);
+        if (alpha < kAlphaMin) {
+          contrib = false;
+        } else {
+          vec3 col = batch_color[j];
+          float one_minus = 1.0 - alpha;
+          float T_before = T / one_minus;
+          vec3 v_col = (alpha * T_before) * v_C;
+          float v_alpha_j = T_before * dot(col, v_C) - dot(S, v_C) / one_minus + v_A * T_final / one_minus;
+          S += col * (alpha * T_before);
+          T = T_before;
+          if (raw < kAlphaMax) {
+            float v_power = alpha * v_alpha_j;
+            g[0] = -v_power * (conic.x * d.x + conic.y * d.y);
+            g[1] = -v_power * (conic.y * d.x + conic.z * d.y);
+            g[2] = -0.5 * d.x * d.x * v_power;
+            g[3] = -d.x * d.y * v_power;
+            g[4] = -0.5 * d.y * d.y * v_power;
+            g[5] = G * v_alpha_j;
+          }
+          g[6] = v_col.r;
+          g[7] = v_col.g;
+          g[8] = v_col.b;
+        }
+      }
+      if (subgroupAny(contrib)) {
+        for (uint k = 0; k < 9; ++k) {
+          float s = subgroupAdd(g[k]);
+          if (subgroupElect() && s != 0.0) acc_add(j * 9 + k, s);
+        }
+      }
+    }
+    barrier();
+    if (lid < n) {
+      uint slot = batch_slot[lid], o = lid * 9;
+      g_mean_x[slot] = acc_get(o);
+      g_mean_y[slot] = acc_get(o + 1);
+      g_conic_x[slot] = acc_get(o + 2);
+      g_conic_y[slot] = acc_get(o + 3);
+      g_conic_z[slot] = acc_get(o + 4);
+      g_opacity[slot] = acc_get(o + 5);
+      g_red[slot] = acc_get(o + 6);
+      g_green[slot] = acc_get(o + 7);
+      g_blue[slot] = acc_get(o + 8);
+    }
+  }
+}

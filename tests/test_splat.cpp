@@ -1,0 +1,187 @@
+// GPU rasterizer vs the double-precision CPU reference (tests/reference): forward within 1e-4,
+// every gradient (pose included) against central finite differences of the reference.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "gpu_fixture.h"
+#include "reference/random_scene.h"
+#include "reference/splat_reference.h"
+#include "splat/rasterizer.h"
+
+using namespace evflow;
+using reference::Param;
+
+namespace {
+
+struct Scene {
+  GaussianCloud cloud;
+  Camera cam;
+  RenderSettings settings;
+};
+
+Scene make_scene(uint64_t seed, size_t n, int degree, uint32_t w, uint32_t h, bool aa) {
+  Scene s;
+  s.cam = reference::test_camera(w, h);
+  s.cloud = reference::random_scene(seed, n, degree, s.cam);
+  s.settings.antialiased = aa;
+  s.settings.background = {0.2f, 0.5f, 0.9f};
+  return s;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Of several finite differences at different steps, the mean of the two that agree best: a step
+// that straddles a discontinuity gives a value ~jump/h that agrees with none of the others.
+double consensus(const std::vector<double>& v) {
+  double best = 1e300, out = v[0];
+  for (size_t a = 0; a < v.size(); ++a)
+    for (size_t b = a + 1; b < v.size(); ++b) {
+      double d = std::abs(v[a] - v[b]) / std::max({std::abs(v[a]), std::abs(v[b]), 1e-12});
+      if (d < best) { best = d; out = 0.5 * (v[a] + v[b]); }
+    }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("splat forward matches the double-precision reference", "[gpu][splat]") {
+  auto& ctx = test::gpu_context();
+  for (bool aa : {false, true}) {
+    Scene s = make_scene(aa ? 7 : 5, 2000, 3, 160, 120, aa);
+    GaussianBuffers params(ctx, s.cloud.size(), s.cloud.sh_degree, "p_");
+    params.upload(s.cloud);
+    Rasterizer r(ctx);
+    r.forward(params, s.cam, s.settings);
+    auto ref = reference::render(s.cloud, s.cam, s.settings);
+    const size_t hw = size_t(s.cam.width) * s.cam.height;
+    auto rgb = r.outputs().rgb.read<float>(3 * hw);
+    auto alpha = r.outputs().alpha.read<float>(hw);
+    double max_rgb = 0, max_alpha = 0;
+    for (size_t i = 0; i < 3 * hw; ++i) max_rgb = std::max(max_rgb, std::abs(rgb[i] - ref.rgb[i]));
+    for (size_t i = 0; i < hw; ++i) max_alpha = std::max(max_alpha, std::abs(alpha[i] - ref.alpha[i]));
+    std::printf("forward (antialiased %d): %u intersections, max |rgb - ref| %.3g, max |alpha - ref| %.3g\n", aa,
+                r.num_intersections(), max_rgb, max_alpha);
+    REQUIRE(r.num_intersections() > 2000);
+    REQUIRE(max_rgb <= 1e-4);
+    REQUIRE(max_alpha <= 1e-4);
+  }
+  test::require_no_validation_messages();
+}
+
+static void check_gradients(gpu::Context& ctx, const Scene& s, size_t sampled_gaussians, uint64_t seed) {
+  const size_t hw = size_t(s.cam.width) * s.cam.height;
+  auto v_rgb = reference::random_weights(seed, 3 * hw);
+  auto v_alpha = reference::random_weights(seed + 1, hw);
+  GaussianBuffers params(ctx, s.cloud.size(), s.cloud.sh_degree, "p_");
+  GaussianBuffers grads(ctx, s.cloud.size(), s.cloud.sh_degree, "v_");
+  params.upload(s.cloud);
+  gpu::Buffer b_vrgb(ctx, 3 * hw * 4, "v_rgb"), b_valpha(ctx, hw * 4, "v_alpha");
+  b_vrgb.write(v_rgb);
+  b_valpha.write(v_alpha);
+  Rasterizer r(ctx);
+  r.forward(params, s.cam, s.settings);
+  r.backward(params, b_vrgb, b_valpha, grads);
+  GaussianCloud g = grads.download();
+  auto pose = r.pose_gradient();
+  reference::FiniteDifferences fd(s.cloud, s.cam, s.settings, v_rgb, v_alpha);
+
+  // The rendered image is discontinuous where a Gaussian's alpha crosses 1/255 or a pixel's
+  // transmittance stop moves; like every 3DGS gradient, ours is the gradient of the smooth part.
+  // A central difference over a step h straddles such a jump with probability ~h, and then is
+  // off by ~jump/h: small steps (exact enough in double precision) keep those rare.
+  const double h = 1e-6;
+  // Gaussians that are visible (non-zero gradient somewhere) get sampled.
+  std::vector<size_t> ids(s.cloud.size());
+  for (size_t i = 0; i < ids.size(); ++i) ids[i] = i;
+  std::mt19937_64 rng(seed);
+  std::shuffle(ids.begin(), ids.end(), rng);
+  ids.resize(std::min(sampled_gaussians, ids.size()));
+  struct Kind { Param p; const char* name; const std::vector<float>* v; int comps; };
+  const int K = s.cloud.coeffs();
+  std::vector<Kind> kinds = {{Param::Mean, "means", &g.means, 3},
+                             {Param::LogScale, "log_scales", &g.log_scales, 3},
+                             {Param::Quat, "quats", &g.quats, 4},
+                             {Param::OpacityLogit, "opacity_logits", &g.opacity_logits, 1},
+                             {Param::Sh, "sh", &g.sh, K * 3}};
+  for (auto& kind : kinds) {
+    std::vector<double> rel;
+    size_t zero_both = 0;
+    for (size_t id : ids)
+      for (int c = 0; c < kind.comps; ++c) {
+        double gpu = (*kind.v)[id * kind.comps + c];
+        double ref = fd.param(kind.p, id, c, h);
+        if (std::abs(gpu - ref) > 1e-3 * std::max(std::abs(gpu), std::abs(ref)))  // a jump? re-check with consensus
+          ref = consensus({ref, fd.param(kind.p, id, c, 1e-5), fd.param(kind.p, id, c, 3e-6), fd.param(kind.p, id, c, 3e-7),
+                           fd.param(kind.p, id, c, 1e-7)});
+        double scale = std::max(std::abs(gpu), std::abs(ref));
+        if (scale < 1e-7) { ++zero_both; continue; }
+        rel.push_back(std::abs(gpu - ref) / scale);
+      }
+    double med = median(rel), mx = rel.empty() ? 0 : *std::max_element(rel.begin(), rel.end());
+    size_t above = std::count_if(rel.begin(), rel.end(), [](double e) { return e > 1e-2; });
+    std::printf("gradient %-15s %5zu compared (%zu both ~0): median rel. error %.2e, max %.2e, %zu above 1e-2\n",
+                kind.name, rel.size(), zero_both, med, mx, above);
+    INFO(kind.name);
+    REQUIRE(rel.size() > ids.size() / 4);
+    REQUIRE(med < 1e-3);
+    REQUIRE(above * 100 <= rel.size());  // outliers: parameters sitting on a discontinuity
+  }
+  // Every Gaussian moves with the camera, so some pixel flips at the 1/255 threshold even for
+  // small steps; take, per component, the two step sizes that agree best (a jump shows up as a
+  // value that scales with 1/h and agrees with none of the others).
+  std::vector<std::array<double, 6>> trials;
+  for (double step : {3e-9, 1e-9, 3e-10, 1e-10}) trials.push_back(fd.pose(step));
+  std::array<double, 6> fpose{};
+  for (int i = 0; i < 6; ++i) fpose[i] = consensus({trials[0][i], trials[1][i], trials[2][i], trials[3][i]});
+  std::vector<double> rel;
+  for (int i = 0; i < 6; ++i) {
+    double e = std::abs(pose[i] - fpose[i]) / std::max({std::abs(double(pose[i])), std::abs(fpose[i]), 1e-9});
+    rel.push_back(e);
+    std::printf("pose[%d]: gpu %.6g  fd %.6g  rel. error %.2e\n", i, pose[i], fpose[i], e);
+  }
+  REQUIRE(median(rel) < 1e-3);
+  REQUIRE(*std::max_element(rel.begin(), rel.end()) < 1e-2);
+}
+
+TEST_CASE("splat gradients match finite differences of the reference", "[gpu][splat][gradient]") {
+  auto& ctx = test::gpu_context();
+  SECTION("SH degree 3") { check_gradients(ctx, make_scene(21, 2000, 3, 160, 120, false), 250, 3); }
+  SECTION("antialiased, SH degree 1") { check_gradients(ctx, make_scene(22, 2000, 1, 176, 128, true), 250, 4); }
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("splat backward without float atomics (compare-and-swap path) gives the same gradients", "[gpu][splat]") {
+  Scene s = make_scene(31, 600, 2, 96, 80, false);
+  auto run = [&](gpu::Context& ctx) {
+    GaussianBuffers params(ctx, s.cloud.size(), 2, "p_"), grads(ctx, s.cloud.size(), 2, "v_");
+    params.upload(s.cloud);
+    const size_t hw = 96 * 80;
+    gpu::Buffer vr(ctx, hw * 12, "v_rgb"), va(ctx, hw * 4, "v_alpha");
+    vr.write(reference::random_weights(1, 3 * hw));
+    va.write(reference::random_weights(2, hw));
+    Rasterizer r(ctx);
+    r.forward(params, s.cam, s.settings);
+    r.backward(params, vr, va, grads);
+    return grads.download();
+  };
+  auto a = run(test::gpu_context());
+  gpu::ContextOptions o = gpu::ContextOptions::from_env();
+  o.validation = true;
+  o.poison = true;
+  o.force_cas = true;
+  gpu::Context cas_ctx(o);
+  REQUIRE_FALSE(cas_ctx.caps().shared_float_atomic_add);
+  auto b = run(cas_ctx);
+  for (size_t i = 0; i < a.means.size(); ++i) REQUIRE(a.means[i] == Approx(b.means[i]).margin(1e-6).epsilon(1e-4));
+  for (size_t i = 0; i < a.sh.size(); ++i) REQUIRE(a.sh[i] == Approx(b.sh[i]).margin(1e-6).epsilon(1e-4));
+  REQUIRE(cas_ctx.take_validation_messages().empty());
+  test::require_no_validation_messages();
+}
