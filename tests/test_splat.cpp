@@ -158,7 +158,7 @@ TEST_CASE("splat gradients match finite differences of the reference", "[gpu][sp
   test::require_no_validation_messages();
 }
 
-TEST_CASE("splat backward without float atomics (compare-and-swap path) gives the same gradients", "[gpu][splat]") {
+TEST_CASE("splat backward: compare-and-swap and subgroup-reduction paths give the same gradients", "[gpu][splat]") {
   Scene s = make_scene(31, 600, 2, 96, 80, false);
   auto run = [&](gpu::Context& ctx) {
     GaussianBuffers params(ctx, s.cloud.size(), 2, "p_"), grads(ctx, s.cloud.size(), 2, "v_");
@@ -183,5 +183,11 @@ TEST_CASE("splat backward without float atomics (compare-and-swap path) gives th
   for (size_t i = 0; i < a.means.size(); ++i) REQUIRE(a.means[i] == Approx(b.means[i]).margin(1e-6).epsilon(1e-4));
   for (size_t i = 0; i < a.sh.size(); ++i) REQUIRE(a.sh[i] == Approx(b.sh[i]).margin(1e-6).epsilon(1e-4));
   REQUIRE(cas_ctx.take_validation_messages().empty());
+  // And the subgroup-reduction path GPUs take (lavapipe defaults to per-lane adds).
+  setenv("EVF_SUBGROUP_REDUCE", "1", 1);
+  auto c = run(test::gpu_context());
+  unsetenv("EVF_SUBGROUP_REDUCE");
+  for (size_t i = 0; i < a.means.size(); ++i) REQUIRE(a.means[i] == Approx(c.means[i]).margin(1e-6).epsilon(1e-4));
+  for (size_t i = 0; i < a.quats.size(); ++i) REQUIRE(a.quats[i] == Approx(c.quats[i]).margin(1e-6).epsilon(1e-4));
   test::require_no_validation_messages();
 }

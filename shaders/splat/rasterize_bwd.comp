@@ -32,6 +32,7 @@ layout(std430, binding = 16) writeonly buffer G6 { float g_red[]; };
 layout(std430, binding = 17) writeonly buffer G7 { float g_green[]; };
 layout(std430, binding = 18) writeonly buffer G8 { float g_blue[]; };
 layout(push_constant) uniform PC { RasterPC pc; };
+shared uint tile_last;
 
 #ifdef EVF_CAS_ATOMICS
 shared uint acc[256 * 9];
@@ -67,6 +68,13 @@ void main() {
   vec3 S = pc.background.rgb * T_final;  // colour of everything behind the current Gaussian
   uint lid = gl_LocalInvocationIndex;
   uint count = range.y - range.x;
+  // Gaussians at or past the tile's largest `last` blended into no pixel: their slots get zeros
+  // without being visited.
+  if (lid == 0) tile_last = range.x;
+  barrier();
+  atomicMax(tile_last, last);
+  barrier();
+  uint visit_end = tile_last;
   for (uint nb = (count + 255u) / 256u; nb > 0u; --nb) {
     uint start = range.x + (nb - 1u) * 256u;
     uint n = min(256u, range.y - start);
@@ -74,7 +82,8 @@ void main() {
     if (lid < n) load_batch_entry(lid, start + lid);
     for (uint k = 0; k < 9; ++k) acc_zero(lid * 9 + k);
     barrier();
-    for (uint jj = n; jj > 0u; --jj) {
+    uint n_visit = start < visit_end ? min(n, visit_end - start) : 0u;
+    for (uint jj = n_visit; jj > 0u; --jj) {
       uint j = jj - 1u;
       bool contrib = inside && start + j < last;
       float g[9] = float[9](0, 0, 0, 0, 0, 0, 0, 0, 0);
@@ -110,11 +119,17 @@ void main() {
           g[8] = v_col.b;
         }
       }
-      if (subgroupAny(contrib)) {
-        for (uint k = 0; k < 9; ++k) {
-          float s = subgroupAdd(g[k]);
-          if (subgroupElect() && s != 0.0) acc_add(j * 9 + k, s);
+      if (pc.subgroup_reduce != 0u) {
+        // GPUs: sum over the subgroup first, one shared add per subgroup.
+        if (subgroupAny(contrib)) {
+          for (uint k = 0; k < 9; ++k) {
+            float s = subgroupAdd(g[k]);
+            if (subgroupElect() && s != 0.0) acc_add(j * 9 + k, s);
+          }
         }
+      } else if (contrib) {
+        // CPU drivers (lavapipe): cross-lane operations cost more than per-lane shared adds.
+        for (uint k = 0; k < 9; ++k) acc_add(j * 9 + k, g[k]);
       }
     }
     barrier();

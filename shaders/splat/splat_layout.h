@@ -43,7 +43,8 @@ struct RasterPC {    // tile ranges, rasterize, rasterize backward
   uint tiles_y;
   uint num_isects;
   uint depth_bits;
-  uint pad0, pad1;
+  uint subgroup_reduce;  // backward: 1 = subgroupAdd before the shared add (GPUs), 0 = per-lane adds
+  uint pad1;
 };
 
 struct ReducePC {
