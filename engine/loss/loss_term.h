@@ -1,0 +1,65 @@
+// LossTerm: the shape every training loss follows (image losses here; events, flow and LDI
+// later). A term records its forward and backward into the caller's Commands: the gradient
+// w.r.t. its prediction, scaled by a weight, is written or added into a gradient buffer, and its
+// scalar value is reduced on the GPU (fixed order, no atomics) into a small value buffer that the
+// host reads after the submit with one small download.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gpu/commands.h"
+
+namespace evflow {
+
+class LossTerm {
+ public:
+  // `value_count` floats are written per record: the loss value first, then term-specific
+  // components (documented by each term).
+  LossTerm(gpu::Context& ctx, std::string name, float weight, uint32_t value_count);
+  virtual ~LossTerm() = default;
+  LossTerm(const LossTerm&) = delete;
+  LossTerm& operator=(const LossTerm&) = delete;
+
+  const std::string& name() const { return name_; }
+  float weight() const { return weight_; }
+  void set_weight(float w) { weight_ = w; }
+
+  // Records forward and backward: grad_out = (accumulate ? grad_out : 0) + weight * dL/dpred,
+  // and the (unweighted) value L into the value slot. With accumulate = false grad_out is only
+  // written, never read. pred, target and grad_out are the term's input layout (images: planar
+  // float C x H x W).
+  virtual void record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buffer& target,
+                      const gpu::Buffer& grad_out, float weight, bool accumulate) = 0;
+  // The same with the term's own weight().
+  void record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buffer& target, const gpu::Buffer& grad_out,
+              bool accumulate) {
+    record(cmd, pred, target, grad_out, weight_, accumulate);
+  }
+
+  // The unweighted loss value of the last submitted record (one 4-byte download).
+  double value() const;
+  // All value_count() floats of the last submitted record (one download).
+  std::vector<float> values() const;
+  uint32_t value_count() const { return value_count_; }
+
+  // Where the values go: the term's own small buffer by default, or floats
+  // [first, first + value_count()) of a shared buffer, so that a trainer reads every term's
+  // value with a single download. The buffer must outlive the term's use of it.
+  void set_value_slot(const gpu::Buffer& buffer, uint32_t first);
+  const gpu::Buffer& value_buffer() const { return *value_buffer_; }
+  uint32_t value_offset() const { return value_first_; }
+
+ protected:
+  gpu::Context& ctx_;
+
+ private:
+  std::string name_;
+  float weight_;
+  uint32_t value_count_;
+  gpu::Buffer own_values_;
+  const gpu::Buffer* value_buffer_;
+  uint32_t value_first_ = 0;
+};
+
+}  // namespace evflow

@@ -1,0 +1,72 @@
+// Image losses and metrics: push constants, flags and sizes shared by engine/loss (C++) and
+// shaders/loss (GLSL).
+//
+// Images are planar float: img[c*H*W + y*W + x]. Every per-pixel kernel runs one invocation per
+// element (linear index i = c*H*W + y*W + x) in workgroups of kLossGroupSize, and writes the
+// workgroup's sum of its per-pixel values into partials[group] (a vec4, fixed-order tree in
+// shared memory). loss/reduce then sums the partials in a fixed order (no atomics), so every
+// value is bit-for-bit reproducible on a given device.
+#ifndef EVF_LOSS_LAYOUT_H
+#define EVF_LOSS_LAYOUT_H
+#include "common/shared_prelude.h"
+EVF_NAMESPACE_BEGIN
+
+EVF_CONST(uint, kLossGroupSize, 256u)
+EVF_CONST(uint, kReduceGroupSize, 256u)
+EVF_CONST(uint, kReduceMaxOutputs, 4u)
+
+// SSIM window: 11 x 11 Gaussian, sigma 1.5 (the separable 1D taps are in ssim_math.glsl).
+EVF_CONST(int, kSsimRadius, 5)
+EVF_CONST(uint, kSsimTaps, 11u)
+
+// Flags of the per-pixel kernels.
+EVF_CONST(uint, kLossWriteGrad, 1u)     // write the gradient (else forward only)
+EVF_CONST(uint, kLossAccumulate, 2u)    // grad += value (else grad = value; grad is not read)
+EVF_CONST(uint, kLossPixelL2, 4u)       // per-pixel term (A-B)^2 instead of |A-B|
+EVF_CONST(uint, kLossWriteSsimMap, 8u)  // ssim_v: store the per-pixel SSIM in plane 3 of D
+
+// loss/pixel: e_i = |A_i - B_i| (or (A_i - B_i)^2); partials[g].x = sum of e over the group;
+// grad_i (+)= grad_scale * de_i/dA_i.
+struct PixelPC {
+  uint count;        // C*H*W
+  uint flags;
+  float grad_scale;  // weight / count for a mean
+  uint pad0;
+};
+
+// loss/ssim_h, ssim_v, ssim_bwd_h, ssim_bwd_v.
+//   H: 5 planes of count floats (horizontally filtered A, B, A^2, B^2, AB; the backward reuses
+//      planes 0..2 for the horizontally filtered partial derivatives)
+//   D: 4 planes: dS/dmu_A, dS/d(E[A^2]), dS/d(E[AB]) per pixel, and the SSIM map (optional)
+// ssim_v partials[g] = (sum of the per-pixel term e, sum of SSIM, 0, 0).
+// ssim_bwd_v: grad (+)= ssim_grad_scale * dSSIM_sum/dA + pixel_grad_scale * de/dA.
+struct SsimPC {
+  uint channels;
+  uint height;
+  uint width;
+  uint count;             // channels * height * width
+  uint flags;
+  float c1;               // (0.01 L)^2
+  float c2;               // (0.03 L)^2
+  float ssim_grad_scale;
+  float pixel_grad_scale;
+  uint pad0, pad1, pad2;
+};
+
+// loss/reduce: s = sum over g < n_partials of partials[g] (vec4), in a fixed order; then for
+// j < n_out: out[dst + j] = dot(coeff[j], s) + offset[j], and -10 log10(that) where bit j of
+// log_mask is set (PSNR from MSE).
+struct ReducePC {
+  vec4 coeff0;
+  vec4 coeff1;
+  vec4 coeff2;
+  vec4 coeff3;
+  vec4 offset;
+  uint n_partials;
+  uint dst;
+  uint n_out;
+  uint log_mask;
+};
+
+EVF_NAMESPACE_END
+#endif
