@@ -1,0 +1,129 @@
+// evflow simulate: render a blurry multi-view dataset with events and ground truth (engine/sim).
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "cli.h"
+#include "gpu/context.h"
+#include "io/npy.h"
+#include "sim/simulator.h"
+
+namespace evflow::app {
+
+static const char* kSimulateHelp =
+    "usage: evflow simulate [options]\n"
+    "Renders a scene (glTF 2.0 or the built-in default) from a camera rig with shaken exposures and\n"
+    "writes a dataset in our layout (docs/datasets.md) plus ground truth (docs/simulator.md).\n\n"
+    "  --out DIR                 output folder (default: sim_dataset)\n"
+    "  --scene FILE              .gltf/.glb scene (default: the built-in default scene)\n"
+    "  --write-default-scene F   write the default scene as glTF (.glb or .gltf) and exit\n"
+    "  --width N --height N      image and sensor size (default: 346 x 260)\n"
+    "  --fov DEG                 vertical field of view (default: 50)\n"
+    "  --train-views N           blurry training views (default: 16)\n"
+    "  --novel-views N           sharp novel (test) views (default: 8)\n"
+    "  --arc DEG                 angular span of the training cameras (default: 50)\n"
+    "  --blur-px PX              target mean pixel path length per exposure (default: 12)\n"
+    "  --exposure S              exposure time per training view, seconds (default: 0.04)\n"
+    "  --view-spacing S          time between training exposures' starts (default: 0.1)\n"
+    "  --translation-share X     translation shake per unit rotation x viewing distance (default: 0.3)\n"
+    "  --max-step-px PX          bound on any pixel's motion between sub-frames (default: 0.5)\n"
+    "  --max-subframes N         per-view sub-frame limit (default: 2000)\n"
+    "  --pose-noise-rot DEG      std dev of rotation noise on the recorded poses (default: 0)\n"
+    "  --pose-noise-trans X      std dev of translation noise on the recorded poses (default: 0)\n"
+    "  --seed N                  random seed (default: 1)\n"
+    "  --events PRESET           event model: default | noisy | ideal (default: default)\n"
+    "  --theta-pos X --theta-neg X --theta-sigma X   thresholds (default: preset's, 0.2 0.2 0.03)\n"
+    "  --refractory S --shot-rate HZ --leak-rate HZ --jitter S   (default: preset's, 5e-4 0 0 0)\n"
+    "  --ambient X               ambient light fraction (default: 0.35)\n"
+    "  --texture-samples N       1 or 4 texture rays per pixel (default: 4)\n"
+    "  --flow mid|all            ground-truth flow written: the interval at mid-exposure per view,\n"
+    "                            or every sub-frame interval gt/flow/<view>_<k>.npy (large) (default: mid)\n"
+    "  --device N|name           Vulkan device (default: automatic)\n"
+    "  --verbose                 per-view statistics\n";
+
+static int run_simulate(const Args& a) {
+  ArgParser p(a);
+  if (p.flag("--help")) { std::printf("%s", kSimulateHelp); return 0; }
+  const std::string export_path = p.value("--write-default-scene");
+  if (!export_path.empty()) {
+    p.reject_unknown();
+    sim::write_gltf(sim::make_default_scene(), export_path);
+    std::printf("wrote the default scene to %s\n", export_path.c_str());
+    return 0;
+  }
+  sim::SimParams sp;
+  const std::string out = p.value("--out", "sim_dataset");
+  const std::string scene_path = p.value("--scene");
+  sp.width = uint32_t(p.integer("--width", sp.width));
+  sp.height = uint32_t(p.integer("--height", sp.height));
+  sp.fov_y_deg = p.number("--fov", sp.fov_y_deg);
+  sp.train_views = int(p.integer("--train-views", sp.train_views));
+  sp.novel_views = int(p.integer("--novel-views", sp.novel_views));
+  sp.arc_deg = p.number("--arc", sp.arc_deg);
+  sp.blur_px = p.number("--blur-px", sp.blur_px);
+  sp.exposure_s = p.number("--exposure", sp.exposure_s);
+  sp.view_spacing_s = p.number("--view-spacing", sp.view_spacing_s);
+  sp.translation_share = p.number("--translation-share", sp.translation_share);
+  sp.max_step_px = p.number("--max-step-px", sp.max_step_px);
+  sp.plan_step_px = std::min(sp.plan_step_px, 0.8 * sp.max_step_px);
+  sp.max_subframes = int(p.integer("--max-subframes", sp.max_subframes));
+  sp.pose_noise_rot_deg = p.number("--pose-noise-rot", 0);
+  sp.pose_noise_trans = p.number("--pose-noise-trans", 0);
+  sp.seed = uint64_t(p.integer("--seed", 1));
+  const std::string preset = p.value("--events", "default");
+  if (preset == "default") sp.events = events::EventModelParams::defaults();
+  else if (preset == "noisy") sp.events = events::EventModelParams::noisy();
+  else if (preset == "ideal") sp.events = events::EventModelParams::ideal();
+  else throw std::invalid_argument("--events must be default, noisy or ideal");
+  sp.events.theta_pos = p.number("--theta-pos", sp.events.theta_pos);
+  sp.events.theta_neg = p.number("--theta-neg", sp.events.theta_neg);
+  sp.events.theta_sigma = p.number("--theta-sigma", sp.events.theta_sigma);
+  sp.events.refractory_s = p.number("--refractory", sp.events.refractory_s);
+  sp.events.shot_rate_hz = p.number("--shot-rate", sp.events.shot_rate_hz);
+  sp.events.leak_rate_hz = p.number("--leak-rate", sp.events.leak_rate_hz);
+  sp.events.jitter_s = p.number("--jitter", sp.events.jitter_s);
+  sp.events.seed = sp.seed;
+  sp.shading.ambient = float(p.number("--ambient", sp.shading.ambient));
+  sp.shading.texture_samples = int(p.integer("--texture-samples", sp.shading.texture_samples));
+  const std::string flow = p.value("--flow", "mid");
+  if (flow != "mid" && flow != "all") throw std::invalid_argument("--flow must be mid or all");
+  gpu::ContextOptions o = gpu::ContextOptions::from_env();
+  const std::string dev = p.value("--device");
+  if (!dev.empty()) o.device = dev;
+  const bool verbose = p.flag("--verbose");
+  p.reject_unknown();
+  if (!p.positional().empty()) throw std::invalid_argument("unexpected argument '" + p.positional()[0] + "'");
+
+  const auto start = std::chrono::steady_clock::now();
+  sim::Scene scene = scene_path.empty() ? sim::make_default_scene() : sim::load_gltf(scene_path);
+  gpu::Context ctx(o);
+  std::printf("simulate: scene %s (%zu triangles, %zu textures), %ux%u, %d training + %d novel views, device %s\n",
+              scene.source.c_str(), scene.triangle_count(), scene.textures.size(), sp.width, sp.height, sp.train_views,
+              sp.novel_views, ctx.caps().name.c_str());
+  sim::Simulator simulator(ctx, scene, sp);
+  const std::filesystem::path dir(out);
+  sim::IntervalCallback cb;
+  if (flow == "all") {
+    std::filesystem::create_directories(dir / "gt" / "flow");
+    cb = [&](const sim::Interval& iv) {
+      char name[64];
+      std::snprintf(name, sizeof name, "%03d_%04d.npy", iv.view, iv.index);
+      io::write_npy<float>(dir / "gt" / "flow" / name, {sp.height, sp.width, 2}, iv.flow);
+    };
+  }
+  sim::SimResult res = simulator.run(cb, verbose);
+  res.scene_source = scene.source;
+  res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  sim::write_simulation(res, dir);
+  const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("simulate: wrote %s\n  time %.1f s (simulation %.1f s), %zu events, %zu sub-frames, mean blur %.2f px, "
+              "max sub-frame step %.3f px\n  EDI (nominal thresholds, 8-bit blurry): PSNR %.2f dB vs blurry %.2f dB "
+              "(gain %.2f dB)\n",
+              out.c_str(), total, res.stats.seconds, res.stats.events, res.stats.subframes, res.stats.mean_blur_px,
+              res.stats.max_step_px, res.stats.psnr_edi, res.stats.psnr_blurry, res.stats.psnr_edi - res.stats.psnr_blurry);
+  return 0;
+}
+
+static Command reg("simulate", "render a blurry event-camera dataset from a glTF scene (or the default scene)", run_simulate);
+
+}  // namespace evflow::app

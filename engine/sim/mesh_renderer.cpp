@@ -1,0 +1,112 @@
+#include "sim/mesh_renderer.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "sim/sim_layout.h"
+
+namespace evflow::sim {
+
+using namespace shaderio;
+
+MeshRenderer::MeshRenderer(gpu::Context& ctx, const Scene& scene, const ShadingParams& shading)
+    : ctx_(ctx), shading_(shading), cmd_(ctx), scan_(ctx) {
+  scene.validate();
+  const size_t T = scene.triangle_count();
+  if (T == 0) throw std::runtime_error(scene.source + ": no triangles to render");
+  if (T >= (1u << 24)) throw std::runtime_error(scene.source + ": too many triangles (" + std::to_string(T) + ")");
+  n_tris_ = uint32_t(T);
+  std::vector<SimTriangle> tris(T);
+  for (size_t i = 0; i < T; ++i) {
+    const float* p = &scene.positions[i * 9];
+    const float* uv = &scene.uvs[i * 6];
+    tris[i].p0 = glm::vec4(p[0], p[1], p[2], float(scene.material[i]));
+    tris[i].p1 = glm::vec4(p[3], p[4], p[5], 0.f);
+    tris[i].p2 = glm::vec4(p[6], p[7], p[8], 0.f);
+    tris[i].uv01 = glm::vec4(uv[0], uv[1], uv[2], uv[3]);
+    tris[i].uv2 = glm::vec4(uv[4], uv[5], 0.f, 0.f);
+  }
+  std::vector<SimMaterial> mats(scene.materials.size());
+  std::vector<uint32_t> texels;
+  std::vector<uint32_t> tex_offset;
+  for (auto& t : scene.textures) {
+    tex_offset.push_back(uint32_t(texels.size()));
+    texels.insert(texels.end(), t.rgba.begin(), t.rgba.end());
+  }
+  if (texels.empty()) texels.push_back(0xFFFFFFFFu);
+  for (size_t i = 0; i < mats.size(); ++i) {
+    const auto& m = scene.materials[i];
+    mats[i].factor = glm::vec4(m.base_color[0], m.base_color[1], m.base_color[2], m.base_color[3]);
+    if (m.texture >= 0) {
+      const auto& t = scene.textures[m.texture];
+      mats[i].tex = glm::uvec4(tex_offset[m.texture], t.width, t.height, t.wrap_s | (t.wrap_t << 2));
+    } else {
+      mats[i].tex = glm::uvec4(kSimNoTexture, 1, 1, 0);
+    }
+  }
+  ctx.check_binding_size(T * sizeof(SimTriangle), scene.source + " triangles");
+  ctx.check_binding_size(texels.size() * 4, scene.source + " textures");
+  tris_ = gpu::Buffer(ctx, T * sizeof(SimTriangle), "sim_tris");
+  tris_.write(tris);
+  materials_ = gpu::Buffer(ctx, mats.size() * sizeof(SimMaterial), "sim_materials");
+  materials_.write(mats);
+  texels_ = gpu::Buffer(ctx, texels.size() * 4, "sim_texels");
+  texels_.write(texels);
+  cam_ = gpu::Buffer(ctx, T * 48, "sim_cam_verts");
+  boxes_ = gpu::Buffer(ctx, T * 16, "sim_boxes");
+  counts_ = gpu::Buffer(ctx, T * 4, "sim_counts");
+  offsets_ = gpu::Buffer(ctx, (T + 1) * 4, "sim_offsets");
+  depth_ = gpu::Buffer(ctx, 16, "sim_depth");
+  ids_ = gpu::Buffer(ctx, 16, "sim_ids");
+  image_ = gpu::Buffer(ctx, 16, "sim_image");
+}
+
+Frame MeshRenderer::render(const Camera& c) {
+  const uint32_t W = c.width, H = c.height;
+  if (W == 0 || H == 0) throw std::invalid_argument("MeshRenderer::render: empty image size");
+  const uint64_t P = uint64_t(W) * H;
+  depth_.ensure(P * 4);
+  ids_.ensure(P * 4);
+  image_.ensure(P * 16);
+  SimPC pc{};
+  pc.r0 = glm::vec4(float(c.R[0]), float(c.R[1]), float(c.R[2]), float(c.t[0]));
+  pc.r1 = glm::vec4(float(c.R[3]), float(c.R[4]), float(c.R[5]), float(c.t[1]));
+  pc.r2 = glm::vec4(float(c.R[6]), float(c.R[7]), float(c.R[8]), float(c.t[2]));
+  pc.intr = glm::vec4(float(c.fx), float(c.fy), float(c.cx), float(c.cy));
+  auto L = shading_.light_dir;
+  const float ln = std::sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+  pc.light = glm::vec4(L[0] / ln, L[1] / ln, L[2] / ln, shading_.ambient);
+  pc.background = glm::vec4(shading_.background[0], shading_.background[1], shading_.background[2], 0.f);
+  pc.dims = glm::uvec4(W, H, n_tris_, 0);
+  pc.misc = glm::vec4(float(std::max(c.near_plane, 1e-6)), float(shading_.texture_samples >= 4 ? 4 : 1), 0.f, 0.f);
+
+  cmd_.dispatch("sim/tri_setup", {tris_, cam_, boxes_, counts_}, pc, cmd_.linear_groups(gpu::Commands::div_up(n_tris_, kSimSetupGroupSize)));
+  scan_.record(cmd_, counts_, offsets_, n_tris_, n_tris_ + 1);
+  cmd_.fill(depth_, 0xFFFFFFFFu, 0, P * 4);
+  cmd_.fill(ids_, kSimNoTriangle, 0, P * 4);
+  cmd_.submit();
+  const uint32_t items = offsets_.read_one<uint32_t>(n_tris_);
+  if (items > 0) {
+    cmd_.dispatch("sim/raster", {cam_, boxes_, offsets_, depth_, ids_}, pc, cmd_.linear_groups(items));
+    pc.dims.w = 1;
+    cmd_.dispatch("sim/raster", {cam_, boxes_, offsets_, depth_, ids_}, pc, cmd_.linear_groups(items));
+  }
+  cmd_.dispatch("sim/shade", {tris_, cam_, ids_, materials_, texels_, image_}, pc,
+                cmd_.linear_groups(gpu::Commands::div_up(P, kSimShadeGroupSize)));
+  cmd_.submit();
+  std::vector<float> px = image_.read<float>(P * 4);
+  Frame f;
+  f.width = W;
+  f.height = H;
+  f.rgb.resize(P * 3);
+  f.depth.resize(P);
+  for (uint64_t i = 0; i < P; ++i) {
+    f.rgb[i * 3] = px[i * 4];
+    f.rgb[i * 3 + 1] = px[i * 4 + 1];
+    f.rgb[i * 3 + 2] = px[i * 4 + 2];
+    f.depth[i] = px[i * 4 + 3];
+  }
+  return f;
+}
+
+}  // namespace evflow::sim

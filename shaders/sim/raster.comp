@@ -1,0 +1,47 @@
+#version 450
+// One workgroup = one 16x16 tile of one triangle's pixel range (work items are enumerated by the
+// prefix sum of the per-triangle tile counts). Mode 0: atomicMin of the depth bits (positive
+// floats order like uints). Mode 1: atomicMin of the triangle id where the depth is the minimum.
+#extension GL_GOOGLE_include_directive : require
+#include "sim/sim_layout.h"
+#include "common/dispatch.glsl"
+#include "sim/raster_common.glsl"
+layout(local_size_x = 16, local_size_y = 16) in;
+layout(std430, binding = 0) readonly buffer CamVerts { vec4 cam[]; };
+layout(std430, binding = 1) readonly buffer Boxes { uvec4 boxes[]; };
+layout(std430, binding = 2) readonly buffer Offsets { uint offsets[]; };  // n + 1 (exclusive scan)
+layout(std430, binding = 3) buffer Depth { uint depth[]; };
+layout(std430, binding = 4) buffer Ids { uint ids[]; };
+layout(push_constant) uniform PC { SimPC pc; };
+shared uint s_tri;
+
+void main() {
+  uint item = evf_linear_group();
+  uint n = pc.dims.z;
+  if (gl_LocalInvocationIndex == 0u) {
+    // Last triangle with offsets[tri] <= item (it has a non-zero count).
+    uint lo = 0u, hi = n;  // invariant: offsets[lo] <= item < offsets[hi]
+    while (hi - lo > 1u) {
+      uint mid = (lo + hi) >> 1;
+      if (offsets[mid] <= item) lo = mid; else hi = mid;
+    }
+    s_tri = lo;
+  }
+  barrier();
+  uint tri = s_tri;
+  if (item >= offsets[n]) return;
+  uvec4 box = boxes[tri];
+  uint tx0 = box.x / kSimTile, ntx = box.z / kSimTile - tx0 + 1u;
+  uint local = item - offsets[tri];
+  uint tx = tx0 + local % ntx, ty = box.y / kSimTile + local / ntx;
+  uint x = tx * kSimTile + gl_LocalInvocationID.x, y = ty * kSimTile + gl_LocalInvocationID.y;
+  if (x < box.x || x > box.z || y < box.y || y > box.w) return;
+  vec3 lambda;
+  float z;
+  vec3 d = sim_ray(pc, vec2(x, y) + 0.5);
+  if (!sim_hit(d, cam[3u * tri].xyz, cam[3u * tri + 1u].xyz, cam[3u * tri + 2u].xyz, pc.misc.x, lambda, z)) return;
+  uint p = y * pc.dims.x + x;
+  uint bits = floatBitsToUint(z);
+  if (pc.dims.w == 0u) atomicMin(depth[p], bits);
+  else if (depth[p] == bits) atomicMin(ids[p], tri);
+}

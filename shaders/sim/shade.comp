@@ -1,0 +1,80 @@
+#version 450
+// Per pixel: the visible triangle's perspective-correct UVs (at 1 or 4 sub-pixel rays, for
+// texture anti-aliasing), bilinear base-colour texture (sRGB RGBA8 texels decoded to linear),
+// base colour factor, ambient + Lambert lighting with the face normal turned towards the camera.
+// Output: linear RGB and camera depth z (0 where nothing is hit: background colour).
+#extension GL_GOOGLE_include_directive : require
+#include "sim/sim_layout.h"
+#include "common/dispatch.glsl"
+#include "sim/raster_common.glsl"
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer Tris { SimTriangle tris[]; };
+layout(std430, binding = 1) readonly buffer CamVerts { vec4 cam[]; };
+layout(std430, binding = 2) readonly buffer Ids { uint ids[]; };
+layout(std430, binding = 3) readonly buffer Materials { SimMaterial materials[]; };
+layout(std430, binding = 4) readonly buffer Texels { uint texels[]; };
+layout(std430, binding = 5) writeonly buffer Out { vec4 image[]; };
+layout(push_constant) uniform PC { SimPC pc; };
+
+float srgb_decode(float c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
+vec4 texel(uint base, uint w, uint x, uint y) {
+  vec4 c = unpackUnorm4x8(texels[base + y * w + x]);
+  return vec4(srgb_decode(c.r), srgb_decode(c.g), srgb_decode(c.b), c.a);
+}
+int wrap(int i, int n, uint mode) {
+  if (mode == 1u) return clamp(i, 0, n - 1);
+  if (mode == 2u) {
+    int m = i % (2 * n); if (m < 0) m += 2 * n;
+    return m < n ? m : 2 * n - 1 - m;
+  }
+  int m = i % n; return m < 0 ? m + n : m;
+}
+vec4 sample_tex(SimMaterial m, vec2 uv) {
+  if (m.tex.x == kSimNoTexture) return vec4(1.0);
+  int w = int(m.tex.y), h = int(m.tex.z);
+  vec2 f = uv * vec2(w, h) - 0.5;
+  // Keep the coordinates in a range where float keeps sub-texel precision.
+  vec2 fl = floor(f);
+  vec2 a = f - fl;
+  int x0 = int(fl.x), y0 = int(fl.y);
+  uint ms = m.tex.w & 3u, mt = (m.tex.w >> 2) & 3u;
+  uint xa = uint(wrap(x0, w, ms)), xb = uint(wrap(x0 + 1, w, ms));
+  uint ya = uint(wrap(y0, h, mt)), yb = uint(wrap(y0 + 1, h, mt));
+  uint b = m.tex.x, uw = uint(w);
+  return mix(mix(texel(b, uw, xa, ya), texel(b, uw, xb, ya), a.x), mix(texel(b, uw, xa, yb), texel(b, uw, xb, yb), a.x), a.y);
+}
+
+void main() {
+  uint p = evf_linear_invocation(64u);
+  uint W = pc.dims.x;
+  if (p >= W * pc.dims.y) return;
+  uint tri = ids[p];
+  if (tri == kSimNoTriangle) { image[p] = vec4(pc.background.rgb, 0.0); return; }
+  vec2 pix = vec2(p % W, p / W) + 0.5;
+  vec3 v0 = cam[3u * tri].xyz, v1 = cam[3u * tri + 1u].xyz, v2 = cam[3u * tri + 2u].xyz;
+  SimTriangle T = tris[tri];
+  SimMaterial m = materials[uint(T.p0.w)];
+  vec3 lc = sim_plane_lambda(sim_ray(pc, pix), v0, v1, v2);
+  float z = lc.x * v0.z + lc.y * v1.z + lc.z * v2.z;
+  vec4 albedo = vec4(0.0);
+  if (pc.misc.y > 1.5) {
+    for (uint k = 0u; k < 4u; ++k) {
+      vec2 o = vec2((k & 1u) == 0u ? -0.25 : 0.25, (k & 2u) == 0u ? -0.25 : 0.25);
+      vec3 l = sim_plane_lambda(sim_ray(pc, pix + o), v0, v1, v2);
+      vec2 uv = l.x * T.uv01.xy + l.y * T.uv01.zw + l.z * T.uv2.xy;
+      albedo += 0.25 * sample_tex(m, uv);
+    }
+  } else {
+    albedo = sample_tex(m, lc.x * T.uv01.xy + lc.y * T.uv01.zw + lc.z * T.uv2.xy);
+  }
+  albedo *= m.factor;
+  // Face normal in the camera frame, turned towards the camera, then to world (n_w = R^T n_c).
+  vec3 nc = cross(v1 - v0, v2 - v0);
+  if (dot(nc, v0) > 0.0) nc = -nc;
+  float len = length(nc);
+  nc = len > 0.0 ? nc / len : vec3(0.0, 0.0, -1.0);
+  vec3 nw = nc.x * pc.r0.xyz + nc.y * pc.r1.xyz + nc.z * pc.r2.xyz;
+  float lambert = max(dot(nw, pc.light.xyz), 0.0);
+  float shade = pc.light.w + (1.0 - pc.light.w) * lambert;
+  image[p] = vec4(albedo.rgb * shade, z);
+}

@@ -1,0 +1,47 @@
+// Mesh renderer of the simulator (engine/sim): layouts shared by engine/sim and shaders/sim.
+//
+// Triangles are rendered by ray casting through pixel centres: a pixel (x, y) is covered when the
+// ray through (x + 0.5, y + 0.5) meets the triangle (watertight: shared edges use the same scalar
+// triple products with opposite signs). Passes: tri_setup (camera-space vertices, clipped screen
+// bounding box in 16x16 tiles, tile count) -> prefix sum of the counts -> raster (mode 0: atomicMin
+// of the depth bits; mode 1: atomicMin of the triangle id where the depth equals the minimum; one
+// workgroup = one (triangle, tile) pair) -> shade (per pixel: perspective-correct UVs, bilinear
+// sRGB RGBA8 texture, ambient + Lambert, depth).
+#ifndef EVF_SIM_LAYOUT_H
+#define EVF_SIM_LAYOUT_H
+#include "common/shared_prelude.h"
+EVF_NAMESPACE_BEGIN
+EVF_CONST(uint, kSimSetupGroupSize, 64u)
+EVF_CONST(uint, kSimTile, 16u)              // raster tile edge (pixels); one workgroup per tile
+EVF_CONST(uint, kSimShadeGroupSize, 64u)
+EVF_CONST(uint, kSimNoTriangle, 0xFFFFFFFFu)
+EVF_CONST(uint, kSimNoTexture, 0xFFFFFFFFu)
+
+// One triangle in world space (std430: 5 vec4 = 80 bytes).
+struct SimTriangle {
+  vec4 p0;   // xyz, w = material index (as float, exact below 2^24)
+  vec4 p1;
+  vec4 p2;
+  vec4 uv01; // u0 v0 u1 v1
+  vec4 uv2;  // u2 v2, 0, 0
+};
+
+// A material: base colour factor (linear RGBA) and its base-colour texture.
+struct SimMaterial {
+  vec4 factor;
+  uvec4 tex;  // x: first texel in the texel buffer (kSimNoTexture = none), y: width, z: height,
+              // w: wrap modes (bits 0-1 s, 2-3 t: 0 repeat, 1 clamp, 2 mirrored repeat)
+};
+
+struct SimPC {
+  vec4 r0;      // world_to_camera rows, translation in w
+  vec4 r1;
+  vec4 r2;
+  vec4 intr;    // fx fy cx cy
+  vec4 light;   // xyz: unit direction towards the light (world), w: ambient fraction
+  vec4 background;  // linear RGB, a: unused
+  uvec4 dims;   // width, height, triangle count, raster mode (0 depth, 1 id)
+  vec4 misc;    // x: near plane, y: texture supersampling (1 or 4 samples per pixel)
+};
+EVF_NAMESPACE_END
+#endif
