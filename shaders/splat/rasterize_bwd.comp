@@ -86,7 +86,10 @@ void main() {
     for (uint jj = n_visit; jj > 0u; --jj) {
       uint j = jj - 1u;
       bool contrib = inside && start + j < last;
-      float g[9] = float[9](0, 0, 0, 0, 0, 0, 0, 0, 0);
+      // Plain scalars, no arrays: CPU drivers spill dynamically indexed private arrays.
+      vec2 g_mean = vec2(0.0);
+      vec3 g_conic = vec3(0.0), g_rgb = vec3(0.0);
+      float g_opac = 0.0;
       if (contrib) {
         vec4 a = batch_mean_conic[j], b = batch_misc[j];
         vec3 conic = vec3(a.zw, b.x);
@@ -101,35 +104,39 @@ void main() {
           vec3 col = batch_color[j];
           float one_minus = 1.0 - alpha;
           float T_before = T / one_minus;
-          vec3 v_col = (alpha * T_before) * v_C;
+          g_rgb = (alpha * T_before) * v_C;
           float v_alpha_j = T_before * dot(col, v_C) - dot(S, v_C) / one_minus + v_A * T_final / one_minus;
           S += col * (alpha * T_before);
           T = T_before;
           if (raw < kAlphaMax) {
             float v_power = alpha * v_alpha_j;
-            g[0] = -v_power * (conic.x * d.x + conic.y * d.y);
-            g[1] = -v_power * (conic.y * d.x + conic.z * d.y);
-            g[2] = -0.5 * d.x * d.x * v_power;
-            g[3] = -d.x * d.y * v_power;
-            g[4] = -0.5 * d.y * d.y * v_power;
-            g[5] = G * v_alpha_j;
+            g_mean = -v_power * vec2(conic.x * d.x + conic.y * d.y, conic.y * d.x + conic.z * d.y);
+            g_conic = v_power * vec3(-0.5 * d.x * d.x, -d.x * d.y, -0.5 * d.y * d.y);
+            g_opac = G * v_alpha_j;
           }
-          g[6] = v_col.r;
-          g[7] = v_col.g;
-          g[8] = v_col.b;
         }
       }
+      uint o = j * 9u;
       if (pc.subgroup_reduce != 0u) {
         // GPUs: sum over the subgroup first, one shared add per subgroup.
         if (subgroupAny(contrib)) {
-          for (uint k = 0; k < 9; ++k) {
-            float s = subgroupAdd(g[k]);
-            if (subgroupElect() && s != 0.0) acc_add(j * 9 + k, s);
+          g_mean = subgroupAdd(g_mean);
+          g_conic = subgroupAdd(g_conic);
+          g_opac = subgroupAdd(g_opac);
+          g_rgb = subgroupAdd(g_rgb);
+          if (subgroupElect()) {
+            acc_add(o, g_mean.x); acc_add(o + 1, g_mean.y);
+            acc_add(o + 2, g_conic.x); acc_add(o + 3, g_conic.y); acc_add(o + 4, g_conic.z);
+            acc_add(o + 5, g_opac);
+            acc_add(o + 6, g_rgb.r); acc_add(o + 7, g_rgb.g); acc_add(o + 8, g_rgb.b);
           }
         }
       } else if (contrib) {
         // CPU drivers (lavapipe): cross-lane operations cost more than per-lane shared adds.
-        for (uint k = 0; k < 9; ++k) acc_add(j * 9 + k, g[k]);
+        acc_add(o, g_mean.x); acc_add(o + 1, g_mean.y);
+        acc_add(o + 2, g_conic.x); acc_add(o + 3, g_conic.y); acc_add(o + 4, g_conic.z);
+        acc_add(o + 5, g_opac);
+        acc_add(o + 6, g_rgb.r); acc_add(o + 7, g_rgb.g); acc_add(o + 8, g_rgb.b);
       }
     }
     barrier();
