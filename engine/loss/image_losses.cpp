@@ -51,10 +51,15 @@ void SsimPipeline::record(gpu::Commands& cmd, const ImageShape& shape, const gpu
   check_image(b, shape, "ssim target");
   if (grad) check_image(*grad, shape, "ssim grad");
   const uint64_t n = shape.count();
-  const uint32_t groups = groups_for(shape);
+  // One invocation per strip of kSsimStrip pixels: row segments (horizontal passes), column
+  // strips (vertical passes).
+  const uint64_t segs = gpu::Commands::div_up(shape.width, shaderio::kSsimStrip);
+  const uint64_t strips = gpu::Commands::div_up(shape.height, shaderio::kSsimStrip);
+  const uint32_t h_groups = gpu::Commands::div_up(uint64_t(shape.channels) * shape.height * segs, kLossGroupSize);
+  const uint32_t v_groups = gpu::Commands::div_up(uint64_t(shape.channels) * strips * shape.width, kLossGroupSize);
   h_.ensure(5 * n * 4);
   d_.ensure(4 * n * 4);
-  partials_.ensure(uint64_t(groups) * 16);
+  partials_.ensure(uint64_t(v_groups) * 16);
   ctx_.check_binding_size(5 * n * 4, "ssim scratch");
 
   shaderio::SsimPC pc{};
@@ -68,13 +73,13 @@ void SsimPipeline::record(gpu::Commands& cmd, const ImageShape& shape, const gpu
   pc.c2 = kSsimC2;
   pc.ssim_grad_scale = ssim_grad_scale;
   pc.pixel_grad_scale = pixel_grad_scale;
-  const gpu::Groups g = cmd.linear_groups(groups);
+  const gpu::Groups g = cmd.linear_groups(h_groups), gv = cmd.linear_groups(v_groups);
   cmd.dispatch("loss/ssim_h", {a, b, h_}, pc, g);
-  cmd.dispatch("loss/ssim_v", {a, b, h_, d_, partials_}, pc, g);
-  record_reduce(cmd, partials_, groups, out);
+  cmd.dispatch("loss/ssim_v", {a, b, h_, d_, partials_}, pc, gv);
+  record_reduce(cmd, partials_, v_groups, out);
   if (grad) {
     cmd.dispatch("loss/ssim_bwd_h", {d_, h_}, pc, g);
-    cmd.dispatch("loss/ssim_bwd_v", {a, b, h_, *grad}, pc, g);
+    cmd.dispatch("loss/ssim_bwd_v", {a, b, h_, *grad}, pc, gv);
   }
 }
 

@@ -18,6 +18,10 @@ EVF_CONST(uint, kReduceMaxOutputs, 4u)
 // SSIM window: 11 x 11 Gaussian, sigma 1.5 (the separable 1D taps are in ssim_math.glsl).
 EVF_CONST(int, kSsimRadius, 5)
 EVF_CONST(uint, kSsimTaps, 11u)
+// The SSIM passes run one invocation per strip of kSsimStrip pixels: horizontal passes a row
+// segment (c, y, segment), vertical passes a column strip (c, strip, x), so that each loaded
+// value serves up to 11 outputs (CPU drivers are bound by loads).
+EVF_CONST(uint, kSsimStrip, 8u)
 
 // Flags of the per-pixel kernels.
 EVF_CONST(uint, kLossWriteGrad, 1u)     // write the gradient (else forward only)

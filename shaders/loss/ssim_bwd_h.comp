@@ -1,7 +1,9 @@
 #version 450
 // SSIM backward, horizontal pass: the same 11-tap filter (its own adjoint) applied along x to
-// the per-pixel partials d1, d3, d5 (planes 0..2 of D), into planes 0..2 of H.
+// the per-pixel partials d1, d3, d5 (planes 0..2 of D), into planes 0..2 of H. One invocation:
+// a row segment of kSsimStrip pixels, as in ssim_h.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
@@ -10,20 +12,34 @@ layout(std430, binding = 0) readonly buffer D { float dmap[]; };
 layout(std430, binding = 1) writeonly buffer H { float hmap[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
+const int kCols = int(kSsimStrip);
+const int kSpan = kCols + 2 * kSsimRadius;
+
 void main() {
-  uint i = evf_linear_invocation(kLossGroupSize);
-  if (i >= pc.count) return;
-  int x = int(i % pc.width);
-  uint row = i - uint(x);
+  uint j = evf_linear_invocation(kLossGroupSize);
+  uint segs = (pc.width + kSsimStrip - 1u) / kSsimStrip;
+  if (j >= pc.channels * pc.height * segs) return;
+  uint seg = j % segs;
+  uint row = (j / segs) * pc.width;
+  int x0 = int(seg * kSsimStrip);
   int w = int(pc.width);
-  vec3 acc = vec3(0.0);
-  for (int k = -kSsimRadius; k <= kSsimRadius; ++k) {
-    int xx = x + k;
+  vec3 acc[kCols];
+  [[unroll]] for (int o = 0; o < kCols; ++o) acc[o] = vec3(0.0);
+  [[unroll]] for (int r = 0; r < kSpan; ++r) {
+    int xx = x0 - kSsimRadius + r;
     if (xx < 0 || xx >= w) continue;
-    uint j = row + uint(xx);
-    acc += kSsimG[k + kSsimRadius] * vec3(dmap[j], dmap[pc.count + j], dmap[2u * pc.count + j]);
+    uint q = row + uint(xx);
+    vec3 v = vec3(dmap[q], dmap[pc.count + q], dmap[2u * pc.count + q]);
+    [[unroll]] for (int o = 0; o < kCols; ++o) {
+      int k = r - o;
+      if (k >= 0 && k <= 2 * kSsimRadius) acc[o] += kSsimG[k] * v;
+    }
   }
-  hmap[i] = acc.x;
-  hmap[pc.count + i] = acc.y;
-  hmap[2u * pc.count + i] = acc.z;
+  [[unroll]] for (int o = 0; o < kCols; ++o) {
+    if (x0 + o >= w) break;
+    uint i = row + uint(x0 + o);
+    hmap[i] = acc[o].x;
+    hmap[pc.count + i] = acc[o].y;
+    hmap[2u * pc.count + i] = acc[o].z;
+  }
 }

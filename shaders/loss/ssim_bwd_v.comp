@@ -1,8 +1,10 @@
 #version 450
 // SSIM backward, vertical pass: finishes E[d1], E[d3], E[d5] and writes
 //   grad (+)= ssim_grad_scale * (E[d1] + 2 A E[d3] + B E[d5]) + pixel_grad_scale * de/dA
-// where e is the per-pixel term (|A-B|: sign(A-B); (A-B)^2: 2(A-B)).
+// where e is the per-pixel term (|A-B|: sign(A-B); (A-B)^2: 2(A-B)). One invocation: a column
+// strip of kSsimStrip pixels, as in ssim_v.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
@@ -13,25 +15,41 @@ layout(std430, binding = 2) readonly buffer H { float hmap[]; };
 layout(std430, binding = 3) buffer Grad { float grad[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
+const int kRows = int(kSsimStrip);
+const int kSpan = kRows + 2 * kSsimRadius;
+
 void main() {
-  uint i = evf_linear_invocation(kLossGroupSize);
-  if (i >= pc.count) return;
-  uint plane = pc.height * pc.width;
-  uint c = i / plane;
-  int y = int((i - c * plane) / pc.width);
+  uint j = evf_linear_invocation(kLossGroupSize);
+  uint strips = (pc.height + kSsimStrip - 1u) / kSsimStrip;
+  if (j >= pc.channels * strips * pc.width) return;
+  uint x = j % pc.width;
+  uint t = j / pc.width;
+  uint strip = t % strips;
+  uint c = t / strips;
+  int y0 = int(strip * kSsimStrip);
   int h = int(pc.height);
-  vec3 acc = vec3(0.0);
-  for (int k = -kSsimRadius; k <= kSsimRadius; ++k) {
-    int yy = y + k;
+  uint col = c * pc.height * pc.width + x;
+  vec3 acc[kRows];
+  [[unroll]] for (int o = 0; o < kRows; ++o) acc[o] = vec3(0.0);
+  [[unroll]] for (int r = 0; r < kSpan; ++r) {
+    int yy = y0 - kSsimRadius + r;
     if (yy < 0 || yy >= h) continue;
-    uint j = uint(int(i) + k * int(pc.width));
-    acc += kSsimG[k + kSsimRadius] * vec3(hmap[j], hmap[pc.count + j], hmap[2u * pc.count + j]);
+    uint q = col + uint(yy) * pc.width;
+    vec3 hv = vec3(hmap[q], hmap[pc.count + q], hmap[2u * pc.count + q]);
+    [[unroll]] for (int o = 0; o < kRows; ++o) {
+      int k = r - o;
+      if (k >= 0 && k <= 2 * kSsimRadius) acc[o] += kSsimG[k] * hv;
+    }
   }
-  float a = img_a[i], b = img_b[i];
-  float d_ssim = acc.x + 2.0 * a * acc.y + b * acc.z;
-  float diff = a - b;
-  float d_pix = (pc.flags & kLossPixelL2) != 0u ? 2.0 * diff : sign(diff);
-  float g = pc.ssim_grad_scale * d_ssim + pc.pixel_grad_scale * d_pix;
-  if ((pc.flags & kLossAccumulate) != 0u) g += grad[i];
-  grad[i] = g;
+  [[unroll]] for (int o = 0; o < kRows; ++o) {
+    if (y0 + o >= h) break;
+    uint i = col + uint(y0 + o) * pc.width;
+    float a = img_a[i], b = img_b[i];
+    float d_ssim = acc[o].x + 2.0 * a * acc[o].y + b * acc[o].z;
+    float diff = a - b;
+    float d_pix = (pc.flags & kLossPixelL2) != 0u ? 2.0 * diff : sign(diff);
+    float g = pc.ssim_grad_scale * d_ssim + pc.pixel_grad_scale * d_pix;
+    if ((pc.flags & kLossAccumulate) != 0u) g += grad[i];
+    grad[i] = g;
+  }
 }

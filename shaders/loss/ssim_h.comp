@@ -1,6 +1,8 @@
 #version 450
 // SSIM forward, horizontal pass: the 11-tap filter of A, B, A^2, B^2, AB along x (zero padding).
+// One invocation: a row segment of kSsimStrip pixels (channel c, row y, x in [x0, x0 + strip)).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
@@ -10,25 +12,42 @@ layout(std430, binding = 1) readonly buffer B { float img_b[]; };
 layout(std430, binding = 2) writeonly buffer H { float hmap[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
+const int kCols = int(kSsimStrip);
+const int kSpan = kCols + 2 * kSsimRadius;
+
 void main() {
-  uint i = evf_linear_invocation(kLossGroupSize);
-  if (i >= pc.count) return;
-  int x = int(i % pc.width);
-  uint row = i - uint(x);
+  uint j = evf_linear_invocation(kLossGroupSize);
+  uint segs = (pc.width + kSsimStrip - 1u) / kSsimStrip;
+  if (j >= pc.channels * pc.height * segs) return;
+  uint seg = j % segs;
+  uint row = (j / segs) * pc.width;  // c*H*W + y*W
+  int x0 = int(seg * kSsimStrip);
   int w = int(pc.width);
-  vec4 m = vec4(0.0);
-  float mab = 0.0;
-  for (int k = -kSsimRadius; k <= kSsimRadius; ++k) {
-    int xx = x + k;
+  vec4 m[kCols];
+  float mab[kCols];
+  [[unroll]] for (int o = 0; o < kCols; ++o) { m[o] = vec4(0.0); mab[o] = 0.0; }
+  // Columns in increasing order: each output receives its taps in the order k = 0..10.
+  [[unroll]] for (int r = 0; r < kSpan; ++r) {
+    int xx = x0 - kSsimRadius + r;
     if (xx < 0 || xx >= w) continue;
-    float g = kSsimG[k + kSsimRadius];
     float a = img_a[row + uint(xx)], b = img_b[row + uint(xx)];
-    m += g * vec4(a, b, a * a, b * b);
-    mab += g * (a * b);
+    vec4 v = vec4(a, b, a * a, b * b);
+    float ab = a * b;
+    [[unroll]] for (int o = 0; o < kCols; ++o) {
+      int k = r - o;
+      if (k >= 0 && k <= 2 * kSsimRadius) {
+        m[o] += kSsimG[k] * v;
+        mab[o] += kSsimG[k] * ab;
+      }
+    }
   }
-  hmap[i] = m.x;
-  hmap[pc.count + i] = m.y;
-  hmap[2u * pc.count + i] = m.z;
-  hmap[3u * pc.count + i] = m.w;
-  hmap[4u * pc.count + i] = mab;
+  [[unroll]] for (int o = 0; o < kCols; ++o) {
+    if (x0 + o >= w) break;
+    uint i = row + uint(x0 + o);
+    hmap[i] = m[o].x;
+    hmap[pc.count + i] = m[o].y;
+    hmap[2u * pc.count + i] = m[o].z;
+    hmap[3u * pc.count + i] = m[o].w;
+    hmap[4u * pc.count + i] = mab[o];
+  }
 }

@@ -47,15 +47,22 @@ SsimPixel ssim_eval(vec4 m, float mab, float c1, float c2) {
   return r;
 }
 
-// Fixed-order workgroup sum of a vec4 (tree in shared memory). Every invocation must call it.
+// Fixed-order workgroup sum of a vec4: 16 invocations each add 16 values in order, then one adds
+// the 16 results in order (two barriers: barriers are costly on CPU drivers). Every invocation
+// must call it; the result is valid in invocation 0.
 shared vec4 evf_loss_red[kLossGroupSize];
 vec4 loss_group_sum(vec4 v) {
   uint lid = gl_LocalInvocationIndex;
   evf_loss_red[lid] = v;
   barrier();
-  for (uint s = kLossGroupSize / 2u; s > 0u; s >>= 1u) {
-    if (lid < s) evf_loss_red[lid] += evf_loss_red[lid + s];
-    barrier();
+  if (lid < 16u) {
+    vec4 s = vec4(0.0);
+    for (uint k = 0u; k < 16u; ++k) s += evf_loss_red[lid * 16u + k];
+    evf_loss_red[lid * 16u] = s;
   }
-  return evf_loss_red[0];
+  barrier();
+  vec4 total = vec4(0.0);
+  if (lid == 0u)
+    for (uint k = 0u; k < 16u; ++k) total += evf_loss_red[k * 16u];
+  return total;
 }

@@ -1,8 +1,10 @@
 #version 450
 // SSIM forward, vertical pass: finishes the five windowed moments, evaluates SSIM per pixel,
 // stores its partial derivatives for the backward (kLossWriteGrad) and the map
-// (kLossWriteSsimMap), and sums (pixel term, SSIM) per workgroup.
+// (kLossWriteSsimMap), and sums (pixel term, SSIM) per workgroup. One invocation: a column strip
+// of kSsimStrip pixels (channel c, rows [y0, y0 + kSsimStrip), column x).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
@@ -14,35 +16,53 @@ layout(std430, binding = 3) writeonly buffer D { float dmap[]; };
 layout(std430, binding = 4) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
+const int kRows = int(kSsimStrip);
+const int kSpan = kRows + 2 * kSsimRadius;
+
 void main() {
-  uint i = evf_linear_invocation(kLossGroupSize);
+  uint j = evf_linear_invocation(kLossGroupSize);
+  uint strips = (pc.height + kSsimStrip - 1u) / kSsimStrip;
   vec4 contrib = vec4(0.0);
-  if (i < pc.count) {
-    uint plane = pc.height * pc.width;
-    uint c = i / plane;
-    uint rem = i - c * plane;
-    int y = int(rem / pc.width);
+  if (j < pc.channels * strips * pc.width) {
+    uint x = j % pc.width;
+    uint t = j / pc.width;
+    uint strip = t % strips;
+    uint c = t / strips;
+    int y0 = int(strip * kSsimStrip);
     int h = int(pc.height);
-    vec4 m = vec4(0.0);
-    float mab = 0.0;
-    for (int k = -kSsimRadius; k <= kSsimRadius; ++k) {
-      int yy = y + k;
+    uint col = c * pc.height * pc.width + x;
+    vec4 m[kRows];
+    float mab[kRows];
+    [[unroll]] for (int o = 0; o < kRows; ++o) { m[o] = vec4(0.0); mab[o] = 0.0; }
+    // Rows in increasing order: each output receives its taps in the order k = 0..10.
+    [[unroll]] for (int r = 0; r < kSpan; ++r) {
+      int yy = y0 - kSsimRadius + r;
       if (yy < 0 || yy >= h) continue;
-      float g = kSsimG[k + kSsimRadius];
-      uint j = uint(int(i) + k * int(pc.width));
-      m += g * vec4(hmap[j], hmap[pc.count + j], hmap[2u * pc.count + j], hmap[3u * pc.count + j]);
-      mab += g * hmap[4u * pc.count + j];
+      uint q = col + uint(yy) * pc.width;
+      vec4 hv = vec4(hmap[q], hmap[pc.count + q], hmap[2u * pc.count + q], hmap[3u * pc.count + q]);
+      float hab = hmap[4u * pc.count + q];
+      [[unroll]] for (int o = 0; o < kRows; ++o) {
+        int k = r - o;
+        if (k >= 0 && k <= 2 * kSsimRadius) {
+          m[o] += kSsimG[k] * hv;
+          mab[o] += kSsimG[k] * hab;
+        }
+      }
     }
-    SsimPixel s = ssim_eval(m, mab, pc.c1, pc.c2);
-    float diff = img_a[i] - img_b[i];
-    float e = (pc.flags & kLossPixelL2) != 0u ? diff * diff : abs(diff);
-    contrib = vec4(e, s.ssim, 0.0, 0.0);
-    if ((pc.flags & kLossWriteGrad) != 0u) {
-      dmap[i] = s.d1;
-      dmap[pc.count + i] = s.d3;
-      dmap[2u * pc.count + i] = s.d5;
+    [[unroll]] for (int o = 0; o < kRows; ++o) {
+      if (y0 + o >= h) break;
+      uint i = col + uint(y0 + o) * pc.width;
+      SsimPixel s = ssim_eval(m[o], mab[o], pc.c1, pc.c2);
+      float diff = img_a[i] - img_b[i];
+      float e = (pc.flags & kLossPixelL2) != 0u ? diff * diff : abs(diff);
+      contrib += vec4(e, s.ssim, 0.0, 0.0);
+      if ((pc.flags & kLossWriteGrad) != 0u) {
+        dmap[i] = s.d1;
+        dmap[pc.count + i] = s.d3;
+        dmap[2u * pc.count + i] = s.d5;
+      }
+      if ((pc.flags & kLossWriteSsimMap) != 0u) dmap[3u * pc.count + i] = s.ssim;
     }
-    if ((pc.flags & kLossWriteSsimMap) != 0u) dmap[3u * pc.count + i] = s.ssim;
   }
   vec4 total = loss_group_sum(contrib);
   if (gl_LocalInvocationIndex == 0u) partials[evf_linear_group()] = total;
