@@ -31,3 +31,32 @@ TEST_CASE("gpu: device limits are queried, not assumed", "[gpu]") {
   REQUIRE(g.x == caps.max_workgroup_count[0]);
   REQUIRE(g.y == 4);
 }
+
+TEST_CASE("gpu: dispatches past 65,535 workgroups reach every element", "[gpu]") {
+  auto& ctx = test::gpu_context();
+  const uint32_t groups = 70000, n = groups * 64 - 5;
+  gpu::Buffer b(ctx, uint64_t(n) * 4, "iota");
+  gpu::Commands cmd(ctx);
+  struct { uint32_t n, offset; } pc{n, 3};
+  auto g = cmd.linear_groups(groups);
+  REQUIRE(g.y >= 2);
+  cmd.dispatch("common/iota", {b}, pc, g);
+  cmd.submit();
+  auto v = b.read<uint32_t>(n);
+  bool ok = true;
+  for (uint32_t i = 0; i < n; ++i) ok = ok && v[i] == i + 3;
+  REQUIRE(ok);
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("gpu: a binding above the device's storage range is refused with a clear message", "[gpu]") {
+  auto& ctx = test::gpu_context();
+  const uint64_t range = ctx.caps().max_storage_buffer_range;
+  if (range >= ctx.caps().max_allocation_size) return;  // nothing to exceed on this device
+  gpu::Buffer big(ctx, range + 1024, "too_big");
+  gpu::Commands cmd(ctx);
+  struct { uint32_t n, offset; } pc{16, 0};
+  REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {big}, pc, gpu::Groups{1, 1, 1}),
+                      Catch::Contains("too_big") && Catch::Contains("maxStorageBufferRange"));
+  test::require_no_validation_messages();
+}
