@@ -595,6 +595,10 @@ TEST_CASE("malformed glTF files give errors naming the file", "[export]") {
                  for (int k = 0; k < 3; ++k) attrs_of(g).erase("KHR_gaussian_splatting:SH_DEGREE_1_COEF_" + std::to_string(k));
                }),
                "SH degree 2 is present but degree 1 is not");
+  expect_error("bad_sh_name.glb", tampered([&](Glb& g) { attrs_of(g)["KHR_gaussian_splatting:SH_DEGREE_1_COEF_5"] = 0; }),
+               "malformed SH attribute 'KHR_gaussian_splatting:SH_DEGREE_1_COEF_5'");
+  expect_error("sh_degree4.glb", tampered([&](Glb& g) { attrs_of(g)["KHR_gaussian_splatting:SH_DEGREE_4_COEF_0"] = 0; }),
+               "SH degree 4");
   expect_error("bad_index.glb", tampered([&](Glb& g) { attrs_of(g)["KHR_gaussian_splatting:OPACITY"] = 999; }),
                "accessors[999], which does not exist");
   expect_error("bad_type.glb", tampered([&](Glb& g) { g.doc["accessors"][attrs_of(g)["KHR_gaussian_splatting:SCALE"].get<int>()]["type"] = "VEC4"; }),

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <bit>
 #include <cctype>
+#include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -456,11 +456,16 @@ SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& 
   bool present[kMaxShDegree + 1][2 * kMaxShDegree + 1] = {};
   for (const auto& [key, value] : attrs.items()) {
     if (key.rfind(kShPrefix, 0) != 0) continue;
+    // "<l>_COEF_<n>", both small decimal integers; anything else is malformed.
     int l = -1, n = -1;
-    char tail = 0;
-    const std::string rest = key.substr(std::strlen(kShPrefix));
-    if (std::sscanf(rest.c_str(), "%d_COEF_%d%c", &l, &n, &tail) != 2 || l < 0 || n < 0 || n > 2 * l ||
-        key != sh_name(l, n))
+    const std::string_view rest = std::string_view(key).substr(std::strlen(kShPrefix));
+    const size_t sep = rest.find("_COEF_");
+    const auto parse = [](std::string_view t, int& v) {
+      const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+      return ec == std::errc() && ptr == t.data() + t.size() && !t.empty() && t.size() <= 3;
+    };
+    if (sep == std::string_view::npos || !parse(rest.substr(0, sep), l) || !parse(rest.substr(sep + 6), n) || l < 0 ||
+        n < 0 || n > 2 * l || key != sh_name(l, n))
       throw GltfError(where + ".attributes has malformed SH attribute '" + key + "'");
     if (l > kMaxShDegree) throw GltfError(where + ".attributes has SH degree " + std::to_string(l) + "; EvFlow supports up to 3");
     present[l][n] = true;
