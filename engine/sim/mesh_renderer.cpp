@@ -1,8 +1,10 @@
 #include "sim/mesh_renderer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
+#include "io/image.h"
 #include "sim/sim_layout.h"
 
 namespace evflow::sim {
@@ -29,9 +31,40 @@ MeshRenderer::MeshRenderer(gpu::Context& ctx, const Scene& scene, const ShadingP
   std::vector<SimMaterial> mats(scene.materials.size());
   std::vector<uint32_t> texels;
   std::vector<uint32_t> tex_offset;
+  std::vector<uint32_t> tex_levels;
   for (auto& t : scene.textures) {
     tex_offset.push_back(uint32_t(texels.size()));
-    texels.insert(texels.end(), t.rgba.begin(), t.rgba.end());
+    // Mip chain: 2x2 box filter in linear space (clamped at odd edges), re-encoded as sRGB.
+    std::vector<uint32_t> level = t.rgba;
+    uint32_t w = t.width, h = t.height, levels = 1;
+    texels.insert(texels.end(), level.begin(), level.end());
+    while ((w > 1 || h > 1) && levels < 16) {
+      const uint32_t nw = std::max(1u, w / 2), nh = std::max(1u, h / 2);
+      std::vector<uint32_t> next(size_t(nw) * nh);
+      for (uint32_t y = 0; y < nh; ++y)
+        for (uint32_t x = 0; x < nw; ++x) {
+          float acc[4] = {0, 0, 0, 0};
+          for (uint32_t dy = 0; dy < 2; ++dy)
+            for (uint32_t dx = 0; dx < 2; ++dx) {
+              const uint32_t sx = std::min(2 * x + dx, w - 1), sy = std::min(2 * y + dy, h - 1);
+              const uint32_t c = level[size_t(sy) * w + sx];
+              for (int k = 0; k < 3; ++k) acc[k] += io::srgb_to_linear(((c >> (8 * k)) & 255u) / 255.f);
+              acc[3] += (c >> 24) / 255.f;
+            }
+          uint32_t out = 0;
+          for (int k = 0; k < 4; ++k) {
+            const float v = k < 3 ? io::linear_to_srgb(0.25f * acc[k]) : 0.25f * acc[k];
+            out |= uint32_t(std::lround(std::clamp(v, 0.f, 1.f) * 255.f)) << (8 * k);
+          }
+          next[size_t(y) * nw + x] = out;
+        }
+      texels.insert(texels.end(), next.begin(), next.end());
+      level.swap(next);
+      w = nw;
+      h = nh;
+      ++levels;
+    }
+    tex_levels.push_back(levels);
   }
   if (texels.empty()) texels.push_back(0xFFFFFFFFu);
   for (size_t i = 0; i < mats.size(); ++i) {
@@ -39,9 +72,9 @@ MeshRenderer::MeshRenderer(gpu::Context& ctx, const Scene& scene, const ShadingP
     mats[i].factor = glm::vec4(m.base_color[0], m.base_color[1], m.base_color[2], m.base_color[3]);
     if (m.texture >= 0) {
       const auto& t = scene.textures[m.texture];
-      mats[i].tex = glm::uvec4(tex_offset[m.texture], t.width, t.height, t.wrap_s | (t.wrap_t << 2));
+      mats[i].tex = glm::uvec4(tex_offset[m.texture], t.width, t.height, t.wrap_s | (t.wrap_t << 2) | (tex_levels[m.texture] << 8));
     } else {
-      mats[i].tex = glm::uvec4(kSimNoTexture, 1, 1, 0);
+      mats[i].tex = glm::uvec4(kSimNoTexture, 1, 1, 1u << 8);
     }
   }
   ctx.check_binding_size(T * sizeof(SimTriangle), scene.source + " triangles");

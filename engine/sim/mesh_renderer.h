@@ -1,7 +1,7 @@
 // Renders a Scene on the GPU with compute shaders (shaders/sim): linear RGB + camera depth.
 // Coverage: a pixel is covered when the ray through its centre meets the triangle (watertight);
-// nearest surface wins (ties: lowest triangle index). Shading: bilinear base-colour texture at 4
-// sub-pixel rays (texture anti-aliasing), times the material factor, times
+// nearest surface wins (ties: lowest triangle index). Shading: trilinear (mip-mapped) base-colour
+// texture at 4 sub-pixel rays (texture anti-aliasing), times the material factor, times
 // (ambient + (1 - ambient) * max(0, n . light)) with the face normal turned towards the camera.
 #pragma once
 #include <array>

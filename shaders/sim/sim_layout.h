@@ -5,8 +5,8 @@
 // triple products with opposite signs). Passes: tri_setup (camera-space vertices, clipped screen
 // bounding box in 16x16 tiles, tile count) -> prefix sum of the counts -> raster (mode 0: atomicMin
 // of the depth bits; mode 1: atomicMin of the triangle id where the depth equals the minimum; one
-// workgroup = one (triangle, tile) pair) -> shade (per pixel: perspective-correct UVs, bilinear
-// sRGB RGBA8 texture, ambient + Lambert, depth).
+// workgroup = one (triangle, tile) pair) -> shade (per pixel: perspective-correct UVs, trilinear
+// mip-mapped sRGB RGBA8 texture, ambient + Lambert, depth).
 #ifndef EVF_SIM_LAYOUT_H
 #define EVF_SIM_LAYOUT_H
 #include "common/shared_prelude.h"
@@ -30,7 +30,8 @@ struct SimTriangle {
 struct SimMaterial {
   vec4 factor;
   uvec4 tex;  // x: first texel in the texel buffer (kSimNoTexture = none), y: width, z: height,
-              // w: wrap modes (bits 0-1 s, 2-3 t: 0 repeat, 1 clamp, 2 mirrored repeat)
+              // w: wrap modes (bits 0-1 s, 2-3 t: 0 repeat, 1 clamp, 2 mirrored repeat), bits 8-15:
+              // mip levels (level l: max(1, width >> l) x max(1, height >> l) texels, stored after l - 1)
 };
 
 struct SimPC {
