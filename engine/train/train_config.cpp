@@ -1,0 +1,114 @@
+#include "train/train_config.h"
+
+#include <functional>
+#include <map>
+#include <stdexcept>
+
+namespace evflow {
+
+namespace {
+
+using Setter = std::function<void(TrainConfig&, const std::string&)>;
+
+double to_double(const std::string& k, const std::string& v) {
+  try { size_t p; double d = std::stod(v, &p); if (p != v.size()) throw 1; return d; }
+  catch (...) { throw std::invalid_argument("config key '" + k + "' expects a number, got '" + v + "'"); }
+}
+uint64_t to_uint(const std::string& k, const std::string& v) {
+  try { size_t p; long long d = std::stoll(v, &p); if (p != v.size() || d < 0) throw 1; return uint64_t(d); }
+  catch (...) { throw std::invalid_argument("config key '" + k + "' expects a non-negative integer, got '" + v + "'"); }
+}
+bool to_bool(const std::string& k, const std::string& v) {
+  if (v == "1" || v == "true" || v == "yes") return true;
+  if (v == "0" || v == "false" || v == "no") return false;
+  throw std::invalid_argument("config key '" + k + "' expects true/false, got '" + v + "'");
+}
+
+const std::map<std::string, Setter>& setters() {
+  static const std::map<std::string, Setter> m = {
+      {"preset", [](TrainConfig& c, const std::string& v) { c = TrainConfig::preset_named(v); }},
+      {"iterations", [](TrainConfig& c, const std::string& v) { c.iterations = uint32_t(to_uint("iterations", v)); }},
+      {"init_gaussians", [](TrainConfig& c, const std::string& v) { c.init_gaussians = uint32_t(to_uint("init_gaussians", v)); }},
+      {"sh_degree", [](TrainConfig& c, const std::string& v) {
+         uint64_t d = to_uint("sh_degree", v);
+         if (d > 3) throw std::invalid_argument("config key 'sh_degree' must be 0..3");
+         c.sh_degree = int(d); }},
+      {"sh_increase_every", [](TrainConfig& c, const std::string& v) { c.sh_increase_every = uint32_t(to_uint("sh_increase_every", v)); }},
+      {"lr_means_init", [](TrainConfig& c, const std::string& v) { c.lr_means_init = to_double("lr_means_init", v); }},
+      {"lr_means_final", [](TrainConfig& c, const std::string& v) { c.lr_means_final = to_double("lr_means_final", v); }},
+      {"lr_sh_dc", [](TrainConfig& c, const std::string& v) { c.lr_sh_dc = to_double("lr_sh_dc", v); }},
+      {"lr_sh_rest", [](TrainConfig& c, const std::string& v) { c.lr_sh_rest = to_double("lr_sh_rest", v); }},
+      {"lr_opacity", [](TrainConfig& c, const std::string& v) { c.lr_opacity = to_double("lr_opacity", v); }},
+      {"lr_log_scales", [](TrainConfig& c, const std::string& v) { c.lr_log_scales = to_double("lr_log_scales", v); }},
+      {"lr_quats", [](TrainConfig& c, const std::string& v) { c.lr_quats = to_double("lr_quats", v); }},
+      {"ssim_lambda", [](TrainConfig& c, const std::string& v) { c.ssim_lambda = to_double("ssim_lambda", v); }},
+      {"target", [](TrainConfig& c, const std::string& v) {
+         if (v != "blurry" && v != "sharp") throw std::invalid_argument("config key 'target' must be blurry or sharp, got '" + v + "'");
+         c.target = v; }},
+      {"antialiased", [](TrainConfig& c, const std::string& v) { c.antialiased = to_bool("antialiased", v); }},
+      {"background", [](TrainConfig& c, const std::string& v) {
+         float r, g, b;
+         if (std::sscanf(v.c_str(), "%f,%f,%f", &r, &g, &b) != 3)
+           throw std::invalid_argument("config key 'background' expects r,g,b, got '" + v + "'");
+         c.background = {r, g, b}; }},
+      {"seed", [](TrainConfig& c, const std::string& v) { c.seed = to_uint("seed", v); }},
+      {"log_every", [](TrainConfig& c, const std::string& v) { c.log_every = uint32_t(std::max<uint64_t>(1, to_uint("log_every", v))); }},
+      {"checkpoint_every", [](TrainConfig& c, const std::string& v) { c.checkpoint_every = uint32_t(to_uint("checkpoint_every", v)); }},
+  };
+  return m;
+}
+
+}  // namespace
+
+TrainConfig TrainConfig::preset_named(const std::string& name) {
+  TrainConfig c;
+  if (name == "fast") {
+    c.preset = "fast";
+  } else if (name == "paper") {
+    c.preset = "paper";
+    c.iterations = 40000;
+    c.init_gaussians = 100000;
+    c.checkpoint_every = 5000;
+  } else {
+    throw std::invalid_argument("unknown preset '" + name + "' (fast, paper)");
+  }
+  return c;
+}
+
+void TrainConfig::set(const std::string& key, const std::string& value) {
+  auto it = setters().find(key);
+  if (it == setters().end()) throw std::invalid_argument("unknown config key '" + key + "'");
+  it->second(*this, value);
+}
+
+void TrainConfig::apply_json(const nlohmann::json& j) {
+  if (!j.is_object()) throw std::invalid_argument("config must be a JSON object");
+  if (j.contains("preset")) set("preset", j["preset"].get<std::string>());
+  for (auto& [k, v] : j.items()) {
+    if (k == "preset") continue;
+    std::string s;
+    if (v.is_string()) s = v.get<std::string>();
+    else if (v.is_boolean()) s = v.get<bool>() ? "true" : "false";
+    else if (v.is_array() && v.size() == 3) s = std::to_string(v[0].get<double>()) + "," + std::to_string(v[1].get<double>()) + "," + std::to_string(v[2].get<double>());
+    else if (v.is_number_integer() || v.is_number_unsigned()) s = std::to_string(v.get<long long>());
+    else s = v.dump();
+    set(k, s);
+  }
+}
+
+nlohmann::json TrainConfig::to_json() const {
+  return {{"preset", preset}, {"iterations", iterations}, {"init_gaussians", init_gaussians}, {"sh_degree", sh_degree},
+          {"sh_increase_every", sh_increase_every}, {"lr_means_init", lr_means_init}, {"lr_means_final", lr_means_final},
+          {"lr_sh_dc", lr_sh_dc}, {"lr_sh_rest", lr_sh_rest}, {"lr_opacity", lr_opacity}, {"lr_log_scales", lr_log_scales},
+          {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"target", target}, {"antialiased", antialiased},
+          {"background", {background[0], background[1], background[2]}}, {"seed", seed}, {"log_every", log_every},
+          {"checkpoint_every", checkpoint_every}};
+}
+
+std::vector<std::string> TrainConfig::keys() {
+  std::vector<std::string> k;
+  for (auto& [name, s] : setters()) k.push_back(name);
+  return k;
+}
+
+}  // namespace evflow

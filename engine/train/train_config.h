@@ -1,0 +1,36 @@
+// Training configuration: every option with its default, set from a JSON file, a preset and
+// key=value overrides (in that order). docs/training.md lists the keys.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace evflow {
+
+struct TrainConfig {
+  std::string preset = "fast";
+  uint32_t iterations = 3000;
+  uint32_t init_gaussians = 20000;
+  int sh_degree = 3;
+  uint32_t sh_increase_every = 1000;   // active SH degree +1 every this many steps
+  double lr_means_init = 1.6e-4, lr_means_final = 1.6e-6;  // x scene extent, exponential decay
+  double lr_sh_dc = 2.5e-3, lr_sh_rest = 2.5e-3 / 20, lr_opacity = 0.05, lr_log_scales = 5e-3, lr_quats = 1e-3;
+  double ssim_lambda = 0.2;            // loss = (1-l) L1 + l (1 - SSIM)
+  std::string target = "blurry";       // train on "blurry" images, or "sharp" (ground truth, when the data has it)
+  bool antialiased = false;
+  std::array<float, 3> background{0, 0, 0};
+  uint64_t seed = 0;
+  uint32_t log_every = 100;
+  uint32_t checkpoint_every = 1000;
+
+  static TrainConfig preset_named(const std::string& name);  // "fast" (CPU) or "paper" (GPU)
+  void set(const std::string& key, const std::string& value);  // throws naming the key
+  void apply_json(const nlohmann::json& j);
+  nlohmann::json to_json() const;
+  static std::vector<std::string> keys();
+};
+
+}  // namespace evflow

@@ -1,0 +1,161 @@
+#include "train/trainer.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "loss/image_losses.h"
+#include "optim/schedule.h"
+
+namespace evflow {
+
+std::vector<float> planar_rgb(const io::Image& img) {
+  const size_t hw = size_t(img.width) * img.height;
+  std::vector<float> out(3 * hw);
+  for (size_t i = 0; i < hw; ++i)
+    for (uint32_t c = 0; c < 3; ++c) out[c * hw + i] = img.data[i * img.channels + std::min(c, img.channels - 1)];
+  return out;
+}
+
+static const io::Image& target_image(const io::View& v, const TrainConfig& cfg) {
+  if (cfg.target == "sharp") {
+    if (!v.sharp_mid) throw std::invalid_argument("target=sharp, but view '" + v.name + "' has no sharp image");
+    return *v.sharp_mid;
+  }
+  return v.blurry;
+}
+
+GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg) {
+  if (data.train.empty()) throw std::invalid_argument("dataset has no training views");
+  std::mt19937_64 rng(cfg.seed * 7919 + 17);
+  auto uni = [&](double a, double b) { return a + (b - a) * (double(rng() >> 11) * (1.0 / 9007199254740992.0)); };
+  const double near = data.near > 0 ? data.near : 0.5, far = data.far > near ? data.far : near * 20;
+  GaussianCloud c;
+  c.resize(cfg.init_gaussians, cfg.sh_degree);
+  const int K = c.coeffs();
+  for (size_t i = 0; i < c.size(); ++i) {
+    const io::View& v = data.train[rng() % data.train.size()];
+    const io::Image& img = target_image(v, cfg);
+    const Camera& cam = v.camera;
+    const double px = uni(0, cam.width), py = uni(0, cam.height);
+    const double z = near * std::pow(far / near, uni(0.05, 0.9));  // log-uniform, away from the bounds
+    const double pc[3] = {(px - cam.cx) / cam.fx * z - cam.t[0], (py - cam.cy) / cam.fy * z - cam.t[1], z - cam.t[2]};
+    for (int r = 0; r < 3; ++r) c.means[i * 3 + r] = float(cam.R[r] * pc[0] + cam.R[3 + r] * pc[1] + cam.R[6 + r] * pc[2]);
+    const float ls = float(std::log(1.5 * z / cam.fx));  // ~1.5 px
+    for (int k = 0; k < 3; ++k) c.log_scales[i * 3 + k] = ls;
+    c.quats[i * 4] = 1;
+    c.quats[i * 4 + 1] = c.quats[i * 4 + 2] = c.quats[i * 4 + 3] = 0;
+    c.opacity_logits[i] = float(std::log(0.1 / 0.9));
+    const uint32_t ix = std::min<uint32_t>(uint32_t(px), img.width - 1), iy = std::min<uint32_t>(uint32_t(py), img.height - 1);
+    for (int ch = 0; ch < 3; ++ch) {
+      float col = img.data[(size_t(iy) * img.width + ix) * img.channels + std::min<uint32_t>(ch, img.channels - 1)];
+      c.sh[(i * K) * 3 + ch] = float((col - 0.5) / 0.28209479177387814);
+      for (int k = 1; k < K; ++k) c.sh[(i * K + k) * 3 + ch] = 0;
+    }
+  }
+  return c;
+}
+
+Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg)
+    : Trainer(ctx, data, cfg, initial_cloud(data, cfg), 0) {}
+
+Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, const GaussianCloud& start, uint32_t start_step)
+    : ctx_(ctx), data_(data), cfg_(std::move(cfg)), raster_(ctx), cmd_(ctx), v_rgb_(ctx, 16, "v_rgb"),
+      v_alpha_(ctx, 16, "v_alpha"), step_(start_step) {
+  setup(start);
+}
+
+void Trainer::setup(const GaussianCloud& start) {
+  if (data_.train.empty()) throw std::invalid_argument("dataset has no training views");
+  const Camera& c0 = data_.train[0].camera;
+  for (auto& v : data_.train)
+    if (v.camera.width != c0.width || v.camera.height != c0.height)
+      throw std::invalid_argument("training views differ in size ('" + v.name + "'); one size per dataset is supported");
+  start.validate("initial Gaussians");
+  params_ = std::make_unique<GaussianBuffers>(ctx_, start.size(), start.sh_degree, "p_");
+  grads_ = std::make_unique<GaussianBuffers>(ctx_, start.size(), start.sh_degree, "v_");
+  params_->upload(start);
+  for (auto& v : data_.train) {
+    auto planar = planar_rgb(target_image(v, cfg_));
+    targets_.emplace_back(ctx_, planar.size() * 4, "target_" + v.name);
+    targets_.back().write(planar);
+  }
+  const size_t hw = size_t(c0.width) * c0.height;
+  v_rgb_.ensure(hw * 12);
+  v_alpha_ = gpu::Buffer(ctx_, hw * 4, "v_alpha");
+  v_alpha_.write(std::vector<float>(hw, 0.0f));
+  terms_.clear();
+  add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
+
+  // Scene extent: radius of the camera centres around their mean (as 3DGS), at least 1.
+  double mean[3] = {0, 0, 0};
+  for (auto& v : data_.train) { auto c = v.camera.center(); for (int i = 0; i < 3; ++i) mean[i] += c[i] / data_.train.size(); }
+  double r = 0;
+  for (auto& v : data_.train) {
+    auto c = v.camera.center();
+    r = std::max(r, std::sqrt((c[0] - mean[0]) * (c[0] - mean[0]) + (c[1] - mean[1]) * (c[1] - mean[1]) + (c[2] - mean[2]) * (c[2] - mean[2])));
+  }
+  extent_ = std::max(1.0, 1.1 * r);
+
+  adam_ = std::make_unique<Adam>(ctx_);
+  const uint32_t n = uint32_t(start.size());
+  means_group_ = adam_->add_group({"means", &params_->means, &grads_->means, n * 3, float(cfg_.lr_means_init * extent_), 3});
+  adam_->add_group({"log_scales", &params_->log_scales, &grads_->log_scales, n * 3, float(cfg_.lr_log_scales), 3});
+  adam_->add_group({"quats", &params_->quats, &grads_->quats, n * 4, float(cfg_.lr_quats), 4});
+  adam_->add_group({"opacity_logits", &params_->opacity_logits, &grads_->opacity_logits, n, float(cfg_.lr_opacity), 1});
+  adam_->add_group({"sh0", &params_->sh[0], &grads_->sh[0], n * 3, float(cfg_.lr_sh_dc), 3});
+  static const uint32_t band[4] = {1, 3, 5, 7};
+  for (int l = 1; l <= start.sh_degree; ++l)
+    adam_->add_group({"sh" + std::to_string(l), &params_->sh[l], &grads_->sh[l], n * band[l] * 3, float(cfg_.lr_sh_rest), band[l] * 3});
+}
+
+StepStats Trainer::step() {
+  auto t0 = std::chrono::steady_clock::now();
+  StepStats st;
+  st.step = ++step_;
+  // Deterministic view order: a seeded shuffle per epoch.
+  const size_t nv = data_.train.size();
+  std::vector<uint32_t> order(nv);
+  for (uint32_t i = 0; i < nv; ++i) order[i] = i;
+  std::mt19937_64 rng(cfg_.seed * 1000003 + (step_ - 1) / nv);
+  std::shuffle(order.begin(), order.end(), rng);
+  st.view = order[(step_ - 1) % nv];
+  const io::View& view = data_.train[st.view];
+
+  RenderSettings s;
+  s.background = cfg_.background;
+  s.antialiased = cfg_.antialiased;
+  s.sh_degree = std::min<int>(params_->sh_degree, cfg_.sh_increase_every ? int(step_ / cfg_.sh_increase_every) : params_->sh_degree);
+  raster_.forward(*params_, view.camera, s);
+  bool first = true;
+  for (auto& t : terms_) {
+    t->record(cmd_, raster_.outputs().rgb, targets_[st.view], v_rgb_, !first);
+    first = false;
+  }
+  cmd_.submit();
+  st.loss = 0;
+  for (auto& t : terms_) st.loss += t->weight() * t->value();
+  if (!std::isfinite(st.loss)) {
+    st.skipped = true;
+    std::fprintf(stderr, "step %u: non-finite loss on view '%s' (term %s): update skipped\n", st.step, view.name.c_str(),
+                 terms_.front()->name().c_str());
+  } else {
+    raster_.backward(*params_, v_rgb_, v_alpha_, *grads_);
+    ExponentialDecay sched{cfg_.lr_means_init * extent_, cfg_.lr_means_final * extent_, cfg_.iterations};
+    adam_->set_lr(means_group_, float(sched(step_)));
+    adam_->step(cmd_);
+    cmd_.submit();
+  }
+  st.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return st;
+}
+
+std::vector<float> Trainer::render(const Camera& cam) {
+  RenderSettings s;
+  s.background = cfg_.background;
+  s.antialiased = cfg_.antialiased;
+  raster_.forward(*params_, cam, s);
+  return raster_.outputs().rgb.read<float>(size_t(cam.width) * cam.height * 3);
+}
+
+}  // namespace evflow

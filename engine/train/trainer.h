@@ -1,0 +1,68 @@
+// The training loop: per step one view, render, loss terms (a registry: each adds its weighted
+// gradient into one image gradient), backward, Adam. Parameters, images and gradients stay on
+// the GPU; per step the host reads back the loss value (and the intersection count).
+#pragma once
+#include <functional>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "io/dataset.h"
+#include "loss/loss_term.h"
+#include "optim/adam.h"
+#include "splat/rasterizer.h"
+#include "train/train_config.h"
+
+namespace evflow {
+
+struct StepStats {
+  uint32_t step = 0;
+  uint32_t view = 0;
+  double loss = 0;
+  bool skipped = false;  // non-finite loss: the update was not applied
+  double ms = 0;
+};
+
+// Random Gaussians inside the training views' frustums between the near and far bounds, coloured
+// from the pixel they were seeded on.
+GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg);
+
+class Trainer {
+ public:
+  Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg);
+  Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, const GaussianCloud& start, uint32_t start_step);
+
+  StepStats step();
+  uint32_t current_step() const { return step_; }
+  const TrainConfig& config() const { return cfg_; }
+  GaussianCloud cloud() const { return params_->download(); }
+  // Renders `cam` with the current Gaussians into planar RGB (3 x H x W) on the host.
+  std::vector<float> render(const Camera& cam);
+  Rasterizer& rasterizer() { return raster_; }
+  const GaussianBuffers& params() const { return *params_; }
+  // The loss-term registry.
+  void add_loss(std::unique_ptr<LossTerm> term) { terms_.push_back(std::move(term)); }
+  const std::vector<std::unique_ptr<LossTerm>>& losses() const { return terms_; }
+
+ private:
+  void setup(const GaussianCloud& start);
+  gpu::Context& ctx_;
+  const io::Dataset& data_;
+  TrainConfig cfg_;
+  Rasterizer raster_;
+  gpu::Commands cmd_;
+  std::unique_ptr<GaussianBuffers> params_, grads_;
+  std::vector<gpu::Buffer> targets_;
+  gpu::Buffer v_rgb_, v_alpha_;
+  std::vector<std::unique_ptr<LossTerm>> terms_;
+  std::unique_ptr<Adam> adam_;
+  size_t means_group_ = 0;
+  double extent_ = 1.0;
+  uint32_t step_ = 0;
+};
+
+// Planar float copy (3 x H x W) of an interleaved RGB image.
+std::vector<float> planar_rgb(const io::Image& img);
+
+}  // namespace evflow
