@@ -9,5 +9,9 @@ mkdir -p -m 700 "$XDG_RUNTIME_DIR"
 OUT=runs/main
 mkdir -p "$OUT"
 build/evflow devices
-build/evflow fit-demo --out "$OUT/fit-demo"
-build/evflow bench raster --gaussians 100000 --repeats 3 --json | tee "$OUT/bench_raster.json"
+# simulate the default scene -> train on the blurry views -> evaluate (deblur + novel views) -> export
+build/evflow simulate --out "$OUT/data"
+build/evflow train "$OUT/data" --out "$OUT/run" --preset fast "${@}"
+build/evflow eval "$OUT/run"
+build/evflow export "$OUT/run" --gltf "$OUT/run/splats.glb" --ply "$OUT/run/splats.ply"
+cat "$OUT/run/eval.md"
