@@ -83,6 +83,10 @@ void main() {
     for (uint k = 0; k < 9; ++k) acc_zero(lid * 9 + k);
     barrier();
     uint n_visit = start < visit_end ? min(n, visit_end - start) : 0u;
+    // Per-lane adds need no uniform control flow, so each pixel starts at its own last Gaussian
+    // (CPU drivers then run a SIMD vector only as far as its furthest pixel); the subgroup
+    // reduction needs every lane at the same j.
+    if (pc.subgroup_reduce == 0u) n_visit = (inside && start < last) ? min(n, last - start) : 0u;
     for (uint jj = n_visit; jj > 0u; --jj) {
       uint j = jj - 1u;
       bool contrib = inside && start + j < last;
