@@ -33,6 +33,7 @@ static const char* kSimulateHelp =
     "  --seed N                  random seed (default: 1)\n"
     "  --events PRESET           event model: default | noisy | ideal (default: default)\n"
     "  --theta-pos X --theta-neg X --theta-sigma X   thresholds (default: preset's, 0.2 0.2 0.03)\n"
+    "  --cfa                     colour events through an RGGB filter array (default: luminance events)\n"
     "  --refractory S --shot-rate HZ --leak-rate HZ --jitter S   (default: preset's, 5e-4 0 0 0)\n"
     "  --ambient X               ambient light fraction (default: 0.35)\n"
     "  --texture-samples N       1 or 4 texture rays per pixel (default: 4)\n"
@@ -75,6 +76,7 @@ static int run_simulate(const Args& a) {
   else if (preset == "noisy") sp.events = events::EventModelParams::noisy();
   else if (preset == "ideal") sp.events = events::EventModelParams::ideal();
   else throw std::invalid_argument("--events must be default, noisy or ideal");
+  if (p.flag("--cfa")) sp.events.color = events::ColorMode::RGGB;
   sp.events.theta_pos = p.number("--theta-pos", sp.events.theta_pos);
   sp.events.theta_neg = p.number("--theta-neg", sp.events.theta_neg);
   sp.events.theta_sigma = p.number("--theta-sigma", sp.events.theta_sigma);

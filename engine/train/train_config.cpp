@@ -68,6 +68,7 @@ TrainConfig TrainConfig::preset_named(const std::string& name) {
     c.preset = "paper";
     c.iterations = 40000;
     c.init_gaussians = 100000;
+    c.sh_increase_every = 1000;
     c.checkpoint_every = 5000;
   } else {
     throw std::invalid_argument("unknown preset '" + name + "' (fast, paper)");
