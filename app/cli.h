@@ -35,3 +35,12 @@ struct ArgParser {
 };
 
 }  // namespace evflow::app
+
+#include "gpu/context.h"
+
+namespace evflow::app {
+
+// Context options from the environment (EVF_DEVICE, EVF_VALIDATION, EVF_POISON) and --device.
+gpu::ContextOptions context_options(ArgParser& p);
+
+}  // namespace evflow::app

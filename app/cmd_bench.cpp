@@ -25,9 +25,7 @@ static int bench_raster(ArgParser& p) {
   const int warmup = int(p.integer("--warmup", 2));
   const bool json = p.flag("--json");
   const bool aa = p.flag("--antialiased");
-  gpu::ContextOptions o = gpu::ContextOptions::from_env();
-  std::string dev = p.value("--device");
-  if (!dev.empty()) o.device = dev;
+  gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   gpu::Context ctx(o);
   Camera cam = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 1}, {0, -1, 0});

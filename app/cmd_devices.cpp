@@ -9,9 +9,7 @@ namespace evflow::app {
 static int run_devices(const Args& a) {
   ArgParser p(a);
   if (p.flag("--help")) { std::printf("usage: evflow devices [--device N|name]\n"); return 0; }
-  gpu::ContextOptions o = gpu::ContextOptions::from_env();
-  std::string dev = p.value("--device");
-  if (!dev.empty()) o.device = dev;
+  gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   for (auto& d : gpu::Context::list_devices()) std::printf("%s\n", d.c_str());
   gpu::Context ctx(o);

@@ -24,9 +24,7 @@ static int run_eval(const Args& a) {
     return 0;
   }
   std::string data_override = p.value("--data");
-  gpu::ContextOptions o = gpu::ContextOptions::from_env();
-  std::string dev = p.value("--device");
-  if (!dev.empty()) o.device = dev;
+  gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   auto pos = p.positional();
   if (pos.size() != 1) throw std::invalid_argument("usage: evflow eval RUN");
@@ -56,7 +54,7 @@ static int run_eval(const Args& a) {
         throw std::runtime_error("view '" + v.name + "': ground truth is " + std::to_string(gt.width) + "x" + std::to_string(gt.height) +
                                  ", camera " + std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
       r.forward(params, v.camera, s);
-      auto planar = planar_rgb(gt);
+      auto planar = io::planar_rgb(gt);
       gpu::Buffer target(ctx, planar.size() * 4, "gt");
       target.write(planar);
       ImageMetrics m(ctx, ImageShape{3, gt.height, gt.width});

@@ -30,17 +30,6 @@ struct HostAdam {
   }
 };
 
-io::Image to_image(const std::vector<float>& planar, uint32_t w, uint32_t h) {
-  io::Image img;
-  img.width = w;
-  img.height = h;
-  img.channels = 3;
-  img.data.resize(size_t(w) * h * 3);
-  for (size_t i = 0; i < size_t(w) * h; ++i)
-    for (int c = 0; c < 3; ++c) img.data[i * 3 + c] = std::clamp(planar[c * size_t(w) * h + i], 0.0f, 1.0f);
-  return img;
-}
-
 }  // namespace
 
 static int run_fit_demo(const Args& a) {
@@ -55,9 +44,7 @@ static int run_fit_demo(const Args& a) {
   const uint32_t W = uint32_t(p.integer("--width", 160)), H = uint32_t(p.integer("--height", 120));
   const size_t N = size_t(p.integer("--gaussians", 3000));
   const int views = int(p.integer("--views", 4));
-  gpu::ContextOptions o = gpu::ContextOptions::from_env();
-  std::string dev = p.value("--device");
-  if (!dev.empty()) o.device = dev;
+  gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   gpu::Context ctx(o);
   std::printf("fit-demo on %s: %zu Gaussians, %d views of %ux%u, %d steps\n", ctx.caps().name.c_str(), N, views, W, H, steps);
@@ -94,9 +81,9 @@ static int run_fit_demo(const Args& a) {
       auto img = r.outputs().rgb.read<float>(3 * hw);
       for (size_t i = 0; i < img.size(); ++i) mse += double(img[i] - targets[v][i]) * (img[i] - targets[v][i]);
       if (save) {
-        io::write_png(std::filesystem::path(out) / (tag + "_view" + std::to_string(v) + ".png"), to_image(img, W, H));
+        io::write_png(std::filesystem::path(out) / (tag + "_view" + std::to_string(v) + ".png"), io::image_from_planar_rgb(img, W, H));
         if (tag == "before")
-          io::write_png(std::filesystem::path(out) / ("target_view" + std::to_string(v) + ".png"), to_image(targets[v], W, H));
+          io::write_png(std::filesystem::path(out) / ("target_view" + std::to_string(v) + ".png"), io::image_from_planar_rgb(targets[v], W, H));
       }
     }
     mse /= double(cams.size() * 3 * hw);

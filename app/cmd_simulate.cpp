@@ -89,9 +89,7 @@ static int run_simulate(const Args& a) {
   sp.shading.texture_samples = int(p.integer("--texture-samples", sp.shading.texture_samples));
   const std::string flow = p.value("--flow", "mid");
   if (flow != "mid" && flow != "all") throw std::invalid_argument("--flow must be mid or all");
-  gpu::ContextOptions o = gpu::ContextOptions::from_env();
-  const std::string dev = p.value("--device");
-  if (!dev.empty()) o.device = dev;
+  gpu::ContextOptions o = context_options(p);
   const bool verbose = p.flag("--verbose");
   p.reject_unknown();
   if (!p.positional().empty()) throw std::invalid_argument("unexpected argument '" + p.positional()[0] + "'");

@@ -39,9 +39,7 @@ static int run_train(const Args& a) {
   const std::string config_file = p.value("--config");
   const std::string preset = p.value("--preset");
   const bool resume = p.flag("--resume");
-  gpu::ContextOptions o = gpu::ContextOptions::from_env();
-  std::string dev = p.value("--device");
-  if (!dev.empty()) o.device = dev;
+  gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   std::vector<std::string> pos = p.positional(), overrides;
   std::string data_dir;

@@ -59,6 +59,13 @@ void ArgParser::reject_unknown() const {
   for (auto& a : args) if (a.rfind("--", 0) == 0) throw std::invalid_argument("unknown option " + a);
 }
 
+gpu::ContextOptions context_options(ArgParser& p) {
+  gpu::ContextOptions o = gpu::ContextOptions::from_env();
+  std::string dev = p.value("--device");
+  if (!dev.empty()) o.device = dev;
+  return o;
+}
+
 }  // namespace evflow::app
 
 static void usage() {

@@ -15,18 +15,6 @@ using namespace evflow;
 
 namespace {
 
-io::Image to_image(const std::vector<float>& planar, uint32_t w, uint32_t h) {
-  io::Image img;
-  img.width = w;
-  img.height = h;
-  img.channels = 3;
-  img.data.resize(size_t(w) * h * 3);
-  const size_t hw = size_t(w) * h;
-  for (size_t i = 0; i < hw; ++i)
-    for (int c = 0; c < 3; ++c) img.data[i * 3 + c] = planar[c * hw + i];
-  return img;
-}
-
 // Views on a ring around the ground-truth cloud (centre at depth 6 from the first camera).
 io::Dataset make_dataset(gpu::Context& ctx, uint32_t w, uint32_t h, int n_train, int n_novel) {
   io::Dataset d;
@@ -45,7 +33,7 @@ io::Dataset make_dataset(gpu::Context& ctx, uint32_t w, uint32_t h, int n_train,
     io::View v;
     v.name = (i < n_train ? "train" : "novel") + std::to_string(i);
     v.camera = cam;
-    io::Image img = to_image(r.outputs().rgb.read<float>(size_t(w) * h * 3), w, h);
+    io::Image img = io::image_from_planar_rgb(r.outputs().rgb.read<float>(size_t(w) * h * 3), w, h);
     v.sharp_mid = img;
     if (i < n_train) {
       v.blurry = img;
@@ -61,7 +49,7 @@ double mean_psnr(gpu::Context& ctx, Trainer& t, const std::vector<io::View>& vie
   double sum = 0;
   for (auto& v : views) {
     auto img = t.render(v.camera);
-    auto gt = planar_rgb(*v.sharp_mid);
+    auto gt = io::planar_rgb(*v.sharp_mid);
     double mse = 0;
     for (size_t i = 0; i < img.size(); ++i) mse += double(img[i] - gt[i]) * (img[i] - gt[i]);
     sum += -10 * std::log10(mse / img.size());

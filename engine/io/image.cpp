@@ -125,4 +125,25 @@ void write_image(const fs::path& path, const Image& im) {
   fail(path, "unsupported image extension '" + ext + "' for writing (use .png or .exr)");
 }
 
+std::vector<float> planar_rgb(const Image& img) {
+  const size_t hw = size_t(img.width) * img.height;
+  std::vector<float> out(3 * hw);
+  for (size_t i = 0; i < hw; ++i)
+    for (uint32_t c = 0; c < 3; ++c) out[c * hw + i] = img.data[i * img.channels + std::min(c, img.channels - 1)];
+  return out;
+}
+
+Image image_from_planar_rgb(const std::vector<float>& planar, uint32_t width, uint32_t height) {
+  const size_t hw = size_t(width) * height;
+  if (planar.size() < 3 * hw) throw std::invalid_argument("image_from_planar_rgb: fewer than 3 x H x W values");
+  Image img;
+  img.width = width;
+  img.height = height;
+  img.channels = 3;
+  img.data.resize(3 * hw);
+  for (size_t i = 0; i < hw; ++i)
+    for (int c = 0; c < 3; ++c) img.data[i * 3 + c] = planar[c * hw + i];
+  return img;
+}
+
 }  // namespace evflow::io

@@ -32,4 +32,9 @@ void write_image(const std::filesystem::path& path, const Image& image);
 void write_png(const std::filesystem::path& path, const Image& image);
 void write_exr(const std::filesystem::path& path, const Image& image);
 
+// GPU images are planar (c * H * W + y * W + x). Planar RGB copy of an image (grey replicated),
+// and an interleaved RGB image from planar data (values as they are; write_png clamps).
+std::vector<float> planar_rgb(const Image& image);
+Image image_from_planar_rgb(const std::vector<float>& planar, uint32_t width, uint32_t height);
+
 }  // namespace evflow::io

@@ -9,14 +9,6 @@
 
 namespace evflow {
 
-std::vector<float> planar_rgb(const io::Image& img) {
-  const size_t hw = size_t(img.width) * img.height;
-  std::vector<float> out(3 * hw);
-  for (size_t i = 0; i < hw; ++i)
-    for (uint32_t c = 0; c < 3; ++c) out[c * hw + i] = img.data[i * img.channels + std::min(c, img.channels - 1)];
-  return out;
-}
-
 static const io::Image& target_image(const io::View& v, const TrainConfig& cfg) {
   if (cfg.target == "sharp") {
     if (!v.sharp_mid) throw std::invalid_argument("target=sharp, but view '" + v.name + "' has no sharp image");
@@ -76,7 +68,7 @@ void Trainer::setup(const GaussianCloud& start) {
   grads_ = std::make_unique<GaussianBuffers>(ctx_, start.size(), start.sh_degree, "v_");
   params_->upload(start);
   for (auto& v : data_.train) {
-    auto planar = planar_rgb(target_image(v, cfg_));
+    auto planar = io::planar_rgb(target_image(v, cfg_));
     targets_.emplace_back(ctx_, planar.size() * 4, "target_" + v.name);
     targets_.back().write(planar);
   }

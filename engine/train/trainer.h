@@ -62,7 +62,4 @@ class Trainer {
   uint32_t step_ = 0;
 };
 
-// Planar float copy (3 x H x W) of an interleaved RGB image.
-std::vector<float> planar_rgb(const io::Image& img);
-
 }  // namespace evflow
