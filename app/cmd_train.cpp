@@ -67,8 +67,7 @@ static int run_train(const Args& a) {
   const fs::path ckpt_path = fs::path(out) / "checkpoint.ckpt";
   std::unique_ptr<Trainer> trainer;
   if (resume) {
-    Checkpoint c = read_checkpoint(ckpt_path);
-    trainer = std::make_unique<Trainer>(ctx, data, cfg, c.cloud, c.step);
+    trainer = std::make_unique<Trainer>(ctx, data, cfg, read_checkpoint(ckpt_path));
   } else {
     trainer = std::make_unique<Trainer>(ctx, data, cfg);
   }
@@ -79,7 +78,7 @@ static int run_train(const Args& a) {
   std::printf("training %zu views (%s) on %s, %u Gaussians, %u iterations, preset %s\n", data.train.size(), data.layout.c_str(),
               ctx.caps().name.c_str(), cfg.init_gaussians, cfg.iterations, cfg.preset.c_str());
   std::signal(SIGINT, on_sigint);
-  auto save = [&] { write_checkpoint(ckpt_path, {trainer->current_step(), trainer->cloud()}); };
+  auto save = [&] { write_checkpoint(ckpt_path, trainer->checkpoint()); };
   double ema_ms = 0, ema_loss = 0;
   while (trainer->current_step() < cfg.iterations && !g_interrupted) {
     StepStats st = trainer->step();

@@ -49,6 +49,17 @@ void Adam::set_buffers(size_t i, const gpu::Buffer& param, const gpu::Buffer& gr
   d.grad = &grad;
 }
 
+void Adam::load_state(size_t i, const std::vector<float>& m, const std::vector<float>& v, uint64_t step) {
+  State& s = *groups_.at(i);
+  if (m.size() != s.desc.count || v.size() != s.desc.count)
+    throw std::invalid_argument("adam: group " + s.desc.name + ": state of " + std::to_string(m.size()) + "/" +
+                                std::to_string(v.size()) + " values for a group of " + std::to_string(s.desc.count));
+  s.m->write(m);
+  s.v->write(v);
+  s.step = step;
+  s.zeroed = true;
+}
+
 void Adam::prepare(gpu::Commands& cmd, State& s) {
   if (s.zeroed) return;
   cmd.fill(*s.m, 0u);

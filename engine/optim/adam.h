@@ -70,6 +70,9 @@ class Adam {
   static void gather_rows(gpu::Commands& cmd, const gpu::Buffer& src, const gpu::Buffer& dst, const gpu::Buffer& index,
                           uint32_t rows, uint32_t width);
 
+  // Restores a group's state (from a checkpoint): both moments (count floats each) and the
+  // step count. Throws when the sizes differ from the group's count.
+  void load_state(size_t i, const std::vector<float>& exp_avg, const std::vector<float>& exp_avg_sq, uint64_t step);
   // Moments of a group (first `count` floats are meaningful).
   const gpu::Buffer& exp_avg(size_t i) const { return *groups_.at(i)->m; }
   const gpu::Buffer& exp_avg_sq(size_t i) const { return *groups_.at(i)->v; }

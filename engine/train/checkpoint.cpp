@@ -1,5 +1,6 @@
 #include "train/checkpoint.h"
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -8,47 +9,100 @@
 
 namespace evflow {
 
-static constexpr char kMagic[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '1'};
+static constexpr char kMagic[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '2'};
+
+namespace {
+
+template <class T>
+void put(std::ofstream& f, const T& v) { f.write(reinterpret_cast<const char*>(&v), sizeof(T)); }
+void put_floats(std::ofstream& f, const std::vector<float>& v) { f.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * 4)); }
+
+struct Reader {
+  std::ifstream f;
+  std::string name;
+  uint64_t left;
+  void need(uint64_t bytes, const char* what) {
+    if (bytes > left) throw std::runtime_error(name + ": truncated checkpoint (" + what + ")");
+    left -= bytes;
+  }
+  template <class T>
+  T get(const char* what) {
+    need(sizeof(T), what);
+    T v;
+    f.read(reinterpret_cast<char*>(&v), sizeof(T));
+    return v;
+  }
+  std::vector<float> floats(uint64_t n, const char* what) {
+    if (n > left / 4) throw std::runtime_error(name + ": truncated checkpoint (" + what + ")");
+    need(n * 4, what);
+    std::vector<float> v(n);
+    f.read(reinterpret_cast<char*>(v.data()), std::streamsize(n * 4));
+    return v;
+  }
+};
+
+}  // namespace
 
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c) {
   c.cloud.validate("checkpoint " + path.string());
+  for (auto& g : c.optimizer)
+    if (g.exp_avg.size() != g.exp_avg_sq.size())
+      throw std::invalid_argument("checkpoint " + path.string() + ": optimizer group " + g.name + " has mismatched moments");
   io::write_file_atomic(path, [&](const std::filesystem::path& tmp) {
     std::ofstream f(tmp, std::ios::binary);
     if (!f) throw std::runtime_error(tmp.string() + ": cannot open for writing");
-    const uint64_t n = c.cloud.size();
-    const int32_t degree = c.cloud.sh_degree;
     f.write(kMagic, 8);
-    f.write(reinterpret_cast<const char*>(&c.step), 4);
-    f.write(reinterpret_cast<const char*>(&degree), 4);
-    f.write(reinterpret_cast<const char*>(&n), 8);
-    for (auto* v : {&c.cloud.means, &c.cloud.log_scales, &c.cloud.quats, &c.cloud.opacity_logits, &c.cloud.sh})
-      f.write(reinterpret_cast<const char*>(v->data()), std::streamsize(v->size() * 4));
+    put(f, c.step);
+    put(f, int32_t(c.cloud.sh_degree));
+    put(f, uint64_t(c.cloud.size()));
+    for (auto* v : {&c.cloud.means, &c.cloud.log_scales, &c.cloud.quats, &c.cloud.opacity_logits, &c.cloud.sh}) put_floats(f, *v);
+    put(f, uint32_t(c.optimizer.size()));
+    for (auto& g : c.optimizer) {
+      put(f, uint32_t(g.name.size()));
+      f.write(g.name.data(), std::streamsize(g.name.size()));
+      put(f, g.step);
+      put(f, uint64_t(g.exp_avg.size()));
+      put_floats(f, g.exp_avg);
+      put_floats(f, g.exp_avg_sq);
+    }
     if (!f) throw std::runtime_error(tmp.string() + ": write failed");
   });
 }
 
 Checkpoint read_checkpoint(const std::filesystem::path& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw std::runtime_error(path.string() + ": cannot open checkpoint");
+  Reader r{std::ifstream(path, std::ios::binary), path.string(), 0};
+  if (!r.f) throw std::runtime_error(path.string() + ": cannot open checkpoint");
+  r.left = std::filesystem::file_size(path);
   char magic[8];
+  r.need(8, "magic");
+  r.f.read(magic, 8);
+  if (std::memcmp(magic, kMagic, 8) != 0) throw std::runtime_error(path.string() + ": not an EvFlow checkpoint (version 2)");
   Checkpoint c;
-  int32_t degree = 0;
-  uint64_t n = 0;
-  f.read(magic, 8);
-  if (!f || std::memcmp(magic, kMagic, 8) != 0) throw std::runtime_error(path.string() + ": not an EvFlow checkpoint");
-  f.read(reinterpret_cast<char*>(&c.step), 4);
-  f.read(reinterpret_cast<char*>(&degree), 4);
-  f.read(reinterpret_cast<char*>(&n), 8);
-  if (!f || degree < 0 || degree > 3 || n > (1ull << 32))
-    throw std::runtime_error(path.string() + ": corrupt checkpoint header");
-  const uint64_t expect = 24 + n * 4 * (3 + 3 + 4 + 1 + 3 * uint64_t(sh_coeff_count(degree)));
-  if (std::filesystem::file_size(path) != expect)
-    throw std::runtime_error(path.string() + ": checkpoint is " + std::to_string(std::filesystem::file_size(path)) +
-                             " bytes, expected " + std::to_string(expect) + " (truncated?)");
+  c.step = r.get<uint32_t>("step");
+  const int32_t degree = r.get<int32_t>("SH degree");
+  const uint64_t n = r.get<uint64_t>("count");
+  if (degree < 0 || degree > 3) throw std::runtime_error(path.string() + ": corrupt checkpoint (SH degree " + std::to_string(degree) + ")");
+  if (n > r.left / 4) throw std::runtime_error(path.string() + ": truncated checkpoint (" + std::to_string(n) + " Gaussians announced)");
   c.cloud.resize(n, degree);
   for (auto* v : {&c.cloud.means, &c.cloud.log_scales, &c.cloud.quats, &c.cloud.opacity_logits, &c.cloud.sh})
-    f.read(reinterpret_cast<char*>(v->data()), std::streamsize(v->size() * 4));
-  if (!f) throw std::runtime_error(path.string() + ": truncated checkpoint");
+    *v = r.floats(v->size(), "Gaussians");
+  const uint32_t groups = r.get<uint32_t>("optimizer groups");
+  if (groups > 64) throw std::runtime_error(path.string() + ": corrupt checkpoint (" + std::to_string(groups) + " optimizer groups)");
+  for (uint32_t i = 0; i < groups; ++i) {
+    OptimizerGroupState g;
+    const uint32_t len = r.get<uint32_t>("group name");
+    if (len > 256) throw std::runtime_error(path.string() + ": corrupt checkpoint (optimizer group name)");
+    r.need(len, "group name");
+    g.name.resize(len);
+    r.f.read(g.name.data(), len);
+    g.step = r.get<uint64_t>("group step");
+    const uint64_t count = r.get<uint64_t>("group size");
+    g.exp_avg = r.floats(count, "optimizer moments");
+    g.exp_avg_sq = r.floats(count, "optimizer moments");
+    c.optimizer.push_back(std::move(g));
+  }
+  if (!r.f) throw std::runtime_error(path.string() + ": read error");
+  if (r.left) throw std::runtime_error(path.string() + ": " + std::to_string(r.left) + " unexpected bytes after the checkpoint");
   c.cloud.validate("checkpoint " + path.string());
   return c;
 }

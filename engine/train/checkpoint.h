@@ -1,14 +1,25 @@
-// Training checkpoints: the Gaussians and the step, written atomically (temporary + rename).
+// Training checkpoints: the step, the Gaussians and the optimizer state (Adam moments and step
+// counts per parameter group), so that a resumed run continues bit-identically on the same
+// device. Written atomically (temporary file, then rename).
 #pragma once
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "splat/gaussians.h"
 
 namespace evflow {
 
+struct OptimizerGroupState {
+  std::string name;
+  uint64_t step = 0;
+  std::vector<float> exp_avg, exp_avg_sq;
+};
+
 struct Checkpoint {
   uint32_t step = 0;
   GaussianCloud cloud;
+  std::vector<OptimizerGroupState> optimizer;  // empty: fresh optimizer state
 };
 
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& ckpt);

@@ -49,12 +49,25 @@ GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg) {
 }
 
 Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg)
-    : Trainer(ctx, data, cfg, initial_cloud(data, cfg), 0) {}
+    : Trainer(ctx, data, cfg, Checkpoint{0, initial_cloud(data, cfg), {}}) {}
 
-Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, const GaussianCloud& start, uint32_t start_step)
+Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, const Checkpoint& start)
     : ctx_(ctx), data_(data), cfg_(std::move(cfg)), raster_(ctx), cmd_(ctx), v_rgb_(ctx, 16, "v_rgb"),
-      v_alpha_(ctx, 16, "v_alpha"), step_(start_step) {
-  setup(start);
+      v_alpha_(ctx, 16, "v_alpha"), step_(start.step) {
+  setup(start.cloud);
+  for (auto& g : start.optimizer) adam_->load_state(adam_->group_index(g.name), g.exp_avg, g.exp_avg_sq, g.step);
+}
+
+Checkpoint Trainer::checkpoint() const {
+  Checkpoint c{step_, params_->download(), {}};
+  for (size_t i = 0; i < adam_->group_count(); ++i) {
+    const uint32_t n = adam_->group(i).count;
+    const bool fresh = adam_->step_count(i) == 0;  // moments not initialised before the first step
+    c.optimizer.push_back({adam_->group(i).name, adam_->step_count(i),
+                           fresh ? std::vector<float>(n, 0.f) : adam_->exp_avg(i).read<float>(n),
+                           fresh ? std::vector<float>(n, 0.f) : adam_->exp_avg_sq(i).read<float>(n)});
+  }
+  return c;
 }
 
 void Trainer::setup(const GaussianCloud& start) {

@@ -12,6 +12,7 @@
 #include "loss/loss_term.h"
 #include "optim/adam.h"
 #include "splat/rasterizer.h"
+#include "train/checkpoint.h"
 #include "train/train_config.h"
 
 namespace evflow {
@@ -31,12 +32,14 @@ GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg);
 class Trainer {
  public:
   Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg);
-  Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, const GaussianCloud& start, uint32_t start_step);
+  // Continues from a checkpoint (Gaussians, step and optimizer state: bit-identical on the same device).
+  Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, const Checkpoint& start);
 
   StepStats step();
   uint32_t current_step() const { return step_; }
   const TrainConfig& config() const { return cfg_; }
   GaussianCloud cloud() const { return params_->download(); }
+  Checkpoint checkpoint() const;
   // Renders `cam` with the current Gaussians into planar RGB (3 x H x W) on the host.
   std::vector<float> render(const Camera& cam);
   Rasterizer& rasterizer() { return raster_; }
