@@ -1,0 +1,86 @@
+// Adaptive density control: push constants and codes shared by engine/densify (C++) and
+// shaders/densify (GLSL). See docs/density_control.md.
+#ifndef EVF_DENSIFY_LAYOUT_H
+#define EVF_DENSIFY_LAYOUT_H
+#include "common/shared_prelude.h"
+EVF_NAMESPACE_BEGIN
+
+EVF_CONST(uint, kDensifyGroupSize, 128u)
+EVF_CONST(uint, kDensifyNoSource, 0xFFFFFFFFu)  // == kAdamNoSource: zero optimizer state
+
+// Decision word per Gaussian (densify/decide), bit flags:
+EVF_CONST(uint, kDecKeep, 1u)       // the original survives when it does not grow
+EVF_CONST(uint, kDecClone, 2u)      // clone candidate whose copy survives pruning
+EVF_CONST(uint, kDecSplit, 4u)      // split candidate whose two children survive pruning
+EVF_CONST(uint, kDecGrown, 8u)      // growth granted (always, unless the cap refused it)
+EVF_CONST(uint, kDecLowOpacity, 16u)  // pruned: opacity below min_opacity
+EVF_CONST(uint, kDecBigScreen, 32u)   // pruned: max screen radius above the limit
+EVF_CONST(uint, kDecBigWorld, 64u)    // pruned: max scale above the world limit
+
+// Row code per new Gaussian (densify/index): 0 = copy of the source row, 1 / 2 = first /
+// second split child of the source row.
+EVF_CONST(uint, kRowCopy, 0u)
+EVF_CONST(uint, kRowChild0, 1u)
+
+// densify/accumulate, one invocation per Gaussian:
+//   grad_sum[g] += grad2d_norm[g] * grad_scale and vis_count[g] += 1 when visible;
+//   max_radius[g] = max(max_radius[g], radius) when the camera is used (use_camera != 0).
+// visible = the projected Gaussian meets the image (use_camera) or grad2d_norm[g] > 0.
+struct AccumulatePC {
+  vec4 row0;    // world -> camera [R | t], row-major
+  vec4 row1;
+  vec4 row2;
+  vec4 intrin;  // fx, fy, cx, cy
+  uint width;
+  uint height;
+  float near_plane;
+  float far_plane;
+  uint count;
+  uint use_camera;
+  float grad_scale;
+  uint pad0;
+};
+
+// densify/decide, one invocation per Gaussian.
+struct DecidePC {
+  uint count;
+  float grad_threshold;     // grow where grad_sum / vis_count > this
+  float clone_max_scale;    // clone where max exp(log_scale) <= this, else split
+  float min_opacity_logit;  // prune where opacity logit < logit(min_opacity)
+  float max_screen_radius;  // prune where max_radius > this (prune_big != 0)
+  float max_world_scale;    // prune where max exp(log_scale) > this (prune_big != 0)
+  float log_split_div;      // children: log_scale - log_split_div
+  uint prune_big;
+  uint capped;              // 1: write sort keys for the cap, else grant every growth
+  uint pad0, pad1, pad2;
+};
+
+// densify/cap_extra (j < count): sorted_extra[j] = extra rows of Gaussian sorted_ids[j].
+// densify/cap_grant (j < count): grant growth of sorted_ids[j] when
+//   scan[j] + extra <= budget, budget = max_total - base_total (base_total read on the GPU).
+struct CapPC {
+  uint count;
+  uint max_total;
+  uint pad0, pad1;
+};
+
+// densify/index (g < count): writes rows offsets[g] .. offsets[g+1] of param_src, state_src, code.
+// densify/geometry (r < rows): new means and log-scales (split children sampled from the parent).
+struct EmitPC {
+  uint count;        // old Gaussians
+  uint rows;         // new Gaussians
+  uint seed;
+  float log_split_div;
+  float max_sigma;   // children's offsets are truncated to this Mahalanobis radius
+  uint pad0, pad1, pad2;
+};
+
+// densify/opacity_reset (g < count): logit = min(logit, max_logit); mask[g] = 1.
+struct ResetPC {
+  uint count;
+  float max_logit;
+  uint pad0, pad1;
+};
+
+EVF_NAMESPACE_END
+#endif
