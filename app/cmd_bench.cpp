@@ -9,6 +9,7 @@
 #include "gpu/commands.h"
 #include "splat/rasterizer.h"
 #include "splat/synthetic.h"
+#include "train/trainer.h"
 
 namespace evflow::app {
 
@@ -76,20 +77,84 @@ static int bench_raster(ArgParser& p) {
   return 0;
 }
 
+// Training steps on sharp views rendered from a synthetic ground-truth cloud: it/s and the split
+// between rasterization, loss and optimizer.
+static int bench_train(ArgParser& p) {
+  const uint32_t W = uint32_t(p.integer("--width", 346)), H = uint32_t(p.integer("--height", 260));
+  const uint32_t N = uint32_t(p.integer("--gaussians", 100000));
+  const int steps = int(p.integer("--steps", 20));
+  const int views = int(p.integer("--views", 8));
+  const bool json = p.flag("--json");
+  gpu::ContextOptions o = context_options(p);
+  p.reject_unknown();
+  gpu::Context ctx(o);
+  io::Dataset data;
+  data.layout = "synthetic";
+  data.near = 1.0;
+  data.far = 12.0;
+  Camera c0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
+  GaussianCloud truth = synthetic_cloud(42, 20000, 0, c0);
+  GaussianBuffers gt(ctx, truth.size(), 0, "gt_");
+  gt.upload(truth);
+  {
+    Rasterizer r(ctx);
+    for (int i = 0; i < views; ++i) {
+      double ang = (i - 0.5 * (views - 1)) * 0.06;
+      io::View v;
+      v.name = "view" + std::to_string(i);
+      v.camera = Camera::look_at(W, H, 60.0, {6 * std::sin(ang), 0.0, 6 - 6 * std::cos(ang)}, {0, 0, 6}, {0, -1, 0});
+      r.forward(gt, v.camera, RenderSettings{});
+      v.blurry = io::image_from_planar_rgb(r.outputs().rgb.read<float>(size_t(W) * H * 3), W, H);
+      data.train.push_back(std::move(v));
+    }
+  }
+  TrainConfig cfg;
+  cfg.init_gaussians = N;
+  cfg.iterations = uint32_t(steps);
+  Trainer t(ctx, data, cfg);
+  t.step();  // warm-up: pipelines compiled, buffers sized
+  std::vector<double> total, fwd, loss, bwd, opt;
+  for (int i = 0; i < steps; ++i) {
+    StepStats st = t.step();
+    total.push_back(st.ms);
+    fwd.push_back(st.raster_forward_ms);
+    loss.push_back(st.loss_ms);
+    bwd.push_back(st.raster_backward_ms);
+    opt.push_back(st.optimizer_ms);
+  }
+  const double m = median(total);
+  if (json) {
+    std::printf("{\"bench\": \"train\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": %u, \"steps\": %d, "
+                "\"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, \"rasterize_backward\": %.2f, "
+                "\"optimizer\": %.2f, \"step\": %.2f}}\n",
+                ctx.caps().name.c_str(), W, H, N, steps, 1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), m);
+  } else {
+    std::printf("train bench on %s: %ux%u, %u Gaussians, one view per step, median of %d steps\n", ctx.caps().name.c_str(), W, H,
+                N, steps);
+    std::printf("  rasterize forward   %9.2f ms\n  loss (L1 + D-SSIM)  %9.2f ms\n  rasterize backward  %9.2f ms\n"
+                "  optimizer (Adam)    %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
+                median(fwd), median(loss), median(bwd), median(opt), m, 1000.0 / m);
+  }
+  return 0;
+}
+
 static int run_bench(const Args& a) {
   ArgParser p(a);
   auto pos = p.positional();
   if (p.flag("--help") || pos.empty()) {
     std::printf("usage: evflow bench raster [--width 346] [--height 260] [--gaussians 100000] [--sh-degree 3]\n"
                 "                           [--repeats 10] [--warmup 2] [--antialiased] [--json] [--device N|name]\n"
-                "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians).\n");
+                "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians).\n"
+                "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--views 8] [--json]\n"
+                "  Training steps (render, L1 + D-SSIM, backward, Adam): it/s and the split per part.\n");
     return pos.empty() ? 2 : 0;
   }
   p.args.erase(std::find(p.args.begin(), p.args.end(), pos[0]));
   if (pos[0] == "raster") return bench_raster(p);
-  throw std::invalid_argument("unknown benchmark '" + pos[0] + "' (available: raster)");
+  if (pos[0] == "train") return bench_train(p);
+  throw std::invalid_argument("unknown benchmark '" + pos[0] + "' (available: raster, train)");
 }
 
-static Command reg("bench", "time the stages of a pipeline (raster), as a table or JSON", run_bench);
+static Command reg("bench", "time the stages of a pipeline (raster, train), as a table or JSON", run_bench);
 
 }  // namespace evflow::app

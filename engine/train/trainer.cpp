@@ -131,13 +131,21 @@ StepStats Trainer::step() {
   s.background = cfg_.background;
   s.antialiased = cfg_.antialiased;
   s.sh_degree = std::min<int>(params_->sh_degree, cfg_.sh_increase_every ? int(step_ / cfg_.sh_increase_every) : params_->sh_degree);
+  auto lap = [t = std::chrono::steady_clock::now()]() mutable {
+    auto now = std::chrono::steady_clock::now();
+    double ms = std::chrono::duration<double, std::milli>(now - t).count();
+    t = now;
+    return ms;
+  };
   raster_.forward(*params_, view.camera, s);
+  st.raster_forward_ms = lap();
   bool first = true;
   for (auto& t : terms_) {
     t->record(cmd_, raster_.outputs().rgb, targets_[st.view], v_rgb_, !first);
     first = false;
   }
   cmd_.submit();
+  st.loss_ms = lap();
   st.loss = 0;
   for (auto& t : terms_) st.loss += t->weight() * t->value();
   if (!std::isfinite(st.loss)) {
@@ -146,10 +154,12 @@ StepStats Trainer::step() {
                  terms_.front()->name().c_str());
   } else {
     raster_.backward(*params_, v_rgb_, v_alpha_, *grads_);
+    st.raster_backward_ms = lap();
     ExponentialDecay sched{cfg_.lr_means_init * extent_, cfg_.lr_means_final * extent_, cfg_.iterations};
     adam_->set_lr(means_group_, float(sched(step_)));
     adam_->step(cmd_);
     cmd_.submit();
+    st.optimizer_ms = lap();
   }
   st.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return st;

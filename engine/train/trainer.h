@@ -23,6 +23,8 @@ struct StepStats {
   double loss = 0;
   bool skipped = false;  // non-finite loss: the update was not applied
   double ms = 0;
+  // Wall-clock split of the step (each part ends in a submit and wait).
+  double raster_forward_ms = 0, loss_ms = 0, raster_backward_ms = 0, optimizer_ms = 0;
 };
 
 // Random Gaussians inside the training views' frustums between the near and far bounds, coloured
