@@ -43,7 +43,8 @@ static std::string lower(std::string s) {
   return s;
 }
 
-static VkInstance make_instance(bool validation, VkDebugUtilsMessengerCreateInfoEXT* dbg) {
+static VkInstance make_instance(bool validation, VkDebugUtilsMessengerCreateInfoEXT* dbg,
+                                const std::vector<std::string>& extra_exts = {}) {
   VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
   app.pApplicationName = "evflow";
   app.apiVersion = VK_API_VERSION_1_2;
@@ -62,6 +63,8 @@ static VkInstance make_instance(bool validation, VkDebugUtilsMessengerCreateInfo
     layers.push_back("VK_LAYER_KHRONOS_validation");
     exts.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
   }
+  for (const std::string& e : extra_exts)
+    if (std::none_of(exts.begin(), exts.end(), [&](const char* x) { return e == x; })) exts.push_back(e.c_str());
   VkInstanceCreateInfo ci{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
   ci.pApplicationInfo = &app;
   ci.enabledLayerCount = static_cast<uint32_t>(layers.size());
@@ -129,7 +132,13 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
                     VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
   dbg.pfnUserCallback = debug_callback;
   dbg.pUserData = this;
-  instance_ = make_instance(opts_.validation, &dbg);
+  std::vector<std::string> extra_exts;
+  if (opts_.presentation) {
+    extra_exts.push_back(VK_KHR_SURFACE_EXTENSION_NAME);
+    for (const std::string& e : opts_.instance_extensions)
+      if (std::find(extra_exts.begin(), extra_exts.end(), e) == extra_exts.end()) extra_exts.push_back(e);
+  }
+  instance_ = make_instance(opts_.validation, &dbg, extra_exts);
   if (opts_.validation) {
     auto fn = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
         vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
@@ -151,6 +160,7 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
     if (p.apiVersion < VK_API_VERSION_1_2) why = "Vulkan < 1.2";
     else if (compute_family(pd) < 0) why = "no compute queue";
     else if (!has_extension(pd, VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME)) why = "no VK_KHR_push_descriptor";
+    else if (opts_.presentation && !has_extension(pd, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) why = "no VK_KHR_swapchain";
     if (!why.empty()) { rejected += std::string(" ") + p.deviceName + " (" + why + ");"; continue; }
     cands.emplace_back(pd, p);
   }
@@ -230,6 +240,7 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   f2_on.pNext = &f12_on;
   std::vector<const char*> dev_exts = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
   if (f12_on.pNext) dev_exts.push_back(VK_EXT_SHADER_ATOMIC_FLOAT_EXTENSION_NAME);
+  if (opts_.presentation) dev_exts.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
   float prio = 1.0f;
   VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
   qci.queueFamilyIndex = queue_family_;
@@ -265,6 +276,20 @@ Context::~Context() {
     if (fn) fn(instance_, messenger_, nullptr);
   }
   if (instance_) vkDestroyInstance(instance_, nullptr);
+}
+
+bool Context::can_present(VkSurfaceKHR surface) const {
+  if (!opts_.presentation) return false;
+  VkBool32 ok = VK_FALSE;
+  EVF_VK(vkGetPhysicalDeviceSurfaceSupportKHR(physical_, queue_family_, surface, &ok));
+  return ok == VK_TRUE;
+}
+
+void Context::require_present(VkSurfaceKHR surface) const {
+  if (!opts_.presentation) throw Error("presenting needs a context created with ContextOptions::presentation");
+  if (!can_present(surface))
+    throw Error(caps_.name + ": its compute queue family " + std::to_string(queue_family_) +
+                " cannot present to this window's surface");
 }
 
 uint32_t Context::memory_type(uint32_t bits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const {

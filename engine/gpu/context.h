@@ -29,6 +29,11 @@ struct ContextOptions {
   bool poison = false;      // fill fresh buffers with 0xFFFFFFFF (NaN) instead of leaving them
   bool verbose = false;
   bool force_cas = false;   // use the compare-and-swap path even where float atomics exist
+  // Presentation (opt-in, for a window): enables these instance extensions (the windowing
+  // system's surface extensions, e.g. from glfwGetRequiredInstanceExtensions) plus
+  // VK_KHR_surface, and VK_KHR_swapchain on the device; devices without it are skipped.
+  bool presentation = false;
+  std::vector<std::string> instance_extensions;
   // Defaults that read the environment: EVF_DEVICE, EVF_VALIDATION=1, EVF_POISON=1.
   static ContextOptions from_env();
 };
@@ -65,11 +70,17 @@ class Context {
 
   const DeviceCaps& caps() const { return caps_; }
   const ContextOptions& options() const { return opts_; }
+  VkInstance instance() const { return instance_; }
   VkDevice device() const { return device_; }
   VkPhysicalDevice physical() const { return physical_; }
   VkQueue queue() const { return queue_; }
   uint32_t queue_family() const { return queue_family_; }
   VkCommandPool command_pool() const { return pool_; }
+
+  // Whether the compute queue family can present to `surface` (presentation contexts only);
+  // require_present throws a clear error naming the device when it cannot.
+  bool can_present(VkSurfaceKHR surface) const;
+  void require_present(VkSurfaceKHR surface) const;
 
   // Memory type index with the required flags (and preferred ones when possible).
   uint32_t memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
