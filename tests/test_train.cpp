@@ -123,6 +123,35 @@ TEST_CASE("trainer: a fixed seed gives the same run twice, and resuming is bit-i
   test::require_no_validation_messages();
 }
 
+TEST_CASE("trainer: density control grows and prunes during training, state stays consistent", "[gpu][train]") {
+  auto& ctx = test::gpu_context();
+  io::Dataset data = make_dataset(ctx, 128, 96, 6, 2);
+  TrainConfig cfg;
+  cfg.init_gaussians = 1500;
+  cfg.sh_degree = 1;
+  cfg.target = "sharp";
+  cfg.iterations = 120;
+  cfg.densify_from = 30;
+  cfg.densify_every = 30;
+  cfg.densify_grad_threshold = 5e-5;
+  cfg.max_gaussians = 2500;
+  Trainer t(ctx, data, cfg);
+  std::vector<size_t> counts;
+  while (t.current_step() < cfg.iterations) {
+    auto st = t.step();
+    REQUIRE_FALSE(st.skipped);
+    if (st.step % 30 == 0) counts.push_back(t.params().count);
+  }
+  std::printf("density control in training: Gaussian count at steps 30/60/90/120: %zu %zu %zu %zu\n", counts[0], counts[1],
+              counts[2], counts[3]);
+  REQUIRE(counts.back() != 1500);
+  for (size_t c : counts) REQUIRE(c <= 2500);
+  Checkpoint c = t.checkpoint();
+  REQUIRE(c.cloud.size() == t.params().count);
+  for (auto& g : c.optimizer) REQUIRE(g.exp_avg.size() % c.cloud.size() == 0);
+  test::require_no_validation_messages();
+}
+
 TEST_CASE("trainer: checkpoints round-trip and reject damaged files", "[train]") {
   Checkpoint c;
   c.step = 77;

@@ -53,6 +53,13 @@ const std::map<std::string, Setter>& setters() {
          c.background = {r, g, b}; }},
       {"seed", [](TrainConfig& c, const std::string& v) { c.seed = to_uint("seed", v); }},
       {"log_every", [](TrainConfig& c, const std::string& v) { c.log_every = uint32_t(std::max<uint64_t>(1, to_uint("log_every", v))); }},
+      {"densify", [](TrainConfig& c, const std::string& v) { c.densify = to_bool("densify", v); }},
+      {"densify_from", [](TrainConfig& c, const std::string& v) { c.densify_from = uint32_t(to_uint("densify_from", v)); }},
+      {"densify_until", [](TrainConfig& c, const std::string& v) { c.densify_until = uint32_t(to_uint("densify_until", v)); }},
+      {"densify_every", [](TrainConfig& c, const std::string& v) { c.densify_every = uint32_t(to_uint("densify_every", v)); }},
+      {"densify_grad_threshold", [](TrainConfig& c, const std::string& v) { c.densify_grad_threshold = to_double("densify_grad_threshold", v); }},
+      {"opacity_reset_every", [](TrainConfig& c, const std::string& v) { c.opacity_reset_every = uint32_t(to_uint("opacity_reset_every", v)); }},
+      {"max_gaussians", [](TrainConfig& c, const std::string& v) { c.max_gaussians = uint32_t(to_uint("max_gaussians", v)); }},
       {"checkpoint_every", [](TrainConfig& c, const std::string& v) { c.checkpoint_every = uint32_t(to_uint("checkpoint_every", v)); }},
   };
   return m;
@@ -69,6 +76,7 @@ TrainConfig TrainConfig::preset_named(const std::string& name) {
     c.iterations = 40000;
     c.init_gaussians = 100000;
     c.sh_increase_every = 1000;
+    c.max_gaussians = 0;
     c.checkpoint_every = 5000;
   } else {
     throw std::invalid_argument("unknown preset '" + name + "' (fast, paper)");
@@ -103,7 +111,9 @@ nlohmann::json TrainConfig::to_json() const {
           {"lr_sh_dc", lr_sh_dc}, {"lr_sh_rest", lr_sh_rest}, {"lr_opacity", lr_opacity}, {"lr_log_scales", lr_log_scales},
           {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"target", target}, {"antialiased", antialiased},
           {"background", {background[0], background[1], background[2]}}, {"seed", seed}, {"log_every", log_every},
-          {"checkpoint_every", checkpoint_every}};
+          {"checkpoint_every", checkpoint_every}, {"densify", densify}, {"densify_from", densify_from},
+          {"densify_until", densify_until}, {"densify_every", densify_every}, {"densify_grad_threshold", densify_grad_threshold},
+          {"opacity_reset_every", opacity_reset_every}, {"max_gaussians", max_gaussians}};
 }
 
 std::vector<std::string> TrainConfig::keys() {

@@ -112,6 +112,21 @@ void Trainer::setup(const GaussianCloud& start) {
   static const uint32_t band[4] = {1, 3, 5, 7};
   for (int l = 1; l <= start.sh_degree; ++l)
     adam_->add_group({"sh" + std::to_string(l), &params_->sh[l], &grads_->sh[l], n * band[l] * 3, float(cfg_.lr_sh_rest), band[l] * 3});
+
+  if (cfg_.densify) {
+    DensityConfig d;
+    d.refine_from = cfg_.densify_from;
+    d.refine_until = cfg_.densify_until;
+    d.refine_every = cfg_.densify_every;
+    d.grad_threshold = float(cfg_.densify_grad_threshold);
+    d.reset_every = cfg_.opacity_reset_every;
+    d.max_gaussians = cfg_.max_gaussians;
+    d.seed = uint32_t(cfg_.seed);
+    density_stats_ = std::make_unique<DensityStats>(ctx_);
+    density_ = std::make_unique<DensityControl>(ctx_, d);
+    density_stats_->reset(cmd_, n);
+    cmd_.submit();
+  }
 }
 
 StepStats Trainer::step() {
@@ -157,9 +172,18 @@ StepStats Trainer::step() {
     st.raster_backward_ms = lap();
     ExponentialDecay sched{cfg_.lr_means_init * extent_, cfg_.lr_means_final * extent_, cfg_.iterations};
     adam_->set_lr(means_group_, float(sched(step_)));
+    if (density_) density_stats_->accumulate(cmd_, raster_.grad2d_norm(), *params_, view.camera, 0.5f * view.camera.width);
     adam_->step(cmd_);
     cmd_.submit();
     st.optimizer_ms = lap();
+    if (density_) {
+      const DensityConfig& d = density_->config();
+      if (d.refine_at(step_)) density_->refine(cmd_, *params_, *grads_, *adam_, *density_stats_, float(extent_), d.prune_big_at(step_));
+      if (d.reset_at(step_)) {
+        density_->reset_opacity(cmd_, *params_, *adam_);
+        cmd_.submit();
+      }
+    }
   }
   st.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return st;

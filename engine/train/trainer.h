@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "densify/density_control.h"
 #include "io/dataset.h"
 #include "loss/loss_term.h"
 #include "optim/adam.h"
@@ -62,6 +63,8 @@ class Trainer {
   gpu::Buffer v_rgb_, v_alpha_;
   std::vector<std::unique_ptr<LossTerm>> terms_;
   std::unique_ptr<Adam> adam_;
+  std::unique_ptr<DensityStats> density_stats_;
+  std::unique_ptr<DensityControl> density_;
   size_t means_group_ = 0;
   double extent_ = 1.0;
   uint32_t step_ = 0;
