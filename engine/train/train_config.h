@@ -30,7 +30,7 @@ struct TrainConfig {
   uint32_t densify_from = 500, densify_until = 15000, densify_every = 100;
   double densify_grad_threshold = 2e-4;
   uint32_t opacity_reset_every = 3000;
-  uint32_t max_gaussians = 150000;     // cap on the count (0: none)
+  uint32_t max_gaussians = 30000;      // cap on the count (0: none); fast preset sized for 2 CPU cores
 
   static TrainConfig preset_named(const std::string& name);  // "fast" (CPU) or "paper" (GPU)
   void set(const std::string& key, const std::string& value);  // throws naming the key
