@@ -191,3 +191,26 @@ TEST_CASE("splat backward: compare-and-swap and subgroup-reduction paths give th
   for (size_t i = 0; i < a.quats.size(); ++i) REQUIRE(a.quats[i] == Approx(c.quats[i]).margin(1e-6).epsilon(1e-4));
   test::require_no_validation_messages();
 }
+
+TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][splat]") {
+  auto& ctx = test::gpu_context();
+  Scene s = make_scene(41, 400, 1, 64, 48, false);
+  GaussianBuffers params(ctx, s.cloud.size(), 1, "p_"), grads(ctx, s.cloud.size(), 1, "v_");
+  params.upload(s.cloud);
+  const size_t hw = 64 * 48;
+  gpu::Buffer vr(ctx, hw * 12, "v_rgb"), va(ctx, hw * 4, "v_alpha");
+  vr.write(reference::random_weights(1, 3 * hw));
+  va.write(reference::random_weights(2, hw));
+  Rasterizer r(ctx);
+  r.forward(params, s.cam, s.settings);
+  r.backward(params, vr, va, grads);
+  GaussianCloud once = grads.download();
+  auto norm_once = r.grad2d_norm().read<float>(s.cloud.size());
+  r.backward(params, vr, va, grads, true);
+  GaussianCloud twice = grads.download();
+  auto norm_twice = r.grad2d_norm().read<float>(s.cloud.size());
+  for (size_t i = 0; i < once.means.size(); ++i) REQUIRE(twice.means[i] == 2.0f * once.means[i]);
+  for (size_t i = 0; i < once.sh.size(); ++i) REQUIRE(twice.sh[i] == 2.0f * once.sh[i]);
+  for (size_t i = 0; i < norm_once.size(); ++i) REQUIRE(norm_twice[i] == 2.0f * norm_once[i]);
+  test::require_no_validation_messages();
+}

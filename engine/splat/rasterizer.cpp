@@ -218,7 +218,7 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
 }
 
 void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
-                          GaussianBuffers& grads) {
+                          GaussianBuffers& grads, bool accumulate) {
   if (params.count != count_) throw gpu::Error("Rasterizer::backward: parameters differ from the last forward");
   if (grads.count != params.count || grads.sh_degree != params.sh_degree)
     throw gpu::Error("Rasterizer::backward: gradient buffers do not match the parameters");
@@ -248,6 +248,8 @@ void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rg
   const gpu::Buffer& dummy = params.sh[0];
   auto band = [&](const GaussianBuffers& b, int l) -> const gpu::Buffer& { return l <= b.sh_degree ? b.sh[l] : b.sh[0]; };
   (void)dummy;
+  auto* pp = reinterpret_cast<ProjectPC*>(project_pc_.data());
+  pp->flags = accumulate ? (pp->flags | kFlagAccumulate) : (pp->flags & ~kFlagAccumulate);
   cmd_.dispatch("splat/project_bwd",
                 {params.means, params.log_scales, params.quats, params.opacity_logits, band(params, 0), band(params, 1),
                  band(params, 2), band(params, 3), isect_offset_, gaussian_id_from_slot_, plane(0), plane(1), plane(2),

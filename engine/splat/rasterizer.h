@@ -42,8 +42,10 @@ class Rasterizer {
   // Gradients for the last forward: v_rgb [3][H][W] and v_alpha [H][W] in GPU buffers. Writes
   // every parameter gradient into `grads`, the pose gradient (se(3), translation first) and
   // the per-Gaussian screen-space gradient norm.
+  // With `accumulate`, gradients (and the screen-gradient norms) are added to what `grads`
+  // holds (several renders in one step); the pose gradient is always this render's alone.
   void backward(const GaussianBuffers& params, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
-                GaussianBuffers& grads);
+                GaussianBuffers& grads, bool accumulate = false);
 
   const RasterOutputs& outputs() const { return out_; }
   std::array<float, 6> pose_gradient() const;

@@ -21,27 +21,32 @@ layout(std430, binding = 15) readonly buffer G5 { float g_opacity[]; };
 layout(std430, binding = 16) readonly buffer G6 { float g_red[]; };
 layout(std430, binding = 17) readonly buffer G7 { float g_green[]; };
 layout(std430, binding = 18) readonly buffer G8 { float g_blue[]; };
-layout(std430, binding = 19) writeonly buffer VMeans { float v_means[]; };
-layout(std430, binding = 20) writeonly buffer VLogScales { float v_log_scales[]; };
-layout(std430, binding = 21) writeonly buffer VQuats { float v_quats[]; };
-layout(std430, binding = 22) writeonly buffer VOpacities { float v_opacity_logits[]; };
-layout(std430, binding = 23) writeonly buffer VSh0 { float v_sh0[]; };
-layout(std430, binding = 24) writeonly buffer VSh1 { float v_sh1[]; };
-layout(std430, binding = 25) writeonly buffer VSh2 { float v_sh2[]; };
-layout(std430, binding = 26) writeonly buffer VSh3 { float v_sh3[]; };
-layout(std430, binding = 27) writeonly buffer Grad2d { float grad2d_norm[]; };
+layout(std430, binding = 19) buffer VMeans { float v_means[]; };
+layout(std430, binding = 20) buffer VLogScales { float v_log_scales[]; };
+layout(std430, binding = 21) buffer VQuats { float v_quats[]; };
+layout(std430, binding = 22) buffer VOpacities { float v_opacity_logits[]; };
+layout(std430, binding = 23) buffer VSh0 { float v_sh0[]; };
+layout(std430, binding = 24) buffer VSh1 { float v_sh1[]; };
+layout(std430, binding = 25) buffer VSh2 { float v_sh2[]; };
+layout(std430, binding = 26) buffer VSh3 { float v_sh3[]; };
+layout(std430, binding = 27) buffer Grad2d { float grad2d_norm[]; };
 layout(std430, binding = 28) writeonly buffer PosePartial { float pose_partial[]; };  // [groups][6]
 layout(push_constant) uniform PC { ProjectPC pc; };
 
 shared float red[6][128];
 
+// kFlagAccumulate: add to the gradient buffers (several renders of one step, e.g. the virtual
+// frames of an exposure) instead of overwriting them.
+bool accumulate() { return (pc.flags & kFlagAccumulate) != 0; }
+#define EVF_PUT(buf, i, value) buf[i] = (accumulate() ? buf[i] : 0.0) + (value)
+
 void store_sh(uint g, uint k, vec3 v) {
-  if (k == 0) { v_sh0[3 * g] = v.x; v_sh0[3 * g + 1] = v.y; v_sh0[3 * g + 2] = v.z; return; }
+  if (k == 0) { EVF_PUT(v_sh0, 3 * g, v.x); EVF_PUT(v_sh0, 3 * g + 1, v.y); EVF_PUT(v_sh0, 3 * g + 2, v.z); return; }
   uint i;
-  if (k < 4) { i = (g * 3 + (k - 1)) * 3; v_sh1[i] = v.x; v_sh1[i + 1] = v.y; v_sh1[i + 2] = v.z; return; }
-  if (k < 9) { i = (g * 5 + (k - 4)) * 3; v_sh2[i] = v.x; v_sh2[i + 1] = v.y; v_sh2[i + 2] = v.z; return; }
+  if (k < 4) { i = (g * 3 + (k - 1)) * 3; EVF_PUT(v_sh1, i, v.x); EVF_PUT(v_sh1, i + 1, v.y); EVF_PUT(v_sh1, i + 2, v.z); return; }
+  if (k < 9) { i = (g * 5 + (k - 4)) * 3; EVF_PUT(v_sh2, i, v.x); EVF_PUT(v_sh2, i + 1, v.y); EVF_PUT(v_sh2, i + 2, v.z); return; }
   i = (g * 7 + (k - 9)) * 3;
-  v_sh3[i] = v.x; v_sh3[i + 1] = v.y; v_sh3[i + 2] = v.z;
+  EVF_PUT(v_sh3, i, v.x); EVF_PUT(v_sh3, i + 1, v.y); EVF_PUT(v_sh3, i + 2, v.z);
 }
 
 void main() {
@@ -138,11 +143,10 @@ void main() {
       pose[4] = -(N[0][2] - N[2][0]);
       pose[5] = -(N[1][0] - N[0][1]);
     }
-    v_means[3 * g] = v_mean.x; v_means[3 * g + 1] = v_mean.y; v_means[3 * g + 2] = v_mean.z;
-    v_log_scales[3 * g] = v_ls.x; v_log_scales[3 * g + 1] = v_ls.y; v_log_scales[3 * g + 2] = v_ls.z;
-    v_quats[4 * g] = v_q.x; v_quats[4 * g + 1] = v_q.y; v_quats[4 * g + 2] = v_q.z; v_quats[4 * g + 3] = v_q.w;
-    v_opacity_logits[g] = v_logit;
-    grad2d_norm[g] = length(v_mean2d);
+    for (uint k = 0; k < 3; ++k) { EVF_PUT(v_means, 3 * g + k, v_mean[k]); EVF_PUT(v_log_scales, 3 * g + k, v_ls[k]); }
+    for (uint k = 0; k < 4; ++k) EVF_PUT(v_quats, 4 * g + k, v_q[k]);
+    EVF_PUT(v_opacity_logits, g, v_logit);
+    EVF_PUT(grad2d_norm, g, length(v_mean2d));
   }
   // Workgroup reduction of the pose contributions (fixed order: deterministic).
   for (uint k = 0; k < 6; ++k) red[k][lid] = pose[k];

@@ -10,6 +10,7 @@ EVF_CONST(uint, kTilePixels, 256u)
 EVF_CONST(uint, kProjectGroupSize, 128u)
 EVF_CONST(uint, kIsectGroupSize, 256u)
 EVF_CONST(uint, kFlagAntialiased, 1u)
+EVF_CONST(uint, kFlagAccumulate, 2u)   // project_bwd: add into the gradient buffers
 
 // The camera: world_to_camera rows with the translation in w, and intrinsics.
 struct CameraPC {
