@@ -1,5 +1,5 @@
 // evflow view RUN|file.ply|file.glb [--width 800] [--height 600] [--frames N] [--screenshot out.png]
-//             [--fps-cap 30] [--vsync] [--device D]
+//             [--fps-cap 30] [--vsync] [--device D] [--resize-to WxH]
 #include <cstdio>
 
 #include "cli.h"
@@ -18,7 +18,8 @@ static int run_view(const Args& a) {
                 "  A window showing the splats from an orbit camera (docs/viewer.md): left-drag rotates about\n"
                 "  the cloud's centre, the wheel zooms, W/A/S/D/Q/E fly, Esc quits. --frames N exits after N\n"
                 "  presented frames; --screenshot writes the last one as PNG. Exits 3 if the validation layer\n"
-                "  (EVF_VALIDATION=1) reported anything.\n");
+                "  (EVF_VALIDATION=1) reported anything. --resize-to WxH (testing) resizes the window after two\n"
+                "  frames; the run then ends only once a frame of the new size was presented.\n");
     return 0;
   }
   viewer::ViewerOptions o;
@@ -28,6 +29,14 @@ static int run_view(const Args& a) {
   o.screenshot = p.value("--screenshot");
   o.fps_cap = p.number("--fps-cap", 30.0);
   o.vsync = p.flag("--vsync");
+  std::string resize = p.value("--resize-to");
+  if (!resize.empty()) {
+    unsigned rw = 0, rh = 0;
+    if (std::sscanf(resize.c_str(), "%ux%u", &rw, &rh) != 2 || rw < 16 || rh < 16)
+      throw std::invalid_argument("--resize-to WxH, e.g. 200x150");
+    o.resize_width = rw;
+    o.resize_height = rh;
+  }
   o.context = context_options(p);
   p.reject_unknown();
   auto pos = p.positional();

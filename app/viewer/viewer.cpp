@@ -154,6 +154,9 @@ int run_viewer(const GaussianCloud& cloud, const ViewerOptions& opt) {
     double render_ms_sum = 0;
     bool last_valid = false;
     uint32_t last_w = 0, last_h = 0;
+    const bool resize_test = opt.resize_width > 0 && opt.resize_height > 0;
+    bool resize_requested = false;
+    int iterations = 0;
     while (!glfwWindowShouldClose(window.w)) {
       glfwPollEvents();
       auto now = Clock::now();
@@ -189,7 +192,15 @@ int run_viewer(const GaussianCloud& cloud, const ViewerOptions& opt) {
         last_w = w;
         last_h = h;
       }
-      if (opt.frames > 0 && shown >= opt.frames) break;
+      if (resize_test && !resize_requested && shown >= 2) {
+        glfwSetWindowSize(window.w, int(opt.resize_width), int(opt.resize_height));
+        resize_requested = true;
+      }
+      const bool resized = !resize_test || (w == opt.resize_width && h == opt.resize_height);
+      if (opt.frames > 0 && shown >= opt.frames && resized) break;
+      if (opt.frames > 0 && ++iterations > 20 * opt.frames + 200)
+        throw std::runtime_error("evflow view: " + std::to_string(iterations) + " frames without reaching --frames " +
+                                 std::to_string(opt.frames) + (resize_test ? " at the --resize-to size" : ""));
 
       now = Clock::now();
       const double since = std::chrono::duration<double>(now - last_title).count();

@@ -16,6 +16,9 @@ struct ViewerOptions {
   std::string screenshot;              // PNG of the last presented frame, written at exit
   double fps_cap = 30.0;               // <= 0: uncapped
   bool vsync = false;
+  // Testing the swapchain rebuild: after 2 presented frames the window is resized to this
+  // size, and the run ends only once `frames` frames in all, the last of that size, were shown.
+  uint32_t resize_width = 0, resize_height = 0;
   std::string title = "evflow view";
   gpu::ContextOptions context;         // presentation is switched on by the viewer
 };
