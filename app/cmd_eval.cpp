@@ -9,6 +9,7 @@
 #include "loss/image_losses.h"
 #include "run_files.h"
 #include "splat/rasterizer.h"
+#include "camera/trajectory.h"
 #include "train/trainer.h"
 
 namespace evflow::app {
@@ -43,17 +44,31 @@ static int run_eval(const Args& a) {
   nlohmann::json out;
   std::ostringstream md;
   md << "| set | views | PSNR | SSIM |\n|---|---|---|---|\n";
+  // Blur mode: the deblurred estimate of a training view is the render at mid-exposure (u = 0.5)
+  // of its learned trajectory; otherwise the view's own camera.
+  const auto& trajs = run.checkpoint.trajectories;
+  if (!trajs.empty() && trajs.size() != data.train.size())
+    throw std::runtime_error("checkpoint has " + std::to_string(trajs.size()) + " trajectories for " +
+                             std::to_string(data.train.size()) + " training views");
+  auto eval_camera = [&](const io::View& v, size_t index, bool train) {
+    if (!train || trajs.empty()) return v.camera;
+    ExposureTrajectory t(v.camera, 0, 0.0);
+    std::copy(trajs[index].knots.begin(), trajs[index].knots.end(), t.data());
+    return t.camera_at(0.5);
+  };
   auto score = [&](const std::vector<io::View>& views, const char* set) {
+    const bool train = &views == &data.train;
     nlohmann::json per = nlohmann::json::array();
     double sp = 0, ss = 0;
     int n = 0;
-    for (auto& v : views) {
+    for (size_t vi = 0; vi < views.size(); ++vi) {
+      const io::View& v = views[vi];
       if (!v.sharp_mid) continue;
       const io::Image& gt = *v.sharp_mid;
       if (gt.width != v.camera.width || gt.height != v.camera.height)
         throw std::runtime_error("view '" + v.name + "': ground truth is " + std::to_string(gt.width) + "x" + std::to_string(gt.height) +
                                  ", camera " + std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
-      r.forward(params, v.camera, s);
+      r.forward(params, eval_camera(v, vi, train), s);
       auto planar = io::planar_rgb(gt);
       gpu::Buffer target(ctx, planar.size() * 4, "gt");
       target.write(planar);

@@ -9,6 +9,7 @@
 #include "loss/image_losses.h"
 #include "splat/synthetic.h"
 #include "train/checkpoint.h"
+#include "camera/trajectory.h"
 #include "train/trainer.h"
 
 using namespace evflow;
@@ -196,4 +197,78 @@ TEST_CASE("trainer: config keys, presets and bad values", "[train]") {
   TrainConfig d;
   d.apply_json(c.to_json());
   REQUIRE(d.to_json() == c.to_json());
+}
+
+TEST_CASE("blur mode: mid-exposure render of a zero-motion trajectory equals the plain render", "[gpu][train][camera]") {
+  auto& ctx = test::gpu_context();
+  Camera cam = Camera::look_at(80, 60, 60.0, {0.3, -0.2, 0}, {0, 0, 6}, {0, -1, 0});
+  GaussianCloud cloud = synthetic_cloud(9, 500, 1, cam);
+  GaussianBuffers p(ctx, cloud.size(), 1, "p_");
+  p.upload(cloud);
+  Rasterizer r(ctx);
+  r.forward(p, cam, RenderSettings{});
+  auto plain = r.outputs().rgb.read<float>(80 * 60 * 3);
+  ExposureTrajectory still(cam, 0, 0.0);
+  r.forward(p, still.camera_at(0.5), RenderSettings{});
+  auto mid = r.outputs().rgb.read<float>(80 * 60 * 3);
+  REQUIRE(mid == plain);
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("blur mode: the mean of virtual renders is fitted, knots learn, trajectories checkpoint", "[gpu][train]") {
+  auto& ctx = test::gpu_context();
+  io::Dataset data = make_dataset(ctx, 96, 72, 4, 1);
+  // Blur the training images with a known exposure motion: the mean of 7 renders along it.
+  {
+    Camera c0 = Camera::look_at(96, 72, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
+    GaussianCloud truth = synthetic_cloud(42, 1500, 0, c0);
+    GaussianBuffers gt(ctx, truth.size(), 0, "gt_");
+    gt.upload(truth);
+    Rasterizer r(ctx);
+    for (size_t v = 0; v < data.train.size(); ++v) {
+      ExposureTrajectory motion(data.train[v].camera, 100 + v, 0.0);
+      for (int j = 0; j < ExposureTrajectory::kKnots; ++j) {
+        motion.data()[j * 6 + 0] = 0.04 * (j - 4) / 4.0;   // sideways drift across the exposure
+        motion.data()[j * 6 + 4] = 0.01 * (j - 4) / 4.0;   // and a little yaw
+      }
+      std::vector<float> mean(96 * 72 * 3, 0.f);
+      for (double u : ExposureTrajectory::virtual_times(3)) {
+        r.forward(gt, motion.camera_at(u), RenderSettings{});
+        auto img = r.outputs().rgb.read<float>(mean.size());
+        for (size_t i = 0; i < mean.size(); ++i) mean[i] += img[i] / 7.0f;
+      }
+      data.train[v].blurry = io::image_from_planar_rgb(mean, 96, 72);
+    }
+  }
+  TrainConfig cfg;
+  cfg.mode = "blur";
+  cfg.init_gaussians = 1500;
+  cfg.sh_degree = 0;
+  cfg.iterations = 40;
+  cfg.densify = false;
+  Trainer t(ctx, data, cfg);
+  REQUIRE(t.trajectories().size() == 4);
+  double first = 0, last = 0;
+  while (t.current_step() < cfg.iterations) {
+    auto st = t.step();
+    REQUIRE_FALSE(st.skipped);
+    if (st.step <= 4) first += st.loss;
+    if (st.step > cfg.iterations - 4) last += st.loss;
+  }
+  REQUIRE(last < 0.8 * first);
+  double moved = 0;
+  for (auto& tr : t.trajectories())
+    for (size_t k = 0; k < ExposureTrajectory::kSize; ++k) moved = std::max(moved, std::abs(tr.data()[k]));
+  std::printf("blur mode: loss %.4f -> %.4f over %u steps, largest knot component %.3g\n", first / 4, last / 4,
+              cfg.iterations, moved);
+  REQUIRE(moved > 1e-3);  // the knots learned (they start at ~1e-5)
+  auto path = std::filesystem::temp_directory_path() / "evf_blur.ckpt";
+  write_checkpoint(path, t.checkpoint());
+  Checkpoint c = read_checkpoint(path);
+  REQUIRE(c.trajectories.size() == 4);
+  REQUIRE(c.trajectories[2].knots[3] == t.trajectories()[2].data()[3]);
+  Trainer resumed(ctx, data, cfg, c);
+  REQUIRE(resumed.trajectories()[1].data()[7] == t.trajectories()[1].data()[7]);
+  std::filesystem::remove(path);
+  test::require_no_validation_messages();
 }

@@ -9,7 +9,7 @@
 
 namespace evflow {
 
-static constexpr char kMagic[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '2'};
+static constexpr char kMagic[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '3'};
 
 namespace {
 
@@ -65,6 +65,13 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c) {
       put_floats(f, g.exp_avg);
       put_floats(f, g.exp_avg_sq);
     }
+    put(f, uint32_t(c.trajectories.size()));
+    for (auto& t : c.trajectories) {
+      if (t.knots.size() != 54 || t.exp_avg.size() != 54 || t.exp_avg_sq.size() != 54)
+        throw std::invalid_argument("checkpoint " + path.string() + ": a trajectory needs 54 knots and moments");
+      put(f, t.step);
+      for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) f.write(reinterpret_cast<const char*>(v->data()), 54 * 8);
+    }
     if (!f) throw std::runtime_error(tmp.string() + ": write failed");
   });
 }
@@ -76,7 +83,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   char magic[8];
   r.need(8, "magic");
   r.f.read(magic, 8);
-  if (std::memcmp(magic, kMagic, 8) != 0) throw std::runtime_error(path.string() + ": not an EvFlow checkpoint (version 2)");
+  if (std::memcmp(magic, kMagic, 8) != 0) throw std::runtime_error(path.string() + ": not an EvFlow checkpoint (version 3)");
   Checkpoint c;
   c.step = r.get<uint32_t>("step");
   const int32_t degree = r.get<int32_t>("SH degree");
@@ -100,6 +107,20 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
     g.exp_avg = r.floats(count, "optimizer moments");
     g.exp_avg_sq = r.floats(count, "optimizer moments");
     c.optimizer.push_back(std::move(g));
+  }
+  const uint32_t trajectories = r.get<uint32_t>("trajectory count");
+  if (trajectories > (1u << 20)) throw std::runtime_error(path.string() + ": corrupt checkpoint (trajectory count)");
+  for (uint32_t i = 0; i < trajectories; ++i) {
+    TrajectoryState t;
+    t.step = r.get<uint64_t>("trajectory step");
+    for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) {
+      r.need(54 * 8, "trajectory");
+      v->resize(54);
+      r.f.read(reinterpret_cast<char*>(v->data()), 54 * 8);
+      for (double x : *v)
+        if (!std::isfinite(x)) throw std::runtime_error(path.string() + ": trajectory " + std::to_string(i) + " is not finite");
+    }
+    c.trajectories.push_back(std::move(t));
   }
   if (!r.f) throw std::runtime_error(path.string() + ": read error");
   if (r.left) throw std::runtime_error(path.string() + ": " + std::to_string(r.left) + " unexpected bytes after the checkpoint");

@@ -42,6 +42,12 @@ const std::map<std::string, Setter>& setters() {
       {"lr_log_scales", [](TrainConfig& c, const std::string& v) { c.lr_log_scales = to_double("lr_log_scales", v); }},
       {"lr_quats", [](TrainConfig& c, const std::string& v) { c.lr_quats = to_double("lr_quats", v); }},
       {"ssim_lambda", [](TrainConfig& c, const std::string& v) { c.ssim_lambda = to_double("ssim_lambda", v); }},
+      {"mode", [](TrainConfig& c, const std::string& v) {
+         if (v != "plain" && v != "blur") throw std::invalid_argument("config key 'mode' must be plain or blur, got '" + v + "'");
+         c.mode = v; }},
+      {"virtual_frames", [](TrainConfig& c, const std::string& v) { c.virtual_frames = uint32_t(to_uint("virtual_frames", v)); }},
+      {"lr_trajectory_init", [](TrainConfig& c, const std::string& v) { c.lr_trajectory_init = to_double("lr_trajectory_init", v); }},
+      {"lr_trajectory_final", [](TrainConfig& c, const std::string& v) { c.lr_trajectory_final = to_double("lr_trajectory_final", v); }},
       {"target", [](TrainConfig& c, const std::string& v) {
          if (v != "blurry" && v != "sharp") throw std::invalid_argument("config key 'target' must be blurry or sharp, got '" + v + "'");
          c.target = v; }},
@@ -109,7 +115,8 @@ nlohmann::json TrainConfig::to_json() const {
   return {{"preset", preset}, {"iterations", iterations}, {"init_gaussians", init_gaussians}, {"sh_degree", sh_degree},
           {"sh_increase_every", sh_increase_every}, {"lr_means_init", lr_means_init}, {"lr_means_final", lr_means_final},
           {"lr_sh_dc", lr_sh_dc}, {"lr_sh_rest", lr_sh_rest}, {"lr_opacity", lr_opacity}, {"lr_log_scales", lr_log_scales},
-          {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"target", target}, {"antialiased", antialiased},
+          {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"mode", mode}, {"virtual_frames", virtual_frames},
+          {"lr_trajectory_init", lr_trajectory_init}, {"lr_trajectory_final", lr_trajectory_final}, {"target", target}, {"antialiased", antialiased},
           {"background", {background[0], background[1], background[2]}}, {"seed", seed}, {"log_every", log_every},
           {"checkpoint_every", checkpoint_every}, {"densify", densify}, {"densify_from", densify_from},
           {"densify_until", densify_until}, {"densify_every", densify_every}, {"densify_grad_threshold", densify_grad_threshold},

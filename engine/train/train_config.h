@@ -19,6 +19,11 @@ struct TrainConfig {
   double lr_means_init = 1.6e-4, lr_means_final = 1.6e-6;  // x scene extent, exponential decay
   double lr_sh_dc = 2.5e-3, lr_sh_rest = 2.5e-3 / 20, lr_opacity = 0.05, lr_log_scales = 5e-3, lr_quats = 1e-3;
   double ssim_lambda = 0.2;            // loss = (1-l) L1 + l (1 - SSIM)
+  // "plain": each image is one render (3DGS); "blur": each blurry image is the mean of 2N+1
+  // renders along the view's learned Bézier exposure trajectory (paper Sec. 4.1, blur-only).
+  std::string mode = "plain";
+  uint32_t virtual_frames = 3;         // N: 2N+1 virtual poses per exposure
+  double lr_trajectory_init = 1e-3, lr_trajectory_final = 1e-5;
   std::string target = "blurry";       // train on "blurry" images, or "sharp" (ground truth, when the data has it)
   bool antialiased = false;
   std::array<float, 3> background{0, 0, 0};

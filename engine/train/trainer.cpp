@@ -6,6 +6,7 @@
 
 #include "loss/image_losses.h"
 #include "optim/schedule.h"
+#include "train/train_layout.h"
 
 namespace evflow {
 
@@ -56,6 +57,15 @@ Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, co
       v_alpha_(ctx, 16, "v_alpha"), step_(start.step) {
   setup(start.cloud);
   for (auto& g : start.optimizer) adam_->load_state(adam_->group_index(g.name), g.exp_avg, g.exp_avg_sq, g.step);
+  if (!start.trajectories.empty()) {
+    if (start.trajectories.size() != trajectories_.size())
+      throw std::invalid_argument("checkpoint has " + std::to_string(start.trajectories.size()) + " trajectories for " +
+                                  std::to_string(trajectories_.size()) + " training views (mode " + cfg_.mode + ")");
+    for (size_t v = 0; v < trajectories_.size(); ++v) {
+      std::copy(start.trajectories[v].knots.begin(), start.trajectories[v].knots.end(), trajectories_[v].data());
+      trajectory_state_[v] = start.trajectories[v];
+    }
+  }
 }
 
 Checkpoint Trainer::checkpoint() const {
@@ -66,6 +76,11 @@ Checkpoint Trainer::checkpoint() const {
     c.optimizer.push_back({adam_->group(i).name, adam_->step_count(i),
                            fresh ? std::vector<float>(n, 0.f) : adam_->exp_avg(i).read<float>(n),
                            fresh ? std::vector<float>(n, 0.f) : adam_->exp_avg_sq(i).read<float>(n)});
+  }
+  for (size_t v = 0; v < trajectories_.size(); ++v) {
+    TrajectoryState t = trajectory_state_[v];
+    t.knots.assign(trajectories_[v].data(), trajectories_[v].data() + ExposureTrajectory::kSize);
+    c.trajectories.push_back(std::move(t));
   }
   return c;
 }
@@ -89,6 +104,14 @@ void Trainer::setup(const GaussianCloud& start) {
   v_rgb_.ensure(hw * 12);
   v_alpha_ = gpu::Buffer(ctx_, hw * 4, "v_alpha");
   v_alpha_.write(std::vector<float>(hw, 0.0f));
+  if (cfg_.mode == "blur") {
+    mean_image_ = gpu::Buffer(ctx_, hw * 12, "blur_mean_image");
+    for (size_t v = 0; v < data_.train.size(); ++v) {
+      trajectories_.emplace_back(data_.train[v].camera, cfg_.seed * 100003 + v);
+      trajectory_state_.push_back({0, {}, std::vector<double>(ExposureTrajectory::kSize, 0.0),
+                                   std::vector<double>(ExposureTrajectory::kSize, 0.0)});
+    }
+  }
   terms_.clear();
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
 
@@ -152,11 +175,27 @@ StepStats Trainer::step() {
     t = now;
     return ms;
   };
-  raster_.forward(*params_, view.camera, s);
+  const bool blur = cfg_.mode == "blur";
+  const uint32_t frames = blur ? 2 * cfg_.virtual_frames + 1 : 1;
+  const std::vector<double> us = blur ? ExposureTrajectory::virtual_times(int(cfg_.virtual_frames)) : std::vector<double>{0.5};
+  auto camera_at = [&](uint32_t i) { return blur ? trajectories_[st.view].camera_at(us[i]) : view.camera; };
+  const size_t n_pix = size_t(view.camera.width) * view.camera.height * 3;
+  // Forward: the image model is the mean of the frames' linear renders (one frame in plain mode).
+  for (uint32_t i = 0; i < frames; ++i) {
+    raster_.forward(*params_, camera_at(i), s);
+    if (blur) {
+      shaderio::AccumulatePC pc{uint32_t(n_pix), 1.0f / float(frames), i > 0 ? 1u : 0u, 0};
+      cmd_.dispatch("train/accumulate", {raster_.outputs().rgb, mean_image_}, pc,
+                    cmd_.linear_groups(gpu::Commands::div_up(n_pix, shaderio::kAccumulateGroupSize)));
+      cmd_.submit();
+    }
+  }
   st.raster_forward_ms = lap();
+  // Every frame's share of d(loss)/d(mean image) is 1/frames of it.
+  const gpu::Buffer& prediction = blur ? mean_image_ : raster_.outputs().rgb;
   bool first = true;
   for (auto& t : terms_) {
-    t->record(cmd_, raster_.outputs().rgb, targets_[st.view], v_rgb_, !first);
+    t->record(cmd_, prediction, targets_[st.view], v_rgb_, t->weight() / float(frames), !first);
     first = false;
   }
   cmd_.submit();
@@ -168,7 +207,17 @@ StepStats Trainer::step() {
     std::fprintf(stderr, "step %u: non-finite loss on view '%s' (term %s): update skipped\n", st.step, view.name.c_str(),
                  terms_.front()->name().c_str());
   } else {
-    raster_.backward(*params_, v_rgb_, v_alpha_, *grads_);
+    std::array<double, ExposureTrajectory::kSize> knot_grad{};
+    for (uint32_t i = 0; i < frames; ++i) {
+      if (blur) raster_.forward(*params_, camera_at(i), s);  // the rasterizer keeps one render's state
+      raster_.backward(*params_, v_rgb_, v_alpha_, *grads_, i > 0);
+      if (blur) {
+        auto g = raster_.pose_gradient();
+        auto kg = trajectories_[st.view].backward(us[i], lie::Vec6{g[0], g[1], g[2], g[3], g[4], g[5]});
+        for (size_t k = 0; k < kg.size(); ++k) knot_grad[k] += kg[k];
+      }
+    }
+    if (blur) trajectory_adam(st.view, knot_grad);
     st.raster_backward_ms = lap();
     ExponentialDecay sched{cfg_.lr_means_init * extent_, cfg_.lr_means_final * extent_, cfg_.iterations};
     adam_->set_lr(means_group_, float(sched(step_)));
@@ -187,6 +236,23 @@ StepStats Trainer::step() {
   }
   st.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return st;
+}
+
+// Adam on one view's 54 knots, on the host (a few hundred flops), learning rate decaying from
+// lr_trajectory_init to lr_trajectory_final over the run.
+void Trainer::trajectory_adam(uint32_t v, const std::array<double, ExposureTrajectory::kSize>& grad) {
+  TrajectoryState& st = trajectory_state_[v];
+  const double b1 = 0.9, b2 = 0.999, eps = 1e-15;
+  ExponentialDecay sched{cfg_.lr_trajectory_init, cfg_.lr_trajectory_final, cfg_.iterations};
+  const double lr = sched(step_);
+  ++st.step;
+  const double c1 = 1 - std::pow(b1, double(st.step)), c2 = 1 - std::pow(b2, double(st.step));
+  double* knots = trajectories_[v].data();
+  for (size_t k = 0; k < grad.size(); ++k) {
+    st.exp_avg[k] = b1 * st.exp_avg[k] + (1 - b1) * grad[k];
+    st.exp_avg_sq[k] = b2 * st.exp_avg_sq[k] + (1 - b2) * grad[k] * grad[k];
+    knots[k] -= lr * (st.exp_avg[k] / c1) / (std::sqrt(st.exp_avg_sq[k] / c2) + eps);
+  }
 }
 
 std::vector<float> Trainer::render(const Camera& cam) {

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "camera/trajectory.h"
 #include "densify/density_control.h"
 #include "io/dataset.h"
 #include "loss/loss_term.h"
@@ -47,12 +48,16 @@ class Trainer {
   std::vector<float> render(const Camera& cam);
   Rasterizer& rasterizer() { return raster_; }
   const GaussianBuffers& params() const { return *params_; }
+  // Blur mode: the training views' exposure trajectories (empty in plain mode).
+  const std::vector<ExposureTrajectory>& trajectories() const { return trajectories_; }
   // The loss-term registry.
   void add_loss(std::unique_ptr<LossTerm> term) { terms_.push_back(std::move(term)); }
   const std::vector<std::unique_ptr<LossTerm>>& losses() const { return terms_; }
 
  private:
   void setup(const GaussianCloud& start);
+  double blur_step(const io::View& view, uint32_t v, const RenderSettings& s, StepStats& st);
+  void trajectory_adam(uint32_t v, const std::array<double, ExposureTrajectory::kSize>& grad);
   gpu::Context& ctx_;
   const io::Dataset& data_;
   TrainConfig cfg_;
@@ -65,6 +70,9 @@ class Trainer {
   std::unique_ptr<Adam> adam_;
   std::unique_ptr<DensityStats> density_stats_;
   std::unique_ptr<DensityControl> density_;
+  std::vector<ExposureTrajectory> trajectories_;
+  std::vector<TrajectoryState> trajectory_state_;  // Adam moments per view (knots live in trajectories_)
+  gpu::Buffer mean_image_;
   size_t means_group_ = 0;
   double extent_ = 1.0;
   uint32_t step_ = 0;
