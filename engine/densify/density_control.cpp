@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "densify/densify_layout.h"
+#include "splat/camera_pc.h"
 
 namespace evflow {
 
@@ -68,14 +69,7 @@ void DensityStats::accumulate(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm
   if (params.count != count_) throw std::invalid_argument("DensityStats: parameter count differs from the statistics' count");
   if (grad2d_norm.size() < uint64_t(count_) * 4) throw std::invalid_argument("DensityStats: grad2d_norm smaller than the count");
   AccumulatePC pc{};
-  pc.row0 = {float(cam.R[0]), float(cam.R[1]), float(cam.R[2]), float(cam.t[0])};
-  pc.row1 = {float(cam.R[3]), float(cam.R[4]), float(cam.R[5]), float(cam.t[1])};
-  pc.row2 = {float(cam.R[6]), float(cam.R[7]), float(cam.R[8]), float(cam.t[2])};
-  pc.intrin = {float(cam.fx), float(cam.fy), float(cam.cx), float(cam.cy)};
-  pc.width = cam.width;
-  pc.height = cam.height;
-  pc.near_plane = float(cam.near_plane);
-  pc.far_plane = float(std::min(cam.far_plane, 3.0e38));
+  pc.cam = camera_pc(cam);
   pc.count = count_;
   pc.use_camera = 1;
   pc.grad_scale = grad_scale;

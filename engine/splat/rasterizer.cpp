@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "splat/camera_pc.h"
 #include "splat/splat_layout.h"
 
 namespace evflow {
@@ -117,15 +118,7 @@ void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const 
   const int degree = s.sh_degree < 0 ? params.sh_degree : std::min(s.sh_degree, params.sh_degree);
 
   ProjectPC pp{};
-  for (int r = 0; r < 3; ++r) {
-    glm::vec4 row(float(cam.R[r * 3]), float(cam.R[r * 3 + 1]), float(cam.R[r * 3 + 2]), float(cam.t[r]));
-    (r == 0 ? pp.cam.row0 : r == 1 ? pp.cam.row1 : pp.cam.row2) = row;
-  }
-  pp.cam.intrin = glm::vec4(float(cam.fx), float(cam.fy), float(cam.cx), float(cam.cy));
-  pp.cam.width = width_;
-  pp.cam.height = height_;
-  pp.cam.near_plane = float(cam.near_plane);
-  pp.cam.far_plane = float(std::min(cam.far_plane, 3.0e38));
+  pp.cam = camera_pc(cam);
   pp.num_gaussians = static_cast<uint32_t>(params.count);
   pp.sh_degree = static_cast<uint32_t>(degree);
   pp.flags = (s.antialiased ? kFlagAntialiased : 0u) | (uint32_t(params.sh_degree) << 8);

@@ -19,15 +19,15 @@ layout(push_constant) uniform PC { AccumulatePC pc; };
 // when the Gaussian is behind the near plane, degenerate or off the image.
 float screen_radius(uint g) {
   vec3 m = vec3(means[3 * g], means[3 * g + 1], means[3 * g + 2]);
-  mat3 Rc = transpose(mat3(pc.row0.xyz, pc.row1.xyz, pc.row2.xyz));  // rows -> matrix
-  vec3 tc = vec3(pc.row0.w, pc.row1.w, pc.row2.w);
+  mat3 Rc = transpose(mat3(pc.cam.row0.xyz, pc.cam.row1.xyz, pc.cam.row2.xyz));  // rows -> matrix
+  vec3 tc = vec3(pc.cam.row0.w, pc.cam.row1.w, pc.cam.row2.w);
   vec3 p = Rc * m + tc;
-  if (!(p.z >= pc.near_plane && p.z <= pc.far_plane)) return -1.0;
+  if (!(p.z >= pc.cam.near_plane && p.z <= pc.cam.far_plane)) return -1.0;
   vec3 s = exp(vec3(log_scales[3 * g], log_scales[3 * g + 1], log_scales[3 * g + 2]));
   mat3 M = Rc * quat_to_mat(quats[g]) * mat3(vec3(s.x, 0, 0), vec3(0, s.y, 0), vec3(0, 0, s.z));
   mat3 S = M * transpose(M);
-  vec2 f = pc.intrin.xy;
-  vec2 size = vec2(pc.width, pc.height);
+  vec2 f = pc.cam.intrin.xy;
+  vec2 size = vec2(pc.cam.width, pc.cam.height);
   vec2 lim = 1.3 * 0.5 * size / f;
   float u = clamp(p.x / p.z, -lim.x, lim.x), v = clamp(p.y / p.z, -lim.y, lim.y);
   mat3x2 J = mat3x2(vec2(f.x / p.z, 0.0), vec2(0.0, f.y / p.z), vec2(-f.x * u / p.z, -f.y * v / p.z));
@@ -38,7 +38,7 @@ float screen_radius(uint g) {
   float mid = 0.5 * (a + d);
   float lambda = mid + sqrt(max(0.1, mid * mid - det));
   float r = ceil(3.0 * sqrt(lambda));
-  vec2 c2 = vec2(f.x * p.x / p.z + pc.intrin.z, f.y * p.y / p.z + pc.intrin.w);
+  vec2 c2 = vec2(f.x * p.x / p.z + pc.cam.intrin.z, f.y * p.y / p.z + pc.cam.intrin.w);
   if (c2.x + r <= 0.0 || c2.y + r <= 0.0 || c2.x - r >= size.x || c2.y - r >= size.y) return -1.0;
   return r;
 }

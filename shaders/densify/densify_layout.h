@@ -3,6 +3,7 @@
 #ifndef EVF_DENSIFY_LAYOUT_H
 #define EVF_DENSIFY_LAYOUT_H
 #include "common/shared_prelude.h"
+#include "common/camera_layout.h"
 EVF_NAMESPACE_BEGIN
 
 EVF_CONST(uint, kDensifyGroupSize, 128u)
@@ -27,14 +28,7 @@ EVF_CONST(uint, kRowChild0, 1u)
 //   max_radius[g] = max(max_radius[g], radius) when the camera is used (use_camera != 0).
 // visible = the projected Gaussian meets the image (use_camera) or grad2d_norm[g] > 0.
 struct AccumulatePC {
-  vec4 row0;    // world -> camera [R | t], row-major
-  vec4 row1;
-  vec4 row2;
-  vec4 intrin;  // fx, fy, cx, cy
-  uint width;
-  uint height;
-  float near_plane;
-  float far_plane;
+  CameraPC cam;
   uint count;
   uint use_camera;
   float grad_scale;

@@ -3,6 +3,7 @@
 #ifndef EVF_SPLAT_LAYOUT_H
 #define EVF_SPLAT_LAYOUT_H
 #include "common/shared_prelude.h"
+#include "common/camera_layout.h"
 EVF_NAMESPACE_BEGIN
 
 EVF_CONST(uint, kTileSize, 16u)
@@ -11,18 +12,6 @@ EVF_CONST(uint, kProjectGroupSize, 128u)
 EVF_CONST(uint, kIsectGroupSize, 256u)
 EVF_CONST(uint, kFlagAntialiased, 1u)
 EVF_CONST(uint, kFlagAccumulate, 2u)   // project_bwd: add into the gradient buffers
-
-// The camera: world_to_camera rows with the translation in w, and intrinsics.
-struct CameraPC {
-  vec4 row0;
-  vec4 row1;
-  vec4 row2;
-  vec4 intrin;      // fx, fy, cx, cy
-  uint width;
-  uint height;
-  float near_plane;
-  float far_plane;
-};
 
 struct ProjectPC {   // project, tile count, emit, project backward
   CameraPC cam;
