@@ -9,6 +9,7 @@
 #include "gpu/commands.h"
 #include "splat/rasterizer.h"
 #include "splat/synthetic.h"
+#include "train/synthetic_dataset.h"
 #include "train/trainer.h"
 
 namespace evflow::app {
@@ -88,26 +89,7 @@ static int bench_train(ArgParser& p) {
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   gpu::Context ctx(o);
-  io::Dataset data;
-  data.layout = "synthetic";
-  data.near = 1.0;
-  data.far = 12.0;
-  Camera c0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
-  GaussianCloud truth = synthetic_cloud(42, 20000, 0, c0);
-  GaussianBuffers gt(ctx, truth.size(), 0, "gt_");
-  gt.upload(truth);
-  {
-    Rasterizer r(ctx);
-    for (int i = 0; i < views; ++i) {
-      double ang = (i - 0.5 * (views - 1)) * 0.06;
-      io::View v;
-      v.name = "view" + std::to_string(i);
-      v.camera = Camera::look_at(W, H, 60.0, {6 * std::sin(ang), 0.0, 6 - 6 * std::cos(ang)}, {0, 0, 6}, {0, -1, 0});
-      r.forward(gt, v.camera, RenderSettings{});
-      v.blurry = io::image_from_planar_rgb(r.outputs().rgb.read<float>(size_t(W) * H * 3), W, H);
-      data.train.push_back(std::move(v));
-    }
-  }
+  io::Dataset data = render_synthetic_dataset(ctx, W, H, views, 0, 20000);
   TrainConfig cfg;
   cfg.init_gaussians = N;
   cfg.iterations = uint32_t(steps);

@@ -10,40 +10,15 @@
 #include "splat/synthetic.h"
 #include "train/checkpoint.h"
 #include "camera/trajectory.h"
+#include "train/synthetic_dataset.h"
 #include "train/trainer.h"
 
 using namespace evflow;
 
 namespace {
 
-// Views on a ring around the ground-truth cloud (centre at depth 6 from the first camera).
 io::Dataset make_dataset(gpu::Context& ctx, uint32_t w, uint32_t h, int n_train, int n_novel) {
-  io::Dataset d;
-  d.layout = "test";
-  d.near = 1.0;
-  d.far = 12.0;
-  Camera c0 = Camera::look_at(w, h, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
-  GaussianCloud truth = synthetic_cloud(42, 1500, 0, c0);
-  GaussianBuffers gt(ctx, truth.size(), 0, "gt_");
-  gt.upload(truth);
-  Rasterizer r(ctx);
-  for (int i = 0; i < n_train + n_novel; ++i) {
-    double ang = (i < n_train ? (i - 0.5 * (n_train - 1)) / n_train : (i - n_train + 0.5 - 0.5 * n_novel) / n_novel * 0.8) * 0.5;
-    Camera cam = Camera::look_at(w, h, 60.0, {6 * std::sin(ang), 0.3 * std::cos(3.0 * i), 6 - 6 * std::cos(ang)}, {0, 0, 6}, {0, -1, 0});
-    r.forward(gt, cam, RenderSettings{});
-    io::View v;
-    v.name = (i < n_train ? "train" : "novel") + std::to_string(i);
-    v.camera = cam;
-    io::Image img = io::image_from_planar_rgb(r.outputs().rgb.read<float>(size_t(w) * h * 3), w, h);
-    v.sharp_mid = img;
-    if (i < n_train) {
-      v.blurry = img;
-      d.train.push_back(v);
-    } else {
-      d.novel.push_back(v);
-    }
-  }
-  return d;
+  return render_synthetic_dataset(ctx, w, h, n_train, n_novel);
 }
 
 double mean_psnr(gpu::Context& ctx, Trainer& t, const std::vector<io::View>& views) {
