@@ -99,6 +99,10 @@ Rasterizer::Rasterizer(gpu::Context& ctx)
       pose_partial_(ctx, 16, "pose_partial"),
       pose_(ctx, 32, "pose_gradient") {}
 
+// SH band l of a set of buffers, or band 0 standing in for a band above its degree (the
+// shaders never read it, but every binding needs a buffer).
+static const gpu::Buffer& sh_band(const GaussianBuffers& b, int l) { return l <= b.sh_degree ? b.sh[l] : b.sh[0]; }
+
 static uint32_t bit_width(uint32_t v) {
   uint32_t b = 0;
   while (v) { ++b; v >>= 1; }
@@ -165,11 +169,9 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   last_isect_.ensure(pixels * 4);
 
   auto* pp = reinterpret_cast<ProjectPC*>(project_pc_.data());
-  const gpu::Buffer& dummy = params.sh[0];
-  auto band = [&](int l) -> const gpu::Buffer& { return l <= params.sh_degree ? params.sh[l] : dummy; };
   cmd_.dispatch("splat/project",
-                {params.means, params.log_scales, params.quats, params.opacity_logits, band(0), band(1), band(2), band(3),
-                 proj_mean_conic_, proj_misc_, proj_color_, tile_rect_, tiles_touched_},
+                {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1), sh_band(params, 2),
+                 sh_band(params, 3), proj_mean_conic_, proj_misc_, proj_color_, tile_rect_, tiles_touched_},
                 project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
   cmd_.mark("project");
   scan_.record(cmd_, tiles_touched_, isect_offset_, uint32_t(n), uint32_t(n + 1));
@@ -238,16 +240,13 @@ void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rg
                  plane(8)},
                 raster_pc_.data(), sizeof(RasterPC), cmd_.linear_groups(tiles_x_ * tiles_y_));
   cmd_.mark("rasterize backward");
-  const gpu::Buffer& dummy = params.sh[0];
-  auto band = [&](const GaussianBuffers& b, int l) -> const gpu::Buffer& { return l <= b.sh_degree ? b.sh[l] : b.sh[0]; };
-  (void)dummy;
   auto* pp = reinterpret_cast<ProjectPC*>(project_pc_.data());
   pp->flags = accumulate ? (pp->flags | kFlagAccumulate) : (pp->flags & ~kFlagAccumulate);
   cmd_.dispatch("splat/project_bwd",
-                {params.means, params.log_scales, params.quats, params.opacity_logits, band(params, 0), band(params, 1),
-                 band(params, 2), band(params, 3), isect_offset_, gaussian_id_from_slot_, plane(0), plane(1), plane(2),
+                {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1),
+                 sh_band(params, 2), sh_band(params, 3), isect_offset_, gaussian_id_from_slot_, plane(0), plane(1), plane(2),
                  plane(3), plane(4), plane(5), plane(6), plane(7), plane(8), grads.means, grads.log_scales, grads.quats,
-                 grads.opacity_logits, band(grads, 0), band(grads, 1), band(grads, 2), band(grads, 3), grad2d_norm_,
+                 grads.opacity_logits, sh_band(grads, 0), sh_band(grads, 1), sh_band(grads, 2), sh_band(grads, 3), grad2d_norm_,
                  pose_partial_},
                 project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(groups));
   ReducePC rp{groups, 0, 0, 0};
