@@ -85,7 +85,7 @@ void SsimPipeline::record(gpu::Commands& cmd, const ImageShape& shape, const gpu
 
 // ---------------------------------------------------------------------------------------------
 L1Loss::L1Loss(gpu::Context& ctx, ImageShape shape, float weight)
-    : LossTerm(ctx, "l1", weight, 1), shape_(shape), partials_(ctx, 16, "l1_partials") {}
+    : ImageLossTerm(ctx, "l1", weight, 1), shape_(shape), partials_(ctx, 16, "l1_partials") {}
 
 void L1Loss::record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buffer& target, const gpu::Buffer& grad_out,
                     float weight, bool accumulate) {
@@ -110,7 +110,7 @@ void L1Loss::record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buff
 
 // ---------------------------------------------------------------------------------------------
 SsimLoss::SsimLoss(gpu::Context& ctx, ImageShape shape, float weight)
-    : LossTerm(ctx, "ssim", weight, 2), shape_(shape), pipe_(ctx) {}
+    : ImageLossTerm(ctx, "ssim", weight, 2), shape_(shape), pipe_(ctx) {}
 
 void SsimLoss::record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buffer& target,
                       const gpu::Buffer& grad_out, float weight, bool accumulate) {
@@ -128,7 +128,7 @@ void SsimLoss::record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Bu
 
 // ---------------------------------------------------------------------------------------------
 BlendLoss::BlendLoss(gpu::Context& ctx, ImageShape shape, float lambda, float weight)
-    : LossTerm(ctx, "l1_ssim", weight, 3), shape_(shape), lambda_(lambda), pipe_(ctx) {}
+    : ImageLossTerm(ctx, "l1_ssim", weight, 3), shape_(shape), lambda_(lambda), pipe_(ctx) {}
 
 void BlendLoss::record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buffer& target,
                        const gpu::Buffer& grad_out, float weight, bool accumulate) {

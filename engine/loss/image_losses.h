@@ -55,12 +55,12 @@ class SsimPipeline {
   gpu::Buffer h_, d_, partials_;
 };
 
-class L1Loss : public LossTerm {
+class L1Loss : public ImageLossTerm {
  public:
   L1Loss(gpu::Context& ctx, ImageShape shape, float weight = 1.0f);
   void record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buffer& target, const gpu::Buffer& grad_out,
               float weight, bool accumulate) override;
-  using LossTerm::record;
+  using ImageLossTerm::record;
   void set_shape(const ImageShape& s) { shape_ = s; }
   const ImageShape& shape() const { return shape_; }
 
@@ -69,12 +69,12 @@ class L1Loss : public LossTerm {
   gpu::Buffer partials_;
 };
 
-class SsimLoss : public LossTerm {
+class SsimLoss : public ImageLossTerm {
  public:
   SsimLoss(gpu::Context& ctx, ImageShape shape, float weight = 1.0f);
   void record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buffer& target, const gpu::Buffer& grad_out,
               float weight, bool accumulate) override;
-  using LossTerm::record;
+  using ImageLossTerm::record;
   void set_shape(const ImageShape& s) { shape_ = s; }
   const ImageShape& shape() const { return shape_; }
   double ssim() const { return values()[1]; }
@@ -84,12 +84,12 @@ class SsimLoss : public LossTerm {
   SsimPipeline pipe_;
 };
 
-class BlendLoss : public LossTerm {
+class BlendLoss : public ImageLossTerm {
  public:
   BlendLoss(gpu::Context& ctx, ImageShape shape, float lambda = kDefaultSsimLambda, float weight = 1.0f);
   void record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buffer& target, const gpu::Buffer& grad_out,
               float weight, bool accumulate) override;
-  using LossTerm::record;
+  using ImageLossTerm::record;
   void set_shape(const ImageShape& s) { shape_ = s; }
   const ImageShape& shape() const { return shape_; }
   float lambda() const { return lambda_; }

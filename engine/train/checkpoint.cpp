@@ -9,7 +9,7 @@
 
 namespace evflow {
 
-static constexpr char kMagic[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '3'};
+static constexpr char kMagic[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '4'};
 
 namespace {
 
@@ -67,10 +67,12 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c) {
     }
     put(f, uint32_t(c.trajectories.size()));
     for (auto& t : c.trajectories) {
-      if (t.knots.size() != 54 || t.exp_avg.size() != 54 || t.exp_avg_sq.size() != 54)
-        throw std::invalid_argument("checkpoint " + path.string() + ": a trajectory needs 54 knots and moments");
+      const size_t k = t.knots.size();
+      if ((k != 54 && k != 6) || t.exp_avg.size() != k || t.exp_avg_sq.size() != k)
+        throw std::invalid_argument("checkpoint " + path.string() + ": a camera state needs 54 (trajectory) or 6 (pose) values and moments");
       put(f, t.step);
-      for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) f.write(reinterpret_cast<const char*>(v->data()), 54 * 8);
+      put(f, uint32_t(k));
+      for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) f.write(reinterpret_cast<const char*>(v->data()), std::streamsize(k * 8));
     }
     if (!f) throw std::runtime_error(tmp.string() + ": write failed");
   });
@@ -83,7 +85,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   char magic[8];
   r.need(8, "magic");
   r.f.read(magic, 8);
-  if (std::memcmp(magic, kMagic, 8) != 0) throw std::runtime_error(path.string() + ": not an EvFlow checkpoint (version 3)");
+  if (std::memcmp(magic, kMagic, 8) != 0) throw std::runtime_error(path.string() + ": not an EvFlow checkpoint (version 4)");
   Checkpoint c;
   c.step = r.get<uint32_t>("step");
   const int32_t degree = r.get<int32_t>("SH degree");
@@ -113,10 +115,12 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   for (uint32_t i = 0; i < trajectories; ++i) {
     TrajectoryState t;
     t.step = r.get<uint64_t>("trajectory step");
+    const uint32_t k = r.get<uint32_t>("camera state size");
+    if (k != 54 && k != 6) throw std::runtime_error(path.string() + ": corrupt checkpoint (camera state of " + std::to_string(k) + " values)");
     for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) {
-      r.need(54 * 8, "trajectory");
-      v->resize(54);
-      r.f.read(reinterpret_cast<char*>(v->data()), 54 * 8);
+      r.need(size_t(k) * 8, "trajectory");
+      v->resize(k);
+      r.f.read(reinterpret_cast<char*>(v->data()), std::streamsize(k * 8));
       for (double x : *v)
         if (!std::isfinite(x)) throw std::runtime_error(path.string() + ": trajectory " + std::to_string(i) + " is not finite");
     }

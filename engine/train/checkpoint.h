@@ -16,17 +16,18 @@ struct OptimizerGroupState {
   std::vector<float> exp_avg, exp_avg_sq;
 };
 
-// A training view's exposure trajectory (engine/camera: 9 se(3) knots) and its Adam state.
+// A training view's learned camera and its Adam state: the exposure trajectory in blur mode
+// (engine/camera: 9 se(3) knots, 54 values) or the pose refinement delta in plain mode (6 values).
 struct TrajectoryState {
   uint64_t step = 0;
-  std::vector<double> knots, exp_avg, exp_avg_sq;  // 54 each
+  std::vector<double> knots, exp_avg, exp_avg_sq;  // 54 or 6 each
 };
 
 struct Checkpoint {
   uint32_t step = 0;
   GaussianCloud cloud;
   std::vector<OptimizerGroupState> optimizer;  // empty: fresh optimizer state
-  std::vector<TrajectoryState> trajectories;   // one per training view (blur mode); empty otherwise
+  std::vector<TrajectoryState> trajectories;   // one per training view (blur mode, or plain mode with pose_refine); else empty
 };
 
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& ckpt);

@@ -49,8 +49,17 @@ const std::map<std::string, Setter>& setters() {
       {"lr_trajectory_init", [](TrainConfig& c, const std::string& v) { c.lr_trajectory_init = to_double("lr_trajectory_init", v); }},
       {"lr_trajectory_final", [](TrainConfig& c, const std::string& v) { c.lr_trajectory_final = to_double("lr_trajectory_final", v); }},
       {"target", [](TrainConfig& c, const std::string& v) {
-         if (v != "blurry" && v != "sharp") throw std::invalid_argument("config key 'target' must be blurry or sharp, got '" + v + "'");
+         if (v != "blurry" && v != "sharp" && v != "edi")
+           throw std::invalid_argument("config key 'target' must be blurry, sharp or edi, got '" + v + "'");
          c.target = v; }},
+      {"method", [](TrainConfig& c, const std::string& v) { c.apply_method(v); }},
+      {"event_weight", [](TrainConfig& c, const std::string& v) { c.event_weight = to_double("event_weight", v); }},
+      {"event_theta_pos", [](TrainConfig& c, const std::string& v) { c.event_theta_pos = to_double("event_theta_pos", v); }},
+      {"event_theta_neg", [](TrainConfig& c, const std::string& v) { c.event_theta_neg = to_double("event_theta_neg", v); }},
+      {"event_norm_floor", [](TrainConfig& c, const std::string& v) { c.event_norm_floor = to_double("event_norm_floor", v); }},
+      {"pose_refine", [](TrainConfig& c, const std::string& v) { c.pose_refine = to_bool("pose_refine", v); }},
+      {"lr_pose_init", [](TrainConfig& c, const std::string& v) { c.lr_pose_init = to_double("lr_pose_init", v); }},
+      {"lr_pose_final", [](TrainConfig& c, const std::string& v) { c.lr_pose_final = to_double("lr_pose_final", v); }},
       {"antialiased", [](TrainConfig& c, const std::string& v) { c.antialiased = to_bool("antialiased", v); }},
       {"background", [](TrainConfig& c, const std::string& v) {
          float r, g, b;
@@ -90,6 +99,14 @@ TrainConfig TrainConfig::preset_named(const std::string& name) {
   return c;
 }
 
+void TrainConfig::apply_method(const std::string& name) {
+  if (name == "plain") { mode = "plain"; target = "blurry"; event_weight = 0; }
+  else if (name == "edi") { mode = "plain"; target = "edi"; event_weight = 0; }
+  else if (name == "blur-only") { mode = "blur"; target = "blurry"; event_weight = 0; }
+  else if (name == "blur+events") { mode = "blur"; target = "blurry"; event_weight = 0.1; }
+  else throw std::invalid_argument("unknown method '" + name + "' (plain, edi, blur-only, blur+events)");
+}
+
 void TrainConfig::set(const std::string& key, const std::string& value) {
   auto it = setters().find(key);
   if (it == setters().end()) throw std::invalid_argument("unknown config key '" + key + "'");
@@ -98,9 +115,11 @@ void TrainConfig::set(const std::string& key, const std::string& value) {
 
 void TrainConfig::apply_json(const nlohmann::json& j) {
   if (!j.is_object()) throw std::invalid_argument("config must be a JSON object");
+  // A preset, then a method, then every other key (so explicit keys win).
   if (j.contains("preset")) set("preset", j["preset"].get<std::string>());
+  if (j.contains("method")) set("method", j["method"].get<std::string>());
   for (auto& [k, v] : j.items()) {
-    if (k == "preset") continue;
+    if (k == "preset" || k == "method") continue;
     std::string s;
     if (v.is_string()) s = v.get<std::string>();
     else if (v.is_boolean()) s = v.get<bool>() ? "true" : "false";
@@ -117,6 +136,9 @@ nlohmann::json TrainConfig::to_json() const {
           {"lr_sh_dc", lr_sh_dc}, {"lr_sh_rest", lr_sh_rest}, {"lr_opacity", lr_opacity}, {"lr_log_scales", lr_log_scales},
           {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"mode", mode}, {"virtual_frames", virtual_frames},
           {"lr_trajectory_init", lr_trajectory_init}, {"lr_trajectory_final", lr_trajectory_final}, {"target", target}, {"antialiased", antialiased},
+          {"event_weight", event_weight}, {"event_theta_pos", event_theta_pos}, {"event_theta_neg", event_theta_neg},
+          {"event_norm_floor", event_norm_floor}, {"pose_refine", pose_refine}, {"lr_pose_init", lr_pose_init},
+          {"lr_pose_final", lr_pose_final},
           {"background", {background[0], background[1], background[2]}}, {"seed", seed}, {"log_every", log_every},
           {"checkpoint_every", checkpoint_every}, {"densify", densify}, {"densify_from", densify_from},
           {"densify_until", densify_until}, {"densify_every", densify_every}, {"densify_grad_threshold", densify_grad_threshold},

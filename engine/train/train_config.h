@@ -24,7 +24,17 @@ struct TrainConfig {
   std::string mode = "plain";
   uint32_t virtual_frames = 3;         // N: 2N+1 virtual poses per exposure
   double lr_trajectory_init = 1e-3, lr_trajectory_final = 1e-5;
-  std::string target = "blurry";       // train on "blurry" images, or "sharp" (ground truth, when the data has it)
+  // Event loss L_ev^gs (paper Eq. 5, engine/loss/event_loss.h): weight lambda (0: off; needs
+  // mode=blur and events). Thresholds 0 = the dataset's (simulator manifest), else 0.2.
+  double event_weight = 0.0;
+  double event_theta_pos = 0.0, event_theta_neg = 0.0;
+  double event_norm_floor = 1e-3;      // per-pixel RMS floor of the normalised sides
+  // Plain mode: per-view se(3) pose refinement (c2w' = c2w Exp(delta)), its own learning rate.
+  bool pose_refine = false;
+  double lr_pose_init = 1e-3, lr_pose_final = 1e-5;
+  // Train on "blurry" images, "sharp" (ground truth, when the data has it) or "edi" (the blurry
+  // images deblurred by EDI with the events at mid-exposure: the 3DGS+EDI baseline).
+  std::string target = "blurry";
   bool antialiased = false;
   std::array<float, 3> background{0, 0, 0};
   uint64_t seed = 0;
@@ -38,6 +48,11 @@ struct TrainConfig {
   uint32_t max_gaussians = 30000;      // cap on the count (0: none); fast preset sized for 2 CPU cores
 
   static TrainConfig preset_named(const std::string& name);  // "fast" (CPU) or "paper" (GPU)
+  // The paper's configurations and baselines (key "method"): plain (3DGS on the blurry images),
+  // edi (3DGS on EDI-deblurred images), blur-only (BAD-Gaussians-like: mode=blur), blur+events
+  // (mode=blur + the event loss, lambda 0.1).
+  void apply_method(const std::string& name);
+  static std::vector<std::string> methods() { return {"plain", "edi", "blur-only", "blur+events"}; }
   void set(const std::string& key, const std::string& value);  // throws naming the key
   void apply_json(const nlohmann::json& j);
   nlohmann::json to_json() const;

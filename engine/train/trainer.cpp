@@ -1,21 +1,53 @@
 #include "train/trainer.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
 
+#include "events/edi.h"
+#include "loss/event_loss.h"
 #include "loss/image_losses.h"
 #include "optim/schedule.h"
 #include "train/train_layout.h"
 
 namespace evflow {
 
+// Colours for the initial Gaussians: the sharp image when training on it, else the blurry one.
 static const io::Image& target_image(const io::View& v, const TrainConfig& cfg) {
   if (cfg.target == "sharp") {
     if (!v.sharp_mid) throw std::invalid_argument("target=sharp, but view '" + v.name + "' has no sharp image");
     return *v.sharp_mid;
   }
   return v.blurry;
+}
+
+std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainConfig& cfg) {
+  double pos = 0.2, neg = 0.2;
+  const auto& m = data.manifest;
+  if (m.is_object() && m.contains("simulator") && m["simulator"].contains("events")) {
+    const auto& e = m["simulator"]["events"];
+    if (e.contains("theta_pos") && e["theta_pos"].is_number()) pos = e["theta_pos"].get<double>();
+    if (e.contains("theta_neg") && e["theta_neg"].is_number()) neg = e["theta_neg"].get<double>();
+  }
+  if (cfg.event_theta_pos > 0) pos = cfg.event_theta_pos;
+  if (cfg.event_theta_neg > 0) neg = cfg.event_theta_neg;
+  return {pos, neg};
+}
+
+io::Image training_target(const io::Dataset& data, size_t view, const TrainConfig& cfg) {
+  const io::View& v = data.train.at(view);
+  if (cfg.target != "edi") return target_image(v, cfg);
+  if (data.events.size() == 0)
+    throw std::invalid_argument("target=edi needs events, and the dataset in '" + data.root + "' has none");
+  if (!(v.exposure_end > v.exposure_start))
+    throw std::invalid_argument("target=edi: view '" + v.name + "' has no exposure interval");
+  auto [pos, neg] = event_thresholds(data, cfg);
+  io::Image out = v.blurry;
+  out.data = events::edi_deblur(v.blurry.data.data(), v.blurry.channels, data.events, v.exposure_start, v.exposure_end,
+                                events::EdiThresholds{pos, neg, {}, {}});
+  for (float& x : out.data) x = std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 0.0f;  // a training target lives in [0, 1]
+  return out;
 }
 
 GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg) {
@@ -58,11 +90,16 @@ Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, co
   setup(start.cloud);
   for (auto& g : start.optimizer) adam_->load_state(adam_->group_index(g.name), g.exp_avg, g.exp_avg_sq, g.step);
   if (!start.trajectories.empty()) {
-    if (start.trajectories.size() != trajectories_.size())
-      throw std::invalid_argument("checkpoint has " + std::to_string(start.trajectories.size()) + " trajectories for " +
-                                  std::to_string(trajectories_.size()) + " training views (mode " + cfg_.mode + ")");
-    for (size_t v = 0; v < trajectories_.size(); ++v) {
-      std::copy(start.trajectories[v].knots.begin(), start.trajectories[v].knots.end(), trajectories_[v].data());
+    const size_t want = trajectory_state_.size(), dof = trajectories_.empty() ? 6 : ExposureTrajectory::kSize;
+    if (start.trajectories.size() != want || start.trajectories[0].knots.size() != dof)
+      throw std::invalid_argument("checkpoint has " + std::to_string(start.trajectories.size()) + " camera states of " +
+                                  std::to_string(start.trajectories[0].knots.size()) + " values; this run (mode " + cfg_.mode +
+                                  (cfg_.pose_refine ? ", pose_refine" : "") + ") has " + std::to_string(want) + " of " +
+                                  std::to_string(dof));
+    for (size_t v = 0; v < want; ++v) {
+      const auto& k = start.trajectories[v].knots;
+      if (trajectories_.empty()) std::copy(k.begin(), k.end(), pose_deltas_[v].begin());
+      else std::copy(k.begin(), k.end(), trajectories_[v].data());
       trajectory_state_[v] = start.trajectories[v];
     }
   }
@@ -77,12 +114,27 @@ Checkpoint Trainer::checkpoint() const {
                            fresh ? std::vector<float>(n, 0.f) : adam_->exp_avg(i).read<float>(n),
                            fresh ? std::vector<float>(n, 0.f) : adam_->exp_avg_sq(i).read<float>(n)});
   }
-  for (size_t v = 0; v < trajectories_.size(); ++v) {
+  for (size_t v = 0; v < trajectory_state_.size(); ++v) {
     TrajectoryState t = trajectory_state_[v];
-    t.knots.assign(trajectories_[v].data(), trajectories_[v].data() + ExposureTrajectory::kSize);
+    if (trajectories_.empty()) t.knots.assign(pose_deltas_[v].begin(), pose_deltas_[v].end());
+    else t.knots.assign(trajectories_[v].data(), trajectories_[v].data() + ExposureTrajectory::kSize);
     c.trajectories.push_back(std::move(t));
   }
   return c;
+}
+
+Camera Trainer::training_camera(uint32_t v) const {
+  if (!trajectories_.empty()) return trajectories_.at(v).camera_at(0.5);
+  if (!pose_deltas_.empty()) return data_.train.at(v).camera.perturbed(pose_deltas_.at(v));
+  return data_.train.at(v).camera;
+}
+
+void Trainer::add_loss(std::unique_ptr<LossTerm> term) {
+  if (!dynamic_cast<ImageLossTerm*>(term.get()) && !dynamic_cast<ExposureLossTerm*>(term.get()))
+    throw std::invalid_argument("loss term '" + term->name() + "' is neither an image nor an exposure term");
+  if (dynamic_cast<ExposureLossTerm*>(term.get()) && cfg_.mode != "blur")
+    throw std::invalid_argument("loss term '" + term->name() + "' needs the virtual frames of mode=blur");
+  terms_.push_back(std::move(term));
 }
 
 void Trainer::setup(const GaussianCloud& start) {
@@ -95,9 +147,9 @@ void Trainer::setup(const GaussianCloud& start) {
   params_ = std::make_unique<GaussianBuffers>(ctx_, start.size(), start.sh_degree, "p_");
   grads_ = std::make_unique<GaussianBuffers>(ctx_, start.size(), start.sh_degree, "v_");
   params_->upload(start);
-  for (auto& v : data_.train) {
-    auto planar = io::planar_rgb(target_image(v, cfg_));
-    targets_.emplace_back(ctx_, planar.size() * 4, "target_" + v.name);
+  for (size_t v = 0; v < data_.train.size(); ++v) {
+    auto planar = io::planar_rgb(training_target(data_, v, cfg_));
+    targets_.emplace_back(ctx_, planar.size() * 4, "target_" + data_.train[v].name);
     targets_.back().write(planar);
   }
   const size_t hw = size_t(c0.width) * c0.height;
@@ -111,9 +163,31 @@ void Trainer::setup(const GaussianCloud& start) {
       trajectory_state_.push_back({0, {}, std::vector<double>(ExposureTrajectory::kSize, 0.0),
                                    std::vector<double>(ExposureTrajectory::kSize, 0.0)});
     }
+  } else if (cfg_.pose_refine) {
+    pose_deltas_.assign(data_.train.size(), lie::Vec6{});
+    trajectory_state_.assign(data_.train.size(), {0, {}, std::vector<double>(6, 0.0), std::vector<double>(6, 0.0)});
   }
   terms_.clear();
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
+  if (cfg_.event_weight > 0) {
+    if (cfg_.mode != "blur") throw std::invalid_argument("event_weight > 0 needs mode=blur (the event loss compares virtual frames)");
+    if (data_.events.size() == 0) throw std::invalid_argument("event_weight > 0, but the dataset in '" + data_.root + "' has no events");
+    if (data_.events.width != c0.width || data_.events.height != c0.height)
+      throw std::invalid_argument("the events' sensor (" + std::to_string(data_.events.width) + "x" +
+                                  std::to_string(data_.events.height) + ") differs from the images (" + std::to_string(c0.width) +
+                                  "x" + std::to_string(c0.height) + ")");
+    std::vector<EventWindow> windows;
+    for (auto& v : data_.train) {
+      if (!(v.exposure_end > v.exposure_start))
+        throw std::invalid_argument("view '" + v.name + "' has no exposure interval for its events");
+      windows.push_back({v.exposure_start, v.exposure_end});
+    }
+    events_ = std::make_unique<GpuEvents>(ctx_, data_.events, windows, "events of " + data_.root);
+    auto [pos, neg] = event_thresholds(data_, cfg_);
+    EventLossOptions o;
+    o.theta_pos = float(pos), o.theta_neg = float(neg), o.norm_floor_rms = float(cfg_.event_norm_floor);
+    add_loss(std::make_unique<EventLoss>(ctx_, *events_, float(cfg_.event_weight), o));
+  }
 
   // Scene extent: radius of the camera centres around their mean (as 3DGS), at least 1.
   double mean[3] = {0, 0, 0};
@@ -178,8 +252,17 @@ StepStats Trainer::step() {
   const bool blur = cfg_.mode == "blur";
   const uint32_t frames = blur ? 2 * cfg_.virtual_frames + 1 : 1;
   const std::vector<double> us = blur ? ExposureTrajectory::virtual_times(int(cfg_.virtual_frames)) : std::vector<double>{0.5};
-  auto camera_at = [&](uint32_t i) { return blur ? trajectories_[st.view].camera_at(us[i]) : view.camera; };
+  auto camera_at = [&](uint32_t i) { return blur ? trajectories_[st.view].camera_at(us[i]) : training_camera(st.view); };
   const size_t n_pix = size_t(view.camera.width) * view.camera.height * 3;
+  bool exposure_terms = false;
+  for (auto& t : terms_) exposure_terms |= dynamic_cast<ExposureLossTerm*>(t.get()) != nullptr;
+  if (exposure_terms && frame_rgb_.size() != frames) {
+    frame_rgb_.clear(), frame_grad_.clear();
+    for (uint32_t i = 0; i < frames; ++i) {
+      frame_rgb_.emplace_back(ctx_, n_pix * 4, "frame_rgb");
+      frame_grad_.emplace_back(ctx_, n_pix * 4, "frame_grad");
+    }
+  }
   // Forward: the image model is the mean of the frames' linear renders (one frame in plain mode).
   for (uint32_t i = 0; i < frames; ++i) {
     raster_.forward(*params_, camera_at(i), s);
@@ -187,37 +270,69 @@ StepStats Trainer::step() {
       shaderio::AccumulatePC pc{uint32_t(n_pix), 1.0f / float(frames), i > 0 ? 1u : 0u, 0};
       cmd_.dispatch("train/accumulate", {raster_.outputs().rgb, mean_image_}, pc,
                     cmd_.linear_groups(gpu::Commands::div_up(n_pix, shaderio::kAccumulateGroupSize)));
+      if (exposure_terms) cmd_.copy(raster_.outputs().rgb, frame_rgb_[i], n_pix * 4);
       cmd_.submit();
     }
   }
   st.raster_forward_ms = lap();
-  // Every frame's share of d(loss)/d(mean image) is 1/frames of it.
+  // Image terms: every frame's share of d(loss)/d(mean image) is 1/frames of it.
   const gpu::Buffer& prediction = blur ? mean_image_ : raster_.outputs().rgb;
   bool first = true;
-  for (auto& t : terms_) {
-    t->record(cmd_, prediction, targets_[st.view], v_rgb_, t->weight() / float(frames), !first);
-    first = false;
+  for (auto& t : terms_)
+    if (auto* img = dynamic_cast<ImageLossTerm*>(t.get())) {
+      img->record(cmd_, prediction, targets_[st.view], v_rgb_, t->weight() / float(frames), !first);
+      first = false;
+    }
+  // Exposure terms add their per-frame gradients on top of that share.
+  if (exposure_terms) {
+    ExposureFrames ef;
+    ef.view = st.view;
+    ef.width = view.camera.width, ef.height = view.camera.height;
+    ef.t0 = view.exposure_start, ef.t1 = view.exposure_end;
+    ef.u = us;
+    ef.seed = cfg_.seed * 0x100000001B3ull + step_;
+    for (uint32_t i = 0; i < frames; ++i) {
+      cmd_.copy(v_rgb_, frame_grad_[i], n_pix * 4);
+      ef.rgb.push_back(&frame_rgb_[i]);
+      ef.grad.push_back(&frame_grad_[i]);
+    }
+    for (auto& t : terms_)
+      if (auto* ex = dynamic_cast<ExposureLossTerm*>(t.get())) ex->record(cmd_, ef);
   }
   cmd_.submit();
   st.loss_ms = lap();
   st.loss = 0;
-  for (auto& t : terms_) st.loss += t->weight() * t->value();
+  const LossTerm* bad_term = nullptr;
+  for (auto& t : terms_) {
+    const double v = t->value();
+    st.term_values.push_back(v);
+    st.loss += t->weight() * v;
+    if (!std::isfinite(v) && !bad_term) bad_term = t.get();
+  }
   if (!std::isfinite(st.loss)) {
     st.skipped = true;
     std::fprintf(stderr, "step %u: non-finite loss on view '%s' (term %s): update skipped\n", st.step, view.name.c_str(),
-                 terms_.front()->name().c_str());
+                 bad_term ? bad_term->name().c_str() : "sum");
   } else {
     std::array<double, ExposureTrajectory::kSize> knot_grad{};
+    lie::Vec6 pose_grad{};
     for (uint32_t i = 0; i < frames; ++i) {
       if (blur) raster_.forward(*params_, camera_at(i), s);  // the rasterizer keeps one render's state
-      raster_.backward(*params_, v_rgb_, v_alpha_, *grads_, i > 0);
-      if (blur) {
+      raster_.backward(*params_, exposure_terms ? frame_grad_[i] : v_rgb_, v_alpha_, *grads_, i > 0);
+      if (blur || !pose_deltas_.empty()) {
         auto g = raster_.pose_gradient();
-        auto kg = trajectories_[st.view].backward(us[i], lie::Vec6{g[0], g[1], g[2], g[3], g[4], g[5]});
-        for (size_t k = 0; k < kg.size(); ++k) knot_grad[k] += kg[k];
+        const lie::Vec6 g6{g[0], g[1], g[2], g[3], g[4], g[5]};
+        if (blur) {
+          auto kg = trajectories_[st.view].backward(us[i], g6);
+          for (size_t k = 0; k < kg.size(); ++k) knot_grad[k] += kg[k];
+        } else {
+          // c2w Exp(delta) Exp(g-step) = c2w Exp(delta + J_r(delta)^-1 g-step): dL/ddelta = J_r(delta)^T g.
+          pose_grad = lie::mul_transposed(lie::se3_right_jacobian(pose_deltas_[st.view]), g6);
+        }
       }
     }
-    if (blur) trajectory_adam(st.view, knot_grad);
+    if (blur) camera_adam(st.view, knot_grad.data(), cfg_.lr_trajectory_init, cfg_.lr_trajectory_final);
+    if (!pose_deltas_.empty()) camera_adam(st.view, pose_grad.data(), cfg_.lr_pose_init, cfg_.lr_pose_final);
     st.raster_backward_ms = lap();
     ExponentialDecay sched{cfg_.lr_means_init * extent_, cfg_.lr_means_final * extent_, cfg_.iterations};
     adam_->set_lr(means_group_, float(sched(step_)));
@@ -238,20 +353,20 @@ StepStats Trainer::step() {
   return st;
 }
 
-// Adam on one view's 54 knots, on the host (a few hundred flops), learning rate decaying from
-// lr_trajectory_init to lr_trajectory_final over the run.
-void Trainer::trajectory_adam(uint32_t v, const std::array<double, ExposureTrajectory::kSize>& grad) {
+// Adam on one view's camera parameters (54 trajectory knots or a 6-vector pose delta), on the
+// host (a few hundred flops), learning rate decaying exponentially over the run.
+void Trainer::camera_adam(uint32_t v, const double* grad, double lr_init, double lr_final) {
   TrajectoryState& st = trajectory_state_[v];
   const double b1 = 0.9, b2 = 0.999, eps = 1e-15;
-  ExponentialDecay sched{cfg_.lr_trajectory_init, cfg_.lr_trajectory_final, cfg_.iterations};
+  ExponentialDecay sched{lr_init, lr_final, cfg_.iterations};
   const double lr = sched(step_);
   ++st.step;
   const double c1 = 1 - std::pow(b1, double(st.step)), c2 = 1 - std::pow(b2, double(st.step));
-  double* knots = trajectories_[v].data();
-  for (size_t k = 0; k < grad.size(); ++k) {
+  double* x = trajectories_.empty() ? pose_deltas_[v].data() : trajectories_[v].data();
+  for (size_t k = 0; k < st.exp_avg.size(); ++k) {
     st.exp_avg[k] = b1 * st.exp_avg[k] + (1 - b1) * grad[k];
     st.exp_avg_sq[k] = b2 * st.exp_avg_sq[k] + (1 - b2) * grad[k] * grad[k];
-    knots[k] -= lr * (st.exp_avg[k] / c1) / (std::sqrt(st.exp_avg_sq[k] / c2) + eps);
+    x[k] -= lr * (st.exp_avg[k] / c1) / (std::sqrt(st.exp_avg_sq[k] / c2) + eps);
   }
 }
 

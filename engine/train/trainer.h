@@ -10,6 +10,7 @@
 
 #include "camera/trajectory.h"
 #include "densify/density_control.h"
+#include "events/gpu_events.h"
 #include "io/dataset.h"
 #include "loss/loss_term.h"
 #include "optim/adam.h"
@@ -27,7 +28,16 @@ struct StepStats {
   double ms = 0;
   // Wall-clock split of the step (each part ends in a submit and wait).
   double raster_forward_ms = 0, loss_ms = 0, raster_backward_ms = 0, optimizer_ms = 0;
+  // Each registered term's unweighted value, in registry order (names: Trainer::losses()).
+  std::vector<double> term_values;
 };
+
+// The image a training view is fitted to: its blurry input, its sharp ground truth, or the EDI
+// estimate at mid-exposure (cfg.target). EDI needs the dataset's events.
+io::Image training_target(const io::Dataset& data, size_t view, const TrainConfig& cfg);
+// Event thresholds for the event loss / EDI: the config's, else the dataset's (simulator
+// manifest), else 0.2.
+std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainConfig& cfg);
 
 // Random Gaussians inside the training views' frustums between the near and far bounds, coloured
 // from the pixel they were seeded on.
@@ -50,14 +60,18 @@ class Trainer {
   const GaussianBuffers& params() const { return *params_; }
   // Blur mode: the training views' exposure trajectories (empty in plain mode).
   const std::vector<ExposureTrajectory>& trajectories() const { return trajectories_; }
+  // The camera the model currently believes view v was taken from: mid-exposure of its
+  // trajectory (blur mode), the refined pose (pose_refine) or the dataset's pose.
+  Camera training_camera(uint32_t v) const;
   // The loss-term registry.
-  void add_loss(std::unique_ptr<LossTerm> term) { terms_.push_back(std::move(term)); }
+  // Image terms compare the image model with the target; exposure terms see every virtual frame.
+  void add_loss(std::unique_ptr<LossTerm> term);
   const std::vector<std::unique_ptr<LossTerm>>& losses() const { return terms_; }
 
  private:
   void setup(const GaussianCloud& start);
   double blur_step(const io::View& view, uint32_t v, const RenderSettings& s, StepStats& st);
-  void trajectory_adam(uint32_t v, const std::array<double, ExposureTrajectory::kSize>& grad);
+  void camera_adam(uint32_t v, const double* grad, double lr_init, double lr_final);
   gpu::Context& ctx_;
   const io::Dataset& data_;
   TrainConfig cfg_;
@@ -72,7 +86,10 @@ class Trainer {
   std::unique_ptr<DensityControl> density_;
   std::vector<ExposureTrajectory> trajectories_;
   std::vector<TrajectoryState> trajectory_state_;  // Adam moments per view (knots live in trajectories_)
+  std::vector<lie::Vec6> pose_deltas_;              // plain mode with pose_refine: c2w' = c2w Exp(delta)
   gpu::Buffer mean_image_;
+  std::unique_ptr<GpuEvents> events_;               // training views' events (when a term needs them)
+  std::vector<gpu::Buffer> frame_rgb_, frame_grad_;  // per virtual frame (exposure terms only)
   size_t means_group_ = 0;
   double extent_ = 1.0;
   uint32_t step_ = 0;

@@ -72,5 +72,32 @@ struct ReducePC {
   uint log_mask;
 };
 
+// Event loss (paper Eq. 5, engine/loss/event_loss.h). One record per pair (t_s, t_j), s < j:
+// loss/event_pair: per pixel
+//   E = sum over interval planes [plane_first, plane_last] of theta_pos * n_pos - theta_neg * n_neg
+//   D = L_j - L_s,  L = log(eps + max(0, luminance(rgb)))   (the later minus the earlier frame:
+//       the sign of the events, checked against the simulator in tests/test_event_loss.cpp)
+// writes E and D into scratch planes 0 and 1 and partials[g] = (sum E*D, sum D*D, sum E*E, 0);
+// loss/reduce stores the three sums at sums[4 * pair .. 4 * pair + 2].
+// loss/event_pair_bwd: with nE = sqrt(max(EE, norm_floor2)), nD = sqrt(max(DD, norm_floor2)),
+//   l = || E / nE - D / nD ||^2, grad_j (+)= grad_scale * dl/drgb_j, grad_s (+)= grad_scale * dl/drgb_s,
+// and invocation 0 writes (value_accumulate: adds) value_scale * l into values[value_index].
+struct EventPairPC {
+  uint width;
+  uint height;
+  uint plane_first;
+  uint plane_last;
+  float theta_pos;
+  float theta_neg;
+  float eps;
+  float norm_floor2;
+  float grad_scale;
+  float value_scale;
+  uint value_accumulate;
+  uint value_index;
+  uint pair;
+  uint pad0, pad1, pad2;
+};
+
 EVF_NAMESPACE_END
 #endif

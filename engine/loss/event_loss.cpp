@@ -1,0 +1,85 @@
+#include "loss/event_loss.h"
+
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "loss/loss_layout.h"
+
+namespace evflow {
+
+EventLoss::EventLoss(gpu::Context& ctx, const GpuEvents& events, float weight, EventLossOptions options)
+    : ExposureLossTerm(ctx, "events", weight, 1), events_(events), options_(options), counts_(ctx, 16, "event_counts"),
+      scratch_(ctx, 16, "event_scratch"), partials_(ctx, 16, "event_partials"), sums_(ctx, 16, "event_sums") {
+  if (!(options.theta_pos > 0 && options.theta_neg > 0)) throw std::invalid_argument("event loss: thresholds must be > 0");
+  if (!(options.eps > 0)) throw std::invalid_argument("event loss: eps must be > 0");
+  if (!(options.norm_floor_rms > 0)) throw std::invalid_argument("event loss: norm_floor_rms must be > 0");
+}
+
+std::vector<std::pair<uint32_t, uint32_t>> EventLoss::sample_pairs(uint32_t frames, uint64_t seed) {
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 0xE7037ED1A0B428DBull);
+  for (uint32_t i = 0; i + 1 < frames; ++i) pairs.emplace_back(uint32_t(rng() % (i + 1)), i + 1);
+  return pairs;
+}
+
+void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
+  const uint32_t F = uint32_t(f.u.size());
+  if (F < 2) throw std::invalid_argument("event loss: needs at least 2 virtual frames, got " + std::to_string(F));
+  if (f.rgb.size() != F || f.grad.size() != F)
+    throw std::invalid_argument("event loss: " + std::to_string(F) + " frame times but " + std::to_string(f.rgb.size()) +
+                                " renders and " + std::to_string(f.grad.size()) + " gradient images");
+  if (f.width != events_.width() || f.height != events_.height())
+    throw std::invalid_argument("event loss: frames are " + std::to_string(f.width) + "x" + std::to_string(f.height) +
+                                " but the events' sensor is " + std::to_string(events_.width()) + "x" +
+                                std::to_string(events_.height()));
+  if (f.view >= events_.window_count())
+    throw std::invalid_argument("event loss: view " + std::to_string(f.view) + " has no event window");
+  const uint64_t hw = uint64_t(f.width) * f.height;
+  for (uint32_t i = 0; i < F; ++i)
+    if (f.rgb[i]->size() < hw * 12 || f.grad[i]->size() < hw * 12)
+      throw std::invalid_argument("event loss: frame " + std::to_string(i) + " buffers hold less than 3 x H x W floats");
+  const uint32_t intervals = F - 1;
+  const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
+  counts_.ensure(uint64_t(intervals) * 2 * hw * 4);
+  scratch_.ensure(2 * hw * 4);
+  partials_.ensure(uint64_t(groups) * 16);
+  sums_.ensure(uint64_t(intervals) * 16);
+  ctx_.check_binding_size(uint64_t(intervals) * 2 * hw * 4, "event loss counts");
+
+  // Every interval's events once, into its own plane.
+  cmd.fill(counts_, 0u);
+  for (uint32_t k = 0; k < intervals; ++k) events_.accumulate(cmd, f.view, f.time_at(k), f.time_at(k + 1), counts_, k);
+
+  pairs_ = sample_pairs(F, f.seed);
+  const gpu::Groups g = cmd.linear_groups(groups);
+  for (uint32_t q = 0; q < pairs_.size(); ++q) {
+    const auto [s, j] = pairs_[q];
+    shaderio::EventPairPC pc{};
+    pc.width = f.width;
+    pc.height = f.height;
+    pc.plane_first = s;
+    pc.plane_last = j - 1;
+    pc.theta_pos = options_.theta_pos;
+    pc.theta_neg = options_.theta_neg;
+    pc.eps = options_.eps;
+    pc.norm_floor2 = float(double(options_.norm_floor_rms) * options_.norm_floor_rms * double(hw));
+    pc.grad_scale = weight / float(pairs_.size());
+    pc.value_scale = 1.0f / float(pairs_.size());
+    pc.value_accumulate = q > 0 ? 1u : 0u;
+    pc.value_index = value_offset();
+    pc.pair = q;
+    cmd.dispatch("loss/event_pair", {counts_, *f.rgb[s], *f.rgb[j], scratch_, partials_}, pc, g);
+    shaderio::ReducePC r{};
+    r.coeff0 = glm::vec4(1, 0, 0, 0);
+    r.coeff1 = glm::vec4(0, 1, 0, 0);
+    r.coeff2 = glm::vec4(0, 0, 1, 0);
+    r.n_partials = groups;
+    r.dst = 4 * q;
+    r.n_out = 3;
+    cmd.dispatch("loss/reduce", {partials_, sums_}, r, gpu::Groups{1, 1, 1});
+    cmd.dispatch("loss/event_pair_bwd", {*f.rgb[s], *f.rgb[j], scratch_, sums_, *f.grad[s], *f.grad[j], value_buffer()}, pc, g);
+  }
+}
+
+}  // namespace evflow

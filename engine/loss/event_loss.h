@@ -1,0 +1,56 @@
+// The event loss L_ev^gs (paper Eq. 5; docs/losses.md). For the 2N+1 virtual frames t_0..t_2N of
+// an exposure and each i = 0..2N-1, with t_s drawn uniformly from {t_0, ..., t_i}:
+//
+//   l_i = || E(t_s, t_{i+1}) / ||E|| - D(t_s, t_{i+1}) / ||D|| ||^2,   L = (1 / 2N) sum_i l_i,
+//
+//   E(t_s, t_j) = Θ+ · #positive events - Θ- · #negative events in [t_s, t_j), per pixel,
+//   D(t_s, t_j) = log(eps + Y_j) - log(eps + Y_s),  Y = luminance of the linear render,
+//
+// norms over the whole image. D is "later minus earlier": the direction in which an event's
+// polarity points (the simulator fires +1 when log Y grows; tests/test_event_loss.cpp checks the
+// sign on simulated events). Normalising both sides removes the unknown threshold scale. A norm
+// below sqrt(H·W)·norm_floor_rms is held at that floor, so nearly static frame pairs (the
+// trajectories start at rest) don't turn into huge gradients.
+//
+// GPU work per record: the events of each of the 2N frame intervals are counted once into their
+// own plane (integer atomics, exact), and each pair sums its planes; every reduction is in a
+// fixed order, so the value and the gradients are reproducible on a device.
+#pragma once
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "events/gpu_events.h"
+#include "loss/loss_term.h"
+
+namespace evflow {
+
+struct EventLossOptions {
+  float theta_pos = 0.2f, theta_neg = 0.2f;  // log units per positive / negative event
+  float eps = 1e-3f;                          // L = log(eps + Y), the event model's eps
+  float norm_floor_rms = 1e-3f;               // per-pixel RMS below which a norm is floored
+};
+
+class EventLoss : public ExposureLossTerm {
+ public:
+  // `events` holds one window per training view (ExposureFrames::view indexes it); it must
+  // outlive the term.
+  EventLoss(gpu::Context& ctx, const GpuEvents& events, float weight, EventLossOptions options = {});
+  using ExposureLossTerm::record;
+  void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) override;
+
+  // The pairs (s, j = i + 1) for F frames and a seed: s uniform in {0..i} (deterministic).
+  static std::vector<std::pair<uint32_t, uint32_t>> sample_pairs(uint32_t frames, uint64_t seed);
+  const std::vector<std::pair<uint32_t, uint32_t>>& last_pairs() const { return pairs_; }
+  const EventLossOptions& options() const { return options_; }
+  // Per-pixel counts of the last record, 2 * H * W uints per interval plane (for viewers and tests).
+  const gpu::Buffer& counts() const { return counts_; }
+
+ private:
+  const GpuEvents& events_;
+  EventLossOptions options_;
+  std::vector<std::pair<uint32_t, uint32_t>> pairs_;
+  gpu::Buffer counts_, scratch_, partials_, sums_;
+};
+
+}  // namespace evflow

@@ -1,0 +1,42 @@
+#version 450
+// Event loss, forward part of one pair (loss_layout.h, EventPairPC): E and D per pixel and the
+// workgroup sums of E*D, D*D and E*E.
+#extension GL_GOOGLE_include_directive : require
+#include "loss/loss_layout.h"
+#include "common/dispatch.glsl"
+layout(local_size_x = 256) in;
+layout(std430, binding = 0) readonly buffer Counts { uint event_counts[]; };
+layout(std430, binding = 1) readonly buffer FrameS { float frame_s[]; };  // planar RGB at t_s
+layout(std430, binding = 2) readonly buffer FrameJ { float frame_j[]; };  // planar RGB at t_j
+layout(std430, binding = 3) writeonly buffer Scratch { float scratch[]; };  // [E][D], H*W each
+layout(std430, binding = 4) writeonly buffer Partials { vec4 partials[]; };
+layout(push_constant) uniform PC { EventPairPC pc; };
+#include "loss/ssim_math.glsl"
+#include "loss/event_math.glsl"
+
+// The event side: the interval planes' signed, threshold-weighted counts at pixel p.
+float event_level(uint p, uint hw) {
+  float e = 0.0;
+  for (uint k = pc.plane_first; k <= pc.plane_last; ++k) {
+    uint base = k * 2u * hw;
+    e += pc.theta_pos * float(event_counts[base + p]) - pc.theta_neg * float(event_counts[base + hw + p]);
+  }
+  return e;
+}
+
+void main() {
+  uint hw = pc.width * pc.height;
+  uint p = evf_linear_invocation(kLossGroupSize);
+  vec4 v = vec4(0.0);
+  if (p < hw) {
+    float e = event_level(p, hw);
+    vec3 cs = vec3(frame_s[p], frame_s[hw + p], frame_s[2u * hw + p]);
+    vec3 cj = vec3(frame_j[p], frame_j[hw + p], frame_j[2u * hw + p]);
+    float d = event_log_luma(cj, pc.eps) - event_log_luma(cs, pc.eps);
+    scratch[p] = e;
+    scratch[hw + p] = d;
+    v = vec4(e * d, d * d, e * e, 0.0);
+  }
+  vec4 total = loss_group_sum(v);
+  if (gl_LocalInvocationIndex == 0u) partials[evf_linear_group()] = total;
+}

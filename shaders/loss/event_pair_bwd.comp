@@ -1,0 +1,42 @@
+#version 450
+// Event loss, backward part of one pair (loss_layout.h, EventPairPC): the gradient of
+// l = || E/nE - D/nD ||^2 w.r.t. both frames' RGB, added into their gradient images, and the
+// pair's value.
+#extension GL_GOOGLE_include_directive : require
+#include "loss/loss_layout.h"
+#include "common/dispatch.glsl"
+layout(local_size_x = 256) in;
+layout(std430, binding = 0) readonly buffer FrameS { float frame_s[]; };
+layout(std430, binding = 1) readonly buffer FrameJ { float frame_j[]; };
+layout(std430, binding = 2) readonly buffer Scratch { float scratch[]; };
+layout(std430, binding = 3) readonly buffer Sums { float sums[]; };
+layout(std430, binding = 4) buffer GradS { float grad_s[]; };
+layout(std430, binding = 5) buffer GradJ { float grad_j[]; };
+layout(std430, binding = 6) buffer Values { float values[]; };
+layout(push_constant) uniform PC { EventPairPC pc; };
+#include "loss/event_math.glsl"
+
+void main() {
+  uint hw = pc.width * pc.height;
+  uint p = evf_linear_invocation(kLossGroupSize);
+  float ed = sums[4u * pc.pair], dd = sums[4u * pc.pair + 1u], ee = sums[4u * pc.pair + 2u];
+  bool d_floored = dd < pc.norm_floor2;
+  float nE = sqrt(max(ee, pc.norm_floor2)), nD = sqrt(max(dd, pc.norm_floor2));
+  if (p == 0u) {
+    float l = ee / (nE * nE) + dd / (nD * nD) - 2.0 * ed / (nE * nD);
+    float v = pc.value_scale * l;
+    values[pc.value_index] = pc.value_accumulate != 0u ? values[pc.value_index] + v : v;
+  }
+  if (p >= hw) return;
+  float e = scratch[p], d = scratch[hw + p];
+  // dl/dD_p: 2 (D_p/nD - E_p/nE) / nD, plus, when nD follows D, the norm's share
+  // 2 D_p (ED/(nE nD) - DD/nD^2) / nD^2.
+  float g = 2.0 * (d / nD - e / nE) / nD;
+  if (!d_floored) g += 2.0 * d * (ed / (nE * nD) - dd / (nD * nD)) / (nD * nD);
+  g *= pc.grad_scale;
+  vec3 cs = vec3(frame_s[p], frame_s[hw + p], frame_s[2u * hw + p]);
+  vec3 cj = vec3(frame_j[p], frame_j[hw + p], frame_j[2u * hw + p]);
+  vec3 gj = g * event_log_luma_grad(cj, pc.eps), gs = -g * event_log_luma_grad(cs, pc.eps);
+  grad_j[p] += gj.r; grad_j[hw + p] += gj.g; grad_j[2u * hw + p] += gj.b;
+  grad_s[p] += gs.r; grad_s[hw + p] += gs.g; grad_s[2u * hw + p] += gs.b;
+}

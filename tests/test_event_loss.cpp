@@ -1,0 +1,210 @@
+// The event loss (engine/loss/event_loss.h): value and gradients against the double reference
+// with finite differences, the pair sampling, and the sign convention against the simulator.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+
+#include "camera/trajectory.h"
+#include "events/event_model.h"
+#include "events/gpu_events.h"
+#include "gpu/commands.h"
+#include "gpu_fixture.h"
+#include "loss/event_loss.h"
+#include "reference/event_reference.h"
+
+using namespace evflow;
+
+namespace {
+
+EventStream random_events(uint32_t w, uint32_t h, size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<double> t(n);
+  for (auto& v : t) v = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+  std::sort(t.begin(), t.end());
+  EventStream ev;
+  ev.width = w, ev.height = h;
+  for (size_t i = 0; i < n; ++i)
+    ev.push(uint16_t(rng() % w), uint16_t(rng() % h), t[i], (rng() & 1) ? int8_t(1) : int8_t(-1));
+  return ev;
+}
+
+// Counts per interval [time(k), time(k+1)) on the host, as the reference wants them.
+void host_counts(const EventStream& ev, const ExposureFrames& f, reference::EventLossInputs& in) {
+  const size_t hw = size_t(ev.width) * ev.height;
+  for (size_t k = 0; k + 1 < f.u.size(); ++k) {
+    std::vector<int> pos(hw, 0), neg(hw, 0);
+    auto [a, b] = ev.window(f.time_at(k), f.time_at(k + 1));
+    for (size_t i = a; i < b; ++i) (ev.p[i] > 0 ? pos : neg)[size_t(ev.y[i]) * ev.width + ev.x[i]]++;
+    in.pos.push_back(pos), in.neg.push_back(neg);
+  }
+}
+
+struct Run {
+  double value = 0;
+  std::vector<std::vector<float>> grad;  // per frame, the term's share (initial values removed)
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+};
+
+// Records the term on planar RGB frames; gradients start at a known pattern so that "adds into"
+// is checked too.
+Run run_gpu(const EventStream& ev, const std::vector<std::vector<float>>& frames, const EventLossOptions& opt, float weight,
+            uint64_t seed) {
+  auto& ctx = test::gpu_context();
+  const uint32_t F = uint32_t(frames.size());
+  const size_t n = frames[0].size();
+  GpuEvents gev(ctx, ev, {EventWindow{0.0, 1.0}}, "test events");
+  EventLoss loss(ctx, gev, weight, opt);
+  std::vector<gpu::Buffer> rgb, grad;
+  std::vector<float> init(n);
+  for (size_t i = 0; i < n; ++i) init[i] = 0.01f * float(i % 7);
+  for (uint32_t i = 0; i < F; ++i) {
+    rgb.emplace_back(ctx, n * 4, "frame");
+    rgb.back().write(frames[i]);
+    grad.emplace_back(ctx, n * 4, "frame_grad");
+    grad.back().write(init);
+  }
+  ExposureFrames f;
+  f.width = ev.width, f.height = ev.height, f.t0 = 0.0, f.t1 = 1.0;
+  f.u = ExposureTrajectory::virtual_times(int(F - 1) / 2);
+  for (uint32_t i = 0; i < F; ++i) f.rgb.push_back(&rgb[i]), f.grad.push_back(&grad[i]);
+  f.seed = seed;
+  gpu::Commands cmd(ctx);
+  loss.record(cmd, f);
+  cmd.submit();
+  Run r;
+  r.value = loss.value();
+  r.pairs = loss.last_pairs();
+  for (uint32_t i = 0; i < F; ++i) {
+    auto g = grad[i].read<float>(n);
+    for (size_t k = 0; k < n; ++k) g[k] -= init[k];
+    r.grad.push_back(g);
+  }
+  return r;
+}
+
+void check_against_reference(const EventStream& ev, const std::vector<std::vector<float>>& frames, uint64_t seed) {
+  EventLossOptions opt;
+  opt.theta_pos = 0.2f, opt.theta_neg = 0.3f;
+  const float weight = 0.7f;
+  Run r = run_gpu(ev, frames, opt, weight, seed);
+
+  reference::EventLossInputs in;
+  in.width = ev.width, in.height = ev.height;
+  for (auto& fr : frames) in.frames.emplace_back(fr.begin(), fr.end());
+  ExposureFrames f;
+  f.t0 = 0, f.t1 = 1, f.u = ExposureTrajectory::virtual_times(int(frames.size() - 1) / 2);
+  host_counts(ev, f, in);
+  in.pairs = r.pairs;
+  in.theta_pos = opt.theta_pos, in.theta_neg = opt.theta_neg, in.eps = opt.eps, in.norm_floor_rms = opt.norm_floor_rms;
+  const double ref_value = reference::event_loss(in);
+  INFO("gpu " << r.value << " reference " << ref_value);
+  REQUIRE(std::abs(r.value - ref_value) <= 1e-4 * std::max(1.0, ref_value));
+
+  // Central differences of the double reference at sampled (frame, element) entries.
+  std::mt19937 rng(uint32_t(seed) + 5);
+  double max_scale = 0;
+  for (auto& g : r.grad)
+    for (float v : g) max_scale = std::max(max_scale, double(std::abs(v)) / weight);
+  int bad = 0, checked = 0;
+  for (int k = 0; k < 80; ++k) {
+    const size_t fi = rng() % frames.size(), e = rng() % frames[0].size();
+    const double h = 1e-6, x0 = in.frames[fi][e];
+    in.frames[fi][e] = x0 + h;
+    const double lp = reference::event_loss(in);
+    in.frames[fi][e] = x0 - h;
+    const double lm = reference::event_loss(in);
+    in.frames[fi][e] = x0;
+    const double fd = (lp - lm) / (2 * h), gpu = double(r.grad[fi][e]) / weight;
+    ++checked;
+    if (std::abs(gpu - fd) > 2e-3 * std::abs(fd) + 1e-4 * max_scale) {
+      ++bad;
+      UNSCOPED_INFO("frame " << fi << " element " << e << ": gpu " << gpu << " fd " << fd);
+    }
+  }
+  REQUIRE(checked == 80);
+  REQUIRE(bad == 0);
+  REQUIRE(max_scale > 0);
+}
+
+std::vector<std::vector<float>> random_frames(uint32_t w, uint32_t h, uint32_t F, uint32_t seed, bool identical) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.05f, 0.95f);
+  std::vector<std::vector<float>> frames(F, std::vector<float>(size_t(3) * w * h));
+  for (uint32_t i = 0; i < F; ++i)
+    for (auto& v : frames[i]) v = u(rng);
+  if (identical)
+    for (uint32_t i = 1; i < F; ++i) frames[i] = frames[0];
+  return frames;
+}
+
+}  // namespace
+
+TEST_CASE("event loss pairs: t_s is drawn from t_0..t_i for every i, deterministically", "[events][loss]") {
+  std::vector<int> seen(7, 0);
+  for (uint64_t seed = 0; seed < 200; ++seed) {
+    auto p = EventLoss::sample_pairs(7, seed);
+    REQUIRE(p == EventLoss::sample_pairs(7, seed));
+    REQUIRE(p.size() == 6);
+    for (uint32_t i = 0; i < 6; ++i) {
+      REQUIRE(p[i].second == i + 1);
+      REQUIRE(p[i].first <= i);
+      if (i == 5) seen[p[i].first]++;
+    }
+  }
+  for (int s = 0; s < 6; ++s) CHECK(seen[s] > 10);  // every start time occurs
+}
+
+TEST_CASE("event loss value and frame gradients match the double reference (finite differences)", "[events][loss]") {
+  const uint32_t W = 24, H = 16;
+  auto ev = random_events(W, H, 4000, 3);
+  SECTION("moving frames") { check_against_reference(ev, random_frames(W, H, 7, 11, false), 17); }
+  SECTION("identical frames: the render-side norm sits on its floor") {
+    check_against_reference(ev, random_frames(W, H, 7, 12, true), 18);
+  }
+  SECTION("five frames (N = 2)") { check_against_reference(ev, random_frames(W, H, 5, 13, false), 19); }
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("event loss sign: renders that follow the simulator's events score near 0, the opposite convention near 4",
+          "[events][loss]") {
+  // A pattern drifting 10 px over the exposure, fed to the event simulator with exact
+  // thresholds; the frames are the same pattern at the virtual times.
+  const uint32_t W = 48, H = 32, F = 7;
+  auto I = [](double x, double y, double t) {
+    return 0.45 + 0.35 * std::sin(2 * M_PI * (x - 10.0 * t) / 14.0 + 0.2 * y) * std::cos(0.05 * (x + 10.0 * t));
+  };
+  events::EventSimulator sim(W, H, events::EventModelParams::ideal(), 5);
+  std::vector<double> luma(size_t(W) * H);
+  for (int s = 0; s <= 400; ++s) {
+    const double t = s / 400.0;
+    for (uint32_t y = 0; y < H; ++y)
+      for (uint32_t x = 0; x < W; ++x) luma[size_t(y) * W + x] = I(x + 0.5, y + 0.5, t);
+    sim.add_frame(luma.data(), t);
+  }
+  EventStream ev = sim.take_events();
+  REQUIRE(ev.size() > 2000);
+  const auto u = ExposureTrajectory::virtual_times(3);
+  std::vector<std::vector<float>> forward(F);
+  for (uint32_t i = 0; i < F; ++i) {
+    forward[i].resize(size_t(3) * W * H);
+    for (uint32_t c = 0; c < 3; ++c)
+      for (uint32_t y = 0; y < H; ++y)
+        for (uint32_t x = 0; x < W; ++x) forward[i][(size_t(c) * H + y) * W + x] = float(I(x + 0.5, y + 0.5, u[i]));
+  }
+  // The opposite convention (D = earlier minus later) is the same as flipping every polarity.
+  EventStream flipped = ev;
+  for (auto& p : flipped.p) p = int8_t(-p);
+  EventLossOptions opt;  // thresholds 0.2 / 0.2 as the ideal simulator
+  double fwd = 0, rev = 0;
+  for (uint64_t seed = 0; seed < 4; ++seed) {
+    fwd += run_gpu(ev, forward, opt, 1.0f, seed).value / 4;
+    rev += run_gpu(flipped, forward, opt, 1.0f, seed).value / 4;
+  }
+  INFO("loss with the events as simulated " << fwd << ", with the opposite sign convention " << rev);
+  CHECK(fwd < 0.3);  // cosine > 0.85 between events and log-luminance change
+  CHECK(rev > 3.4);
+  test::require_no_validation_messages();
+}
