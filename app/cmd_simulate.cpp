@@ -1,4 +1,5 @@
 // evflow simulate: render a blurry multi-view dataset with events and ground truth (engine/sim).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -15,7 +16,8 @@ static const char* kSimulateHelp =
     "Renders a scene (glTF 2.0 or the built-in default) from a camera rig with shaken exposures and\n"
     "writes a dataset in our layout (docs/datasets.md) plus ground truth (docs/simulator.md).\n\n"
     "  --out DIR                 output folder (default: sim_dataset)\n"
-    "  --scene FILE              .gltf/.glb scene (default: the built-in default scene)\n"
+    "  --scene FILE|NAME         .gltf/.glb scene, or a built-in scene: default, gallery, workshop\n"
+    "                            (default: default)\n"
     "  --write-default-scene F   write the default scene as glTF (.glb or .gltf) and exit\n"
     "  --width N --height N      image and sensor size (default: 346 x 260)\n"
     "  --fov DEG                 vertical field of view (default: 50)\n"
@@ -95,7 +97,9 @@ static int run_simulate(const Args& a) {
   if (!p.positional().empty()) throw std::invalid_argument("unexpected argument '" + p.positional()[0] + "'");
 
   const auto start = std::chrono::steady_clock::now();
-  sim::Scene scene = scene_path.empty() ? sim::make_default_scene() : sim::load_gltf(scene_path);
+  auto builtin = sim::builtin_scene_names();
+  const bool is_builtin = scene_path.empty() || std::find(builtin.begin(), builtin.end(), scene_path) != builtin.end();
+  sim::Scene scene = is_builtin ? sim::make_builtin_scene(scene_path.empty() ? "default" : scene_path) : sim::load_gltf(scene_path);
   gpu::Context ctx(o);
   std::printf("simulate: scene %s (%zu triangles, %zu textures), %ux%u, %d training + %d novel views, device %s\n",
               scene.source.c_str(), scene.triangle_count(), scene.textures.size(), sp.width, sp.height, sp.train_views,

@@ -468,3 +468,18 @@ TEST_CASE("sim dataset: the written dataset loads back", "[sim][gpu]") {
   test::require_no_validation_messages();
 }
 
+
+TEST_CASE("built-in scenes: the default room with other textures, unknown names refused", "[sim]") {
+  const sim::Scene def = sim::make_builtin_scene("default");
+  for (const char* name : {"gallery", "workshop"}) {
+    const sim::Scene s = sim::make_builtin_scene(name);
+    REQUIRE(s.source == name);
+    REQUIRE(s.materials.size() == def.materials.size());
+    REQUIRE(s.textures.size() == def.textures.size());
+    int differ = 0;
+    for (size_t i = 0; i < s.textures.size(); ++i) differ += s.textures[i].rgba != def.textures[i].rgba;
+    CHECK(differ >= 5);  // most surfaces look different
+  }
+  REQUIRE(sim::builtin_scene_names().size() == 3);
+  REQUIRE_THROWS_WITH(sim::make_builtin_scene("atrium"), Catch::Contains("unknown built-in scene 'atrium'"));
+}

@@ -601,11 +601,14 @@ Texture dark_texture() {
 
 }  // namespace
 
-Scene make_default_scene() {
+namespace {
+
+// The room of the built-in scenes; `textures` fills its seven material slots: back-wall poster,
+// floor, right wall, noise boxes, grating, dark (left wall and a box), sign.
+Scene make_room(const std::string& source, std::vector<Texture> textures) {
   Scene s;
-  s.source = "default";
-  s.textures = {text_texture(1, 0.85, 0.03, {1.0, 0.97, 0.9}), checker_texture(), brick_texture(), noise_texture(3),
-                grating_texture(), dark_texture(), text_texture(2, 0.04, 0.9, {1.0, 0.85, 0.5})};
+  s.source = source;
+  s.textures = std::move(textures);
   auto mat = [&](const char* name, int tex, std::array<float, 4> f = {1, 1, 1, 1}) {
     s.materials.push_back(Material{name, f, tex});
     return uint32_t(s.materials.size() - 1);
@@ -633,6 +636,28 @@ Scene make_default_scene() {
   s.view_height = 1.0f;
   s.validate();
   return s;
+}
+
+}  // namespace
+
+Scene make_default_scene() {
+  return make_room("default", {text_texture(1, 0.85, 0.03, {1.0, 0.97, 0.9}), checker_texture(), brick_texture(),
+                               noise_texture(3), grating_texture(), dark_texture(), text_texture(2, 0.04, 0.9, {1.0, 0.85, 0.5})});
+}
+
+std::vector<std::string> builtin_scene_names() { return {"default", "gallery", "workshop"}; }
+
+Scene make_builtin_scene(const std::string& name) {
+  if (name == "default") return make_default_scene();
+  // Same room, other surfaces: fine print everywhere and bright noise (high-frequency texture).
+  if (name == "gallery")
+    return make_room("gallery", {text_texture(11, 0.9, 0.05, {0.95, 0.95, 1.0}), noise_texture(17), text_texture(12, 0.1, 0.95, {0.7, 1.0, 0.8}),
+                                 brick_texture(), text_texture(13, 0.8, 0.1, {1.0, 0.9, 0.8}), noise_texture(23), grating_texture()});
+  // Same room, other surfaces: large smooth shapes, coarse bricks and gratings, dark corners.
+  if (name == "workshop")
+    return make_room("workshop", {brick_texture(), grating_texture(), checker_texture(), dark_texture(), checker_texture(),
+                                  brick_texture(), noise_texture(31)});
+  throw std::invalid_argument("unknown built-in scene '" + name + "' (default, gallery, workshop)");
 }
 
 }  // namespace evflow::sim

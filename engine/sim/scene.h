@@ -66,5 +66,9 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path);
 // dark wall and a bright one) with boxes at several depths; procedural textures with fine detail.
 // Cameras look at it from +z. Deterministic.
 Scene make_default_scene();
+// Built-in scenes by name: "default" (the above) and two variants of its room with other
+// textures ("gallery": fine print and noise; "workshop": coarse bricks, gratings, dark corners).
+Scene make_builtin_scene(const std::string& name);
+std::vector<std::string> builtin_scene_names();
 
 }  // namespace evflow::sim
