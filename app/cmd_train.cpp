@@ -103,6 +103,13 @@ static int run_train(const Args& a) {
   for (auto& kv : overrides) cfg.set(kv.substr(0, kv.find('=')), kv.substr(kv.find('=') + 1));
 
   io::Dataset data = io::load_dataset(data_dir);
+  if (view) {
+    if (vo.view < 0 || size_t(vo.view) >= data.train.size())
+      throw std::invalid_argument("--view-index " + std::to_string(vo.view) + ": the dataset has " +
+                                  std::to_string(data.train.size()) + " training views (0.." +
+                                  std::to_string(data.train.size() - 1) + ")");
+    viewer::TrainView::parse_script(vo.script);  // throws on a bad script before a window opens
+  }
   fs::create_directories(out);
   nlohmann::json saved = cfg.to_json();
   saved["data"] = fs::absolute(data_dir).string();

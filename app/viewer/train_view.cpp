@@ -94,6 +94,26 @@ int TrainView::key_from_name(const std::string& n) {
   throw std::invalid_argument("--view-script: unknown key '" + n + "' (space, n, right, left, o, r, 1..9)");
 }
 
+std::map<int, std::vector<int>> TrainView::parse_script(const std::string& script) {
+  std::map<int, std::vector<int>> out;
+  std::stringstream ss(script);
+  for (std::string item; std::getline(ss, item, ',');) {
+    if (item.empty()) continue;
+    const size_t colon = item.find(':');
+    int frame = 0;
+    try {
+      if (colon == std::string::npos) throw 1;
+      size_t pos = 0;
+      frame = std::stoi(item.substr(0, colon), &pos);
+      if (pos != colon || frame < 1) throw 1;
+    } catch (...) {
+      throw std::invalid_argument("--view-script: '" + item + "' is not FRAME:KEY with FRAME >= 1 (e.g. 3:space,5:n)");
+    }
+    out[frame].push_back(key_from_name(item.substr(colon + 1)));
+  }
+  return out;
+}
+
 TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data, const TrainViewOptions& options,
                      const volatile std::sig_atomic_t* interrupted)
     : display_(display), trainer_(trainer), data_(data), opt_(options), interrupted_(interrupted), ctx_(display.context()),
@@ -109,22 +129,7 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
   shown_.events = gpu::Buffer(ctx_, 16, "view_events");
   shown_.mid = gpu::Buffer(ctx_, 16, "view_mid");
   paused_ = opt_.start_paused;
-  // Script: "FRAME:KEY,FRAME:KEY".
-  std::stringstream ss(opt_.script);
-  for (std::string item; std::getline(ss, item, ',');) {
-    if (item.empty()) continue;
-    const size_t colon = item.find(':');
-    int frame = 0;
-    try {
-      if (colon == std::string::npos) throw 1;
-      size_t pos = 0;
-      frame = std::stoi(item.substr(0, colon), &pos);
-      if (pos != colon || frame < 1) throw 1;
-    } catch (...) {
-      throw std::invalid_argument("--view-script: '" + item + "' is not FRAME:KEY with FRAME >= 1 (e.g. 3:space,5:n)");
-    }
-    script_[frame].push_back(key_from_name(item.substr(colon + 1)));
-  }
+  script_ = parse_script(opt_.script);
 
   const bool blur = trainer_.config().mode == "blur";
   panels_.push_back(std::make_unique<BlurryPanel>());

@@ -101,6 +101,8 @@ class TrainView {
   // The key handler (window keys and the test script). Keys are documented in docs/viewer.md.
   void press(int key);
   static int key_from_name(const std::string& name);  // "space", "n", "right", "1", ...; throws on unknown names
+  // "FRAME:KEY,..." -> frame -> keys; throws std::invalid_argument naming the bad item.
+  static std::map<int, std::vector<int>> parse_script(const std::string& script);
 
  private:
   void draw_frame();
