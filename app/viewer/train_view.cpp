@@ -137,7 +137,16 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
   panels_.push_back(std::make_unique<VirtualFramesPanel>());
   panels_.push_back(std::make_unique<EventsPanel>());
 
-  home_ = initial_orbit(trainer_.cloud());
+  // The free camera starts at the first shown training view, aimed at the cloud's centre depth.
+  {
+    const Camera& cam = data_.train[view_].camera;
+    const Orbit centre = initial_orbit(trainer_.cloud());
+    const auto c = cam.center();
+    double depth = 0;
+    for (int k = 0; k < 3; ++k) depth += (centre.target[k] - c[k]) * cam.R[6 + k];
+    if (!(depth > 0)) depth = data_.near > 0 && data_.far > data_.near ? 0.5 * (data_.near + data_.far) : centre.distance;
+    home_ = orbit_from_camera(cam, depth);
+  }
   display_.input().orbit = home_;
   display_.input().on_key = [this](int key, int) { press(key); };
 
