@@ -75,6 +75,22 @@ inline Camera initial_view_camera(const GaussianCloud& cloud, uint32_t width, ui
   return orbit_camera(initial_orbit(cloud), width, height);
 }
 
+// An orbit whose eye is the camera's centre and which looks along the camera's viewing axis,
+// with the camera's vertical field of view (roll is dropped: an orbit keeps world up up). The
+// target lies `distance` ahead of the eye. `evflow train --view` starts at a training view.
+inline Orbit orbit_from_camera(const Camera& cam, double distance) {
+  Orbit o;
+  const std::array<double, 3> f{cam.R[6], cam.R[7], cam.R[8]};  // camera z axis in world
+  o.pitch = std::clamp(std::asin(std::clamp(f[1], -1.0, 1.0)), -kMaxPitchRad, kMaxPitchRad);
+  o.yaw = std::atan2(f[0], f[2]);
+  o.distance = std::max(distance, 1e-4);
+  if (cam.fy > 0 && cam.height > 0) o.fov_y_deg = 2.0 * std::atan(0.5 * cam.height / cam.fy) * 180.0 / M_PI;
+  const auto c = cam.center();
+  const auto fw = orbit_forward(o);
+  for (int k = 0; k < 3; ++k) o.target[k] = c[k] + o.distance * fw[k];
+  return o;
+}
+
 // Controls, as pure updates of an orbit (the viewer feeds them GLFW input).
 // Drag: dx, dy in pixels; a drag across the window height turns by about 180 degrees.
 inline void orbit_rotate(Orbit& o, double dx_px, double dy_px, uint32_t height) {

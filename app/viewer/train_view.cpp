@@ -1,0 +1,495 @@
+#include "viewer/train_view.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "viewer/event_image.h"
+#include "viewer/view_camera.h"
+
+namespace evflow::viewer {
+
+namespace {
+
+double now_s() {
+  using namespace std::chrono;
+  return duration<double>(steady_clock::now().time_since_epoch()).count();
+}
+
+constexpr uint32_t kBackground = rgba(32, 32, 32);
+constexpr uint32_t kLabelColor = rgba(230, 230, 230);
+constexpr uint32_t kOverlayColor = rgba(255, 255, 120);
+
+std::string fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+double psnr(const std::vector<float>& a, const std::vector<float>& b) {
+  double mse = 0;
+  for (size_t i = 0; i < a.size(); ++i) mse += double(a[i] - b[i]) * double(a[i] - b[i]);
+  mse /= double(std::max<size_t>(a.size(), 1));
+  return mse > 0 ? -10.0 * std::log10(mse) : 99.0;
+}
+
+// The panels of issue 6. Flow and LDI panels will be appended the same way.
+class BlurryPanel : public Panel {
+ public:
+  BlurryPanel() : Panel("blurry", GLFW_KEY_1) {}
+  std::string label(const ShownView& s) const override { return "1 BLURRY INPUT"; }
+  std::vector<Tile> tiles(const ShownView& s) const override { return {{&s.blurry, s.width, s.height}}; }
+};
+
+class MidPanel : public Panel {
+ public:
+  explicit MidPanel(bool blur) : Panel("mid", GLFW_KEY_2), blur_(blur) {}
+  std::string label(const ShownView& s) const override {
+    return std::string(blur_ ? "2 MID-EXPOSURE" : "2 RENDER") + " STEP " + std::to_string(s.step);
+  }
+  std::vector<Tile> tiles(const ShownView& s) const override { return {{&s.mid, s.width, s.height}}; }
+
+ private:
+  bool blur_;
+};
+
+class VirtualFramesPanel : public Panel {
+ public:
+  VirtualFramesPanel() : Panel("virtual", GLFW_KEY_3) {}
+  bool available(const ShownView& s) const override { return !s.frames.empty(); }
+  std::string label(const ShownView& s) const override {
+    return "3 VIRTUAL FRAMES X" + std::to_string(s.frames.size());
+  }
+  std::vector<Tile> tiles(const ShownView& s) const override {
+    std::vector<Tile> t;
+    for (auto& f : s.frames) t.push_back({&f, s.width, s.height});
+    return t;
+  }
+};
+
+class EventsPanel : public Panel {
+ public:
+  EventsPanel() : Panel("events", GLFW_KEY_4) {}
+  std::string label(const ShownView& s) const override {
+    if (!s.has_events) return "4 EVENTS: NONE IN DATASET";
+    return "4 EVENTS +" + std::to_string(s.events_pos) + " -" + std::to_string(s.events_neg);
+  }
+  std::vector<Tile> tiles(const ShownView& s) const override { return {{&s.events, s.events_w, s.events_h}}; }
+};
+
+}  // namespace
+
+int TrainView::key_from_name(const std::string& n) {
+  if (n == "space") return GLFW_KEY_SPACE;
+  if (n == "n") return GLFW_KEY_N;
+  if (n == "right" || n == "]") return GLFW_KEY_RIGHT;
+  if (n == "left" || n == "[") return GLFW_KEY_LEFT;
+  if (n == "o") return GLFW_KEY_O;
+  if (n == "r") return GLFW_KEY_R;
+  if (n.size() == 1 && n[0] >= '1' && n[0] <= '9') return GLFW_KEY_1 + (n[0] - '1');
+  throw std::invalid_argument("--view-script: unknown key '" + n + "' (space, n, right, left, o, r, 1..9)");
+}
+
+std::map<int, std::vector<int>> TrainView::parse_script(const std::string& script) {
+  std::map<int, std::vector<int>> out;
+  std::stringstream ss(script);
+  for (std::string item; std::getline(ss, item, ',');) {
+    if (item.empty()) continue;
+    const size_t colon = item.find(':');
+    int frame = 0;
+    try {
+      if (colon == std::string::npos) throw 1;
+      size_t pos = 0;
+      frame = std::stoi(item.substr(0, colon), &pos);
+      if (pos != colon || frame < 1) throw 1;
+    } catch (...) {
+      throw std::invalid_argument("--view-script: '" + item + "' is not FRAME:KEY with FRAME >= 1 (e.g. 3:space,5:n)");
+    }
+    out[frame].push_back(key_from_name(item.substr(colon + 1)));
+  }
+  return out;
+}
+
+TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data, const TrainViewOptions& options,
+                     const volatile std::sig_atomic_t* interrupted)
+    : display_(display), trainer_(trainer), data_(data), opt_(options), interrupted_(interrupted), ctx_(display.context()),
+      cmd_(ctx_), raster_(ctx_), canvas_(ctx_, cmd_) {
+  if (data_.train.empty()) throw std::invalid_argument("train --view: the dataset has no training views");
+  if (opt_.view < 0 || size_t(opt_.view) >= data_.train.size())
+    throw std::invalid_argument("--view-index " + std::to_string(opt_.view) + ": the dataset has " +
+                                std::to_string(data_.train.size()) + " training views (0.." +
+                                std::to_string(data_.train.size() - 1) + ")");
+  if (!(opt_.budget > 0 && opt_.budget <= 1)) throw std::invalid_argument("--view-budget must be in (0, 1]");
+  view_ = uint32_t(opt_.view);
+  shown_.blurry = gpu::Buffer(ctx_, 16, "view_blurry");
+  shown_.events = gpu::Buffer(ctx_, 16, "view_events");
+  shown_.mid = gpu::Buffer(ctx_, 16, "view_mid");
+  paused_ = opt_.start_paused;
+  script_ = parse_script(opt_.script);
+
+  const bool blur = trainer_.config().mode == "blur";
+  panels_.push_back(std::make_unique<BlurryPanel>());
+  panels_.push_back(std::make_unique<MidPanel>(blur));
+  panels_.push_back(std::make_unique<VirtualFramesPanel>());
+  panels_.push_back(std::make_unique<EventsPanel>());
+
+  // The free camera starts at the first shown training view, aimed at the cloud's centre depth.
+  {
+    const Camera& cam = data_.train[view_].camera;
+    const Orbit centre = initial_orbit(trainer_.cloud());
+    const auto c = cam.center();
+    double depth = 0;
+    for (int k = 0; k < 3; ++k) depth += (centre.target[k] - c[k]) * cam.R[6 + k];
+    if (!(depth > 0)) depth = data_.near > 0 && data_.far > data_.near ? 0.5 * (data_.near + data_.far) : centre.distance;
+    home_ = orbit_from_camera(cam, depth);
+  }
+  display_.input().orbit = home_;
+  display_.input().on_key = [this](int key, int) { press(key); };
+
+  start_ = last_mark_ = last_poll_ = next_frame_ = now_s();
+  apply_script(1);
+  draw_frame();  // something to look at before the first (possibly long) step
+}
+
+TrainView::~TrainView() {
+  try {
+    close();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "train --view: %s\n", e.what());
+  }
+  display_.input().on_key = nullptr;
+}
+
+void TrainView::press(int key) {
+  switch (key) {
+    case GLFW_KEY_SPACE:
+      paused_ = !paused_;
+      step_requests_ = 0;
+      break;
+    case GLFW_KEY_N:
+      if (!paused_) paused_ = true;
+      else ++step_requests_;
+      break;
+    case GLFW_KEY_RIGHT:
+    case GLFW_KEY_RIGHT_BRACKET:
+      view_ = uint32_t((view_ + 1) % data_.train.size());
+      break;
+    case GLFW_KEY_LEFT:
+    case GLFW_KEY_LEFT_BRACKET:
+      view_ = uint32_t((view_ + data_.train.size() - 1) % data_.train.size());
+      break;
+    case GLFW_KEY_O:
+      overlay_ = !overlay_;
+      break;
+    case GLFW_KEY_R:
+      display_.input().orbit = home_;
+      break;
+    default:
+      for (auto& p : panels_)
+        if (p->key() == key) p->visible = !p->visible;
+  }
+}
+
+void TrainView::apply_script(int frame) {
+  auto it = script_.find(frame);
+  if (it == script_.end()) return;
+  for (int k : it->second) press(k);
+}
+
+void TrainView::poll() {
+  glfwPollEvents();
+  const double t = now_s();
+  display_.fly(std::min(t - last_poll_, 0.1));
+  last_poll_ = t;
+  if (display_.should_close()) close();
+}
+
+void TrainView::before_step() {
+  if (!open_) return;
+  poll();
+  auto interrupted = [&] { return interrupted_ && *interrupted_; };
+  bool waited = false;
+  while (open_ && paused_ && step_requests_ == 0 && !interrupted()) {
+    waited = true;
+    const double t = now_s();
+    if (t >= next_frame_) {
+      draw_frame();
+    } else {
+      glfwWaitEventsTimeout(std::min(next_frame_ - t, 0.1));
+    }
+    poll();
+  }
+  if (step_requests_ > 0) --step_requests_;
+  // Time spent paused is neither training time nor charged to the budget.
+  if (waited) last_mark_ = now_s();
+}
+
+void TrainView::after_step(const StepStats& st) {
+  const double t = now_s();
+  last_step_ = st.step;
+  if (!st.skipped) {
+    last_loss_ = st.loss;
+    loss_ema_ = loss_ema_ < 0 ? st.loss : 0.9 * loss_ema_ + 0.1 * st.loss;
+  }
+  if (!open_) return;
+  // Credit: budget x wall time since the last mark (viewer time included: the share is of the
+  // whole), capped so that a long stretch without frames does not buy a burst of them.
+  training_wall_s_ += t - last_mark_;
+  credit_ = std::min(credit_ + opt_.budget * (t - last_mark_), 0.1);
+  if (last_step_time_ > 0) {
+    const double its = 1.0 / std::max(t - last_step_time_, 1e-9);
+    its_ema_ = its_ema_ > 0 ? 0.8 * its_ema_ + 0.2 * its : its;
+  }
+  last_step_time_ = t;
+  last_mark_ = t;
+  poll();
+  if (!open_) return;
+  const bool due = opt_.fps_cap <= 0 || t >= next_frame_;
+  if (paused_ || (credit_ >= 0 && due)) draw_frame();
+}
+
+void TrainView::after_training() {
+  training_done_ = true;
+  while (open_ && ((opt_.frames > 0 && frames_shown_ < opt_.frames) || opt_.hold)) {
+    if (interrupted_ && *interrupted_) break;
+    const double t = now_s();
+    if (t >= next_frame_) draw_frame();
+    else glfwWaitEventsTimeout(std::min(next_frame_ - t, 0.1));
+    poll();
+  }
+  close();
+}
+
+// Re-renders what the side panels show: the view's inputs when the view changed, the renders
+// when the view changed or training advanced (at most every refresh_s while training runs).
+void TrainView::refresh_content(bool force) {
+  const io::View& view = data_.train[view_];
+  const bool new_view = !shown_.inputs_ready || shown_.view != view_;
+  const uint32_t step = trainer_.current_step();
+  const bool running = !paused_ && !training_done_;
+  const bool stale = shown_.step != step && (!running || now_s() - last_refresh_ >= opt_.refresh_s);
+  if (!new_view && !stale && !force) return;
+  const uint32_t W = view.camera.width, H = view.camera.height;
+  const size_t n = size_t(W) * H * 3;
+  if (new_view) {
+    shown_.view = view_;
+    shown_.width = W;
+    shown_.height = H;
+    if (view.blurry.width != W || view.blurry.height != H)
+      throw std::runtime_error("train --view: view '" + view.name + "': blurry image " + std::to_string(view.blurry.width) + "x" +
+                               std::to_string(view.blurry.height) + " differs from its camera's " + std::to_string(W) +
+                               "x" + std::to_string(H));
+    shown_.blurry.ensure(n * 4);
+    shown_.blurry.write(io::planar_rgb(view.blurry));
+    EventImage ev = event_image(data_, view_);
+    shown_.events_w = ev.width;
+    shown_.events_h = ev.height;
+    shown_.events_pos = ev.positive;
+    shown_.events_neg = ev.negative;
+    shown_.has_events = ev.has_events;
+    shown_.events.ensure(ev.rgb.size() * 4);
+    shown_.events.write(ev.rgb);
+    shown_.inputs_ready = true;
+  }
+  // Renders, with the settings of Trainer::render.
+  RenderSettings s;
+  s.background = trainer_.config().background;
+  s.antialiased = trainer_.config().antialiased;
+  const auto& trajectories = trainer_.trajectories();
+  const bool blur = trainer_.config().mode == "blur" && view_ < trajectories.size();
+  const std::vector<float> target =
+      io::planar_rgb(trainer_.config().target == "sharp" && view.sharp_mid ? *view.sharp_mid : view.blurry);
+  std::vector<float> model(n, 0.f), mid;
+  shown_.mid.ensure(n * 4);
+  if (blur) {
+    shown_.times = ExposureTrajectory::virtual_times(int(trainer_.config().virtual_frames));
+    while (shown_.frames.size() < shown_.times.size())
+      shown_.frames.emplace_back(ctx_, n * 4, "view_frame" + std::to_string(shown_.frames.size()));
+    shown_.frames.resize(shown_.times.size());
+    bool mid_done = false;
+    for (size_t i = 0; i < shown_.times.size(); ++i) {
+      raster_.forward(trainer_.params(), trajectories[view_].camera_at(shown_.times[i]), s);
+      shown_.frames[i].ensure(n * 4);
+      cmd_.copy(raster_.outputs().rgb, shown_.frames[i], n * 4);
+      if (shown_.times[i] == 0.5) {
+        cmd_.copy(raster_.outputs().rgb, shown_.mid, n * 4);
+        mid_done = true;
+      }
+      cmd_.submit();
+      const std::vector<float> img = raster_.outputs().rgb.read<float>(n);
+      if (shown_.times[i] == 0.5) mid = img;
+      for (size_t k = 0; k < n; ++k) model[k] += img[k] / float(shown_.times.size());
+    }
+    if (!mid_done) {
+      raster_.forward(trainer_.params(), trajectories[view_].camera_at(0.5), s);
+      cmd_.copy(raster_.outputs().rgb, shown_.mid, n * 4);
+      cmd_.submit();
+      mid = raster_.outputs().rgb.read<float>(n);
+    }
+  } else {
+    shown_.times.clear();
+    shown_.frames.clear();
+    raster_.forward(trainer_.params(), view.camera, s);
+    cmd_.copy(raster_.outputs().rgb, shown_.mid, n * 4);
+    cmd_.submit();
+    mid = raster_.outputs().rgb.read<float>(n);
+    model = mid;
+  }
+  shown_.psnr = psnr(model, target);
+  shown_.psnr_mid_sharp = view.sharp_mid ? psnr(mid, io::planar_rgb(*view.sharp_mid)) : -1;
+  shown_.step = step;
+  last_refresh_ = now_s();
+  for (auto& p : panels_) p->refresh(shown_);
+}
+
+void TrainView::draw_frame() {
+  const double t0 = now_s();
+  if (!display_.sync_swapchain()) {  // minimised: nothing to draw
+    next_frame_ = t0 + 0.1;
+    return;
+  }
+  gpu::Swapchain& sc = display_.swapchain();
+  const uint32_t W = sc.width(), H = sc.height();
+  canvas_.resize(W, H, sc.bgr());
+  canvas_.set_text_scale(H >= 600 ? 2 : 1);
+  const uint32_t lh = canvas_.line_height();
+
+  refresh_content(false);
+  std::vector<Panel*> shown;
+  for (auto& p : panels_)
+    if (p->visible && p->available(shown_)) shown.push_back(p.get());
+  const TrainLayout layout = train_layout(W, H, uint32_t(shown.size()), lh + 2);
+  main_rect_ = layout.main;
+
+  // The free camera's view, rendered at the size it is shown.
+  RenderSettings s;
+  s.background = trainer_.config().background;
+  s.antialiased = trainer_.config().antialiased;
+  const Rect& m = layout.main;
+  if (!m.empty()) raster_.forward(trainer_.params(), orbit_camera(display_.input().orbit, m.w, m.h), s);
+
+  canvas_.fill({0, 0, W, H}, kBackground);
+  if (!m.empty()) canvas_.blit(raster_.outputs().rgb, m.w, m.h, m);
+  last_tiles_.clear();
+  for (size_t i = 0; i < shown.size(); ++i) {
+    const Rect& lab = layout.labels[i];
+    std::string text = shown[i]->label(shown_);
+    const size_t max_chars = lab.w / (shaderio::kGlyphCellW * canvas_.text_scale());
+    if (text.size() > max_chars) text.resize(max_chars);
+    canvas_.text(lab.x + 1, lab.y + 1, text, kLabelColor);
+    const std::vector<Tile> tiles = shown[i]->tiles(shown_);
+    std::vector<std::pair<Rect, Tile>> placed;
+    if (!tiles.empty()) {
+      const std::vector<Rect> rects = tile_grid(layout.boxes[i], uint32_t(tiles.size()), tiles[0].width, tiles[0].height);
+      for (size_t k = 0; k < rects.size() && k < tiles.size(); ++k) {
+        canvas_.blit(*tiles[k].rgb, tiles[k].width, tiles[k].height, rects[k]);
+        placed.push_back({rects[k], tiles[k]});
+      }
+    }
+    last_tiles_.push_back({shown[i]->id(), std::move(placed)});
+  }
+  if (overlay_) {
+    const io::View& view = data_.train[view_];
+    const TrainConfig& cfg = trainer_.config();
+    const double share = training_wall_s_ > 0 ? viewer_s_ / training_wall_s_ : 0.0;
+    std::vector<std::string> lines;
+    lines.push_back("STEP " + std::to_string(trainer_.current_step()) + "/" + std::to_string(cfg.iterations) +
+                    (training_done_ ? " DONE" : paused_ ? " PAUSED" : "") + "  LOSS " +
+                    (loss_ema_ < 0 ? std::string("-") : fmt("%.4f", loss_ema_)));
+    lines.push_back(fmt("%.2f IT/S", its_ema_) + "  GAUSSIANS " + std::to_string(trainer_.params().count) + "  VIEWER " +
+                    fmt("%.0f%%", 100.0 * share));
+    lines.push_back("VIEW " + std::to_string(view_ + 1) + "/" + std::to_string(data_.train.size()) + " " + view.name +
+                    "  PSNR " + fmt("%.2f DB", shown_.psnr) +
+                    (shown_.psnr_mid_sharp >= 0 ? "  MID VS SHARP " + fmt("%.2f DB", shown_.psnr_mid_sharp) : ""));
+    lines.push_back("SPACE PAUSE N STEP <> VIEW 1-4 PANELS");
+    for (size_t i = 0; i < lines.size(); ++i) {
+      std::string& l = lines[i];
+      const size_t max_chars = std::max<uint32_t>(m.w, 8) / (shaderio::kGlyphCellW * canvas_.text_scale());
+      if (l.size() > max_chars) l.resize(max_chars);
+      canvas_.text(m.x + 4, m.y + 4 + uint32_t(i) * lh, l, kOverlayColor);
+    }
+  }
+  canvas_.draw_text();
+  cmd_.submit();
+  const bool ok = sc.present(canvas_.packed());
+  const double t1 = now_s();
+  viewer_s_ += t1 - t0;
+  credit_ -= t1 - t0;
+  next_frame_ = opt_.fps_cap > 0 ? std::max(next_frame_ + 1.0 / opt_.fps_cap, t1) : t1;
+  if (!ok) return;
+  ++frames_shown_;
+  frame_log_.push_back({{"frame", frames_shown_},
+                        {"step", trainer_.current_step()},
+                        {"paused", paused_},
+                        {"view", view_},
+                        {"content_step", shown_.step},
+                        {"ms", 1000.0 * (t1 - t0)}});
+  char title[256];
+  std::snprintf(title, sizeof title, "evflow train - step %u/%u - %.2f it/s - view %u - %s", trainer_.current_step(),
+                trainer_.config().iterations, its_ema_, view_ + 1, paused_ ? "paused" : "running");
+  display_.set_title(title);
+  if (opt_.frames > 0 && frames_shown_ >= opt_.frames) {
+    close();
+    return;
+  }
+  apply_script(frames_shown_ + 1);
+}
+
+nlohmann::json TrainView::report() const {
+  using nlohmann::json;
+  auto rect = [](const Rect& r) { return json{{"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}; };
+  json panels = json::array();
+  for (auto& [id, placed] : last_tiles_) {
+    json tiles = json::array();
+    for (auto& [r, t] : placed) {
+      json j = rect(r);
+      j["src_w"] = t.width;
+      j["src_h"] = t.height;
+      tiles.push_back(j);
+    }
+    panels.push_back({{"id", id}, {"tiles", tiles}});
+  }
+  return json{{"canvas", {canvas_.width(), canvas_.height()}},
+              {"main", rect(main_rect_)},
+              {"panels", panels},
+              {"frames", frame_log_},
+              {"content", {{"view", shown_.view},
+                           {"step", shown_.step},
+                           {"psnr", shown_.psnr},
+                           {"psnr_mid_sharp", shown_.psnr_mid_sharp},
+                           {"events_pos", shown_.events_pos},
+                           {"events_neg", shown_.events_neg},
+                           {"virtual_times", shown_.times}}},
+              {"viewer_seconds", viewer_s_},
+              {"training_wall_seconds", training_wall_s_},
+              {"budget", opt_.budget}};
+}
+
+void TrainView::close() {
+  if (!open_) return;
+  open_ = false;
+  paused_ = false;
+  step_requests_ = 0;
+  if (!opt_.screenshot.empty()) {
+    if (frames_shown_ == 0) throw std::runtime_error("train --view: no frame was presented, no screenshot written");
+    save_screenshot(canvas_.packed(), canvas_.width(), canvas_.height(), canvas_.bgr(), opt_.screenshot);
+    std::fprintf(stderr, "train --view: %d frame(s) presented, wrote %s (%ux%u)\n", frames_shown_, opt_.screenshot.c_str(),
+                 canvas_.width(), canvas_.height());
+  }
+  if (!opt_.report.empty()) {
+    std::ofstream f(opt_.report);
+    f << report().dump(1) << "\n";
+    if (!f) throw std::runtime_error(opt_.report + ": cannot write the viewer report");
+  }
+  std::fprintf(stderr, "train --view: viewer closed after %d frame(s); its time %.2f s of %.2f s training wall time (%.1f%%)%s\n",
+               frames_shown_, viewer_s_, training_wall_s_, training_wall_s_ > 0 ? 100.0 * viewer_s_ / training_wall_s_ : 0.0,
+               training_done_ ? "" : "; training goes on");
+  glfwHideWindow(display_.window());
+  glfwPollEvents();
+}
+
+}  // namespace evflow::viewer

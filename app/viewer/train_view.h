@@ -1,0 +1,144 @@
+// `evflow train --view`: the viewer open while training runs in the same process, on the same
+// gpu::Context and the trainer's parameter buffers (docs/viewer.md). Single-threaded: the
+// training loop calls before_step() / after_step() around each Trainer::step(); a viewer frame
+// is drawn only while the viewer's share of the wall time stays within a budget, and window
+// events are polled every step.
+#pragma once
+#include <csignal>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "io/dataset.h"
+#include "train/trainer.h"
+#include "viewer/canvas.h"
+#include "viewer/layout.h"
+#include "viewer/window.h"
+
+namespace evflow::viewer {
+
+struct TrainViewOptions {
+  uint32_t width = 1280, height = 720;  // window size (screen coordinates)
+  int frames = 0;                 // > 0: the viewer closes after this many presented frames
+  std::string screenshot;         // PNG of the last presented frame (written when the viewer closes)
+  std::string report;             // JSON: per-frame step/paused/view, panel rectangles, PSNR, time share
+  double budget = 0.10;           // viewer time / wall time while training runs
+  double fps_cap = 30.0;          // <= 0: uncapped
+  double refresh_s = 1.0;         // the training-view panels re-render at most this often while training runs
+  bool start_paused = false;
+  bool hold = false;              // keep the window open after training ends, until it is closed
+  int view = 0;                   // training view shown first
+  std::string script;             // testing: "FRAME:KEY,..." presses KEY just before frame FRAME is drawn
+  bool vsync = false;
+};
+
+// Everything the side panels show for the chosen training view, refreshed together.
+struct ShownView {
+  uint32_t view = 0;
+  bool inputs_ready = false;            // blurry + events (depend on the view only)
+  uint32_t step = UINT32_MAX;           // training step of the renders below
+  uint32_t width = 0, height = 0;       // the view's image size
+  gpu::Buffer blurry;                   // planar linear RGB, width x height
+  uint32_t events_w = 0, events_h = 0;
+  gpu::Buffer events;                   // planar linear RGB, events_w x events_h
+  size_t events_pos = 0, events_neg = 0;
+  bool has_events = false;
+  gpu::Buffer mid;                      // render at mid-exposure (plain mode: the view's camera)
+  std::vector<double> times;            // blur mode: the virtual frames' exposure times u
+  std::vector<gpu::Buffer> frames;      // blur mode: renders at those times
+  double psnr = 0;                      // model image (blur: mean of the frames) vs the training target
+  double psnr_mid_sharp = -1;           // mid render vs the sharp ground truth (when the view has one)
+};
+
+struct Tile {
+  const gpu::Buffer* rgb = nullptr;
+  uint32_t width = 0, height = 0;
+};
+
+// A side panel: a label and a few images (tiles) of the shown training view. Panels are a
+// list; a new one (flow, LDI) derives from Panel, takes its data from ShownView or its own
+// refresh(), and is appended in TrainView's constructor with its toggle key.
+class Panel {
+ public:
+  Panel(std::string id, int key) : id_(std::move(id)), key_(key) {}
+  virtual ~Panel() = default;
+  const std::string& id() const { return id_; }
+  int key() const { return key_; }  // GLFW key that toggles it
+  bool visible = true;
+  virtual bool available(const ShownView&) const { return true; }
+  virtual std::string label(const ShownView&) const = 0;
+  virtual std::vector<Tile> tiles(const ShownView&) const = 0;
+  // Called after ShownView was refreshed (for panels with their own content).
+  virtual void refresh(const ShownView&) {}
+
+ private:
+  std::string id_;
+  int key_;
+};
+
+class TrainView {
+ public:
+  // `display` must outlive the trainer's GPU work (its context is the trainer's).
+  TrainView(Display& display, Trainer& trainer, const io::Dataset& data, const TrainViewOptions& options,
+            const volatile std::sig_atomic_t* interrupted = nullptr);
+  ~TrainView();
+
+  // Before each training step: polls window events and, while paused with no single step
+  // requested, keeps drawing (at the frame cap) until resumed, stepped, closed or interrupted.
+  void before_step();
+  // After each step: records its statistics and draws a frame when the time budget allows.
+  void after_step(const StepStats& st);
+  // After the last step: keeps drawing while --frames are missing or --view-hold asks for it.
+  void after_training();
+  // Closes the viewer (writes the screenshot and report) if still open.
+  void close();
+  bool open() const { return open_; }
+
+  // The key handler (window keys and the test script). Keys are documented in docs/viewer.md.
+  void press(int key);
+  static int key_from_name(const std::string& name);  // "space", "n", "right", "1", ...; throws on unknown names
+  // "FRAME:KEY,..." -> frame -> keys; throws std::invalid_argument naming the bad item.
+  static std::map<int, std::vector<int>> parse_script(const std::string& script);
+
+ private:
+  void draw_frame();
+  void refresh_content(bool force);
+  void poll();
+  void apply_script(int frame);
+  nlohmann::json report() const;
+
+  Display& display_;
+  Trainer& trainer_;
+  const io::Dataset& data_;
+  TrainViewOptions opt_;
+  const volatile std::sig_atomic_t* interrupted_;
+  gpu::Context& ctx_;
+  gpu::Commands cmd_;
+  Rasterizer raster_;
+  Canvas canvas_;
+  ShownView shown_;
+  std::vector<std::unique_ptr<Panel>> panels_;
+  std::map<int, std::vector<int>> script_;  // frame -> keys
+  Orbit home_;
+  bool open_ = true, paused_ = false, overlay_ = true, training_done_ = false;
+  int step_requests_ = 0;
+  uint32_t view_ = 0;
+  // Time budget (seconds): credit grows by budget x wall time while training runs, a frame costs
+  // its duration; a frame is drawn when the credit is >= 0.
+  double credit_ = 0, viewer_s_ = 0, training_wall_s_ = 0;
+  double last_mark_ = 0, next_frame_ = 0, last_poll_ = 0, last_refresh_ = -1e9;
+  double start_ = 0;
+  // Statistics for the overlay.
+  uint32_t last_step_ = 0;
+  double loss_ema_ = -1, last_loss_ = 0, its_ema_ = 0, last_step_time_ = -1;
+  int frames_shown_ = 0;
+  Rect main_rect_;
+  std::vector<std::pair<std::string, std::vector<std::pair<Rect, Tile>>>> last_tiles_;
+  std::vector<nlohmann::json> frame_log_;
+};
+
+}  // namespace evflow::viewer

@@ -1,0 +1,411 @@
+// `evflow train --view` (docs/viewer.md): the viewer's drawing kernels offscreen, and the live
+// training viewer end to end under Xvfb: its panels against the dataset and offscreen renders,
+// and the pause / single-step / view / panel keys through --view-script.
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "camera/trajectory.h"
+#include "gpu_fixture.h"
+#include "io/dataset.h"
+#include "io/image.h"
+#include "train/synthetic_dataset.h"
+#include "train/trainer.h"
+#include "viewer/canvas.h"
+#include "viewer/event_image.h"
+#include "viewer/font.h"
+#include "viewer/layout.h"
+
+using namespace evflow;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+fs::path evflow_binary() { return fs::read_symlink("/proc/self/exe").parent_path().parent_path() / "evflow"; }
+
+bool on_path(const std::string& prog) { return std::system(("command -v " + prog + " >/dev/null 2>&1").c_str()) == 0; }
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+uint8_t encode8(float linear) {
+  float v = std::isnan(linear) ? 0.f : std::clamp(linear, 0.f, 1.f);
+  return static_cast<uint8_t>(std::lround(io::linear_to_srgb(v) * 255.f));
+}
+
+// A fresh folder with a 0700 XDG_RUNTIME_DIR inside.
+fs::path fresh_dir(const std::string& tag) {
+  const fs::path dir = fs::temp_directory_path() / ("evflow_trainview_test_" + std::to_string(::getpid()) + "_" + tag);
+  fs::remove_all(dir);
+  fs::create_directories(dir / "xdg");
+  ::chmod((dir / "xdg").c_str(), 0700);
+  return dir;
+}
+
+// 3 training views of 96 x 72 (+1 novel) with exposure windows and a few events: view 0's
+// exposure holds 3 positive events at (10, 10) and 3 negative ones at (40, 30); one more event
+// at (60, 50) lies in view 1's exposure only. Written as float EXR so that it loads back exactly.
+fs::path write_dataset(const fs::path& dir) {
+  auto& ctx = test::gpu_context();
+  io::Dataset d = render_synthetic_dataset(ctx, 96, 72, 3, 1, 800, 7);
+  d.layout = "evflow";
+  for (size_t v = 0; v < d.train.size(); ++v) {
+    d.train[v].exposure_start = 0.1 * double(v);
+    d.train[v].exposure_end = 0.1 * double(v) + 0.04;
+  }
+  d.events.width = 96;
+  d.events.height = 72;
+  for (int k = 0; k < 3; ++k) {
+    d.events.push(10, 10, 0.001 + 0.005 * k, +1);
+    d.events.push(40, 30, 0.003 + 0.005 * k, -1);
+  }
+  d.events.push(60, 50, 0.12, +1);
+  const fs::path data = dir / "data";
+  io::WriteOptions wo;
+  wo.image_ext = ".exr";
+  io::write_evflow_dataset(d, data, wo);
+  return data;
+}
+
+struct Run {
+  int rc = -1;
+  std::string out;
+  double secs = 0;
+};
+
+Run run_evflow(const fs::path& dir, const std::string& args, bool xvfb = true) {
+  const fs::path log = dir / "run.log";
+  std::string cmd = "cd " + quote(dir.string()) + " && XDG_RUNTIME_DIR=" + quote((dir / "xdg").string()) +
+                    " EVF_VALIDATION=1 timeout 300 " + (xvfb ? "xvfb-run -a -s '-screen 0 1024x768x24' " : "") +
+                    quote(evflow_binary().string()) + " " + args + " > " + quote(log.string()) + " 2>&1";
+  const auto t0 = std::chrono::steady_clock::now();
+  const int status = std::system(cmd.c_str());
+  Run r;
+  r.secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = "command: " + cmd + "\n" + slurp(log);
+  return r;
+}
+
+void require_xvfb() {
+  REQUIRE(fs::exists(evflow_binary()));
+  if (!on_path("xvfb-run") || !on_path("Xvfb") || !on_path("xauth"))
+    FAIL("the viewer tests need Xvfb: install the Debian packages xvfb and xauth (scripts/install-deps.sh)");
+}
+
+// The training configuration both the CLI run and the in-process reference use.
+const std::vector<std::pair<std::string, std::string>> kKeys = {
+    {"iterations", "3"}, {"init_gaussians", "400"}, {"sh_degree", "0"}, {"mode", "blur"},
+    {"virtual_frames", "1"}, {"densify", "false"}, {"seed", "3"}};
+
+std::string key_args() {
+  std::string s;
+  for (auto& [k, v] : kKeys) s += " " + k + "=" + v;
+  return s;
+}
+
+// Compares a screenshot rectangle with a planar linear RGB image resampled the viewer's way.
+// Returns the fraction of pixels whose 8-bit values are within one level on every channel.
+double tile_match(const io::Image& shot, const json& tile, const std::vector<float>& planar, int* max_diff) {
+  const uint32_t x0 = tile["x"], y0 = tile["y"], w = tile["w"], h = tile["h"], sw = tile["src_w"], sh = tile["src_h"];
+  REQUIRE(planar.size() == size_t(3) * sw * sh);
+  REQUIRE(x0 + w <= shot.width);
+  REQUIRE(y0 + h <= shot.height);
+  size_t within = 0;
+  *max_diff = 0;
+  const size_t n = size_t(sw) * sh;
+  for (uint32_t dy = 0; dy < h; ++dy)
+    for (uint32_t dx = 0; dx < w; ++dx) {
+      const size_t s = size_t(viewer::nearest_source(dy, h, sh)) * sw + viewer::nearest_source(dx, w, sw);
+      const size_t p = (size_t(y0 + dy) * shot.width + x0 + dx) * 3;
+      int worst = 0;
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(int(encode8(shot.data[p + c])) - int(encode8(planar[c * n + s]))));
+      within += worst <= 1;
+      *max_diff = std::max(*max_diff, worst);
+    }
+  return double(within) / double(size_t(w) * h);
+}
+
+const json& panel(const json& report, const std::string& id) {
+  for (const auto& p : report["panels"])
+    if (p["id"] == id) return p;
+  FAIL("no panel '" << id << "' in the report");
+  static json none;
+  return none;
+}
+
+std::array<int, 3> shot_px(const io::Image& shot, uint32_t x, uint32_t y) {
+  const size_t p = (size_t(y) * shot.width + x) * 3;
+  return {encode8(shot.data[p]), encode8(shot.data[p + 1]), encode8(shot.data[p + 2])};
+}
+
+}  // namespace
+
+TEST_CASE("viewer canvas: text, fill and nearest-neighbour blit match their host definitions", "[viewer]") {
+  auto& ctx = test::gpu_context();
+  gpu::Commands cmd(ctx);
+  viewer::Canvas canvas(ctx, cmd);
+  const uint32_t W = 160, H = 48;
+  canvas.resize(W, H, true);  // B,G,R,A byte order
+  // A 7 x 5 gradient image blitted into a 20 x 13 rectangle.
+  const uint32_t sw = 7, sh = 5;
+  std::vector<float> img(3 * sw * sh);
+  for (size_t i = 0; i < img.size(); ++i) img[i] = float(i % 11) / 10.f;
+  gpu::Buffer src(ctx, img.size() * 4, "vt_src");
+  src.write(img);
+  const viewer::Rect r{3, 20, 20, 13};
+  canvas.fill({0, 0, W, H}, viewer::rgba(10, 20, 30));
+  canvas.blit(src, sw, sh, r);
+  canvas.set_text_scale(2);
+  const std::string text = "Step 12/3: LOSS 0.5% x";
+  canvas.text(30, 2, text, viewer::rgba(250, 200, 100));
+  canvas.draw_text(true, viewer::rgba(0, 0, 0));
+  cmd.submit();
+  const std::vector<uint32_t> px = canvas.packed().read<uint32_t>(size_t(W) * H);
+  test::require_no_validation_messages();
+
+  const std::vector<uint32_t> font = viewer::font_table();
+  auto bgra = [](uint32_t r8, uint32_t g8, uint32_t b8) { return b8 | (g8 << 8) | (r8 << 16) | (255u << 24); };
+  size_t bad = 0, lit = 0;
+  for (uint32_t y = 0; y < H; ++y)
+    for (uint32_t x = 0; x < W; ++x) {
+      uint32_t want = bgra(10, 20, 30);
+      if (x >= r.x && x < r.x + r.w && y >= r.y && y < r.y + r.h) {
+        const size_t s = size_t(viewer::nearest_source(y - r.y, r.h, sh)) * sw + viewer::nearest_source(x - r.x, r.w, sw);
+        const size_t n = size_t(sw) * sh;
+        want = bgra(encode8(img[s]), encode8(img[n + s]), encode8(img[2 * n + s]));
+      }
+      const uint32_t cw = shaderio::kGlyphCellW * 2, ch = shaderio::kGlyphCellH * 2;
+      if (x >= 30 && x < 30 + cw * text.size() && y >= 2 && y < 2 + ch) {
+        const uint32_t i = (x - 30) / cw, gx = (x - 30) % cw / 2, gy = (y - 2) / 2;
+        const bool on = viewer::glyph_pixel_lit(font, uint8_t(text[i]), gx, gy);
+        lit += on;
+        want = on ? bgra(250, 200, 100) : bgra(0, 0, 0);
+      }
+      bad += px[size_t(y) * W + x] != want;
+    }
+  INFO("pixels differing from the host reference: " << bad << "; lit glyph pixels " << lit);
+  CHECK(bad == 0);
+  CHECK(lit > 150);
+  // Lower case draws as upper case; every glyph of the table is within 5 x 7.
+  CHECK(font[size_t('s') * 2] == font[size_t('S') * 2]);
+  CHECK(font[size_t('0') * 2] != 0);
+}
+
+TEST_CASE("viewer layout: nearest-neighbour source index, aspect fit and tile grids", "[viewer]") {
+  // The mapping covers the source evenly and stays in range.
+  for (uint32_t dst : {1u, 7u, 64u, 333u})
+    for (uint32_t src : {1u, 5u, 64u, 346u}) {
+      uint32_t prev = 0;
+      for (uint32_t d = 0; d < dst; ++d) {
+        const uint32_t s = viewer::nearest_source(d, dst, src);
+        REQUIRE(s < src);
+        REQUIRE(s >= prev);
+        prev = s;
+      }
+      if (dst == src)
+        for (uint32_t d = 0; d < dst; ++d) REQUIRE(viewer::nearest_source(d, dst, src) == d);
+    }
+  const viewer::Rect f = viewer::fit_aspect({10, 20, 300, 100}, 4, 3);
+  CHECK(f.h == 100);
+  CHECK(f.w == 133);
+  CHECK(f.x == 10 + (300 - 133) / 2);
+  const auto tiles = viewer::tile_grid({0, 0, 400, 300}, 7, 4, 3);
+  REQUIRE(tiles.size() == 7);
+  for (size_t i = 0; i < tiles.size(); ++i)
+    for (size_t j = i + 1; j < tiles.size(); ++j) {
+      const bool apart = tiles[i].x + tiles[i].w <= tiles[j].x || tiles[j].x + tiles[j].w <= tiles[i].x ||
+                         tiles[i].y + tiles[i].h <= tiles[j].y || tiles[j].y + tiles[j].h <= tiles[i].y;
+      REQUIRE(apart);
+    }
+  const auto l = viewer::train_layout(1280, 720, 4, 20);
+  CHECK(l.main.w == 640);
+  REQUIRE(l.boxes.size() == 4);
+  CHECK(l.boxes[3].x + l.boxes[3].w <= 1280);
+  CHECK(viewer::train_layout(800, 600, 0, 20).main.w == 800);
+}
+
+TEST_CASE("train --view: bad viewer options give clear errors before a window opens", "[viewer]") {
+  REQUIRE(fs::exists(evflow_binary()));
+  const fs::path dir = fresh_dir("badargs");
+  const fs::path data = write_dataset(dir);
+  struct Case {
+    std::string args, message;
+  } cases[] = {
+      {"--view-frames 3", "--view-frames needs --view"},
+      {"--view --view-index 7", "--view-index 7: the dataset has 3 training views"},
+      {"--view --view-script 2:zz", "unknown key 'zz'"},
+      {"--view --view-script x:n", "is not FRAME:KEY"},
+      {"--view --view-budget 0", "--view-budget must be in (0, 1]"},
+  };
+  for (const auto& c : cases) {
+    const Run r = run_evflow(dir, "train " + quote(data.string()) + " --out " + quote((dir / "run").string()) + " " + c.args, false);
+    INFO(r.out);
+    CHECK(r.rc == 1);
+    CHECK(r.out.find(c.message) != std::string::npos);
+  }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("train --view under Xvfb: panels show the blurry input, the renders and the events of the view", "[viewer]") {
+  require_xvfb();
+  const fs::path dir = fresh_dir("panels");
+  const fs::path data_dir = write_dataset(dir);
+  const fs::path shot_png = dir / "shot.png", report_json = dir / "report.json";
+  // Paused from the start; one single step before frame 2; 3 frames, then training finishes.
+  const Run r = run_evflow(dir, "train " + quote(data_dir.string()) + " --out " + quote((dir / "run").string()) + key_args() +
+                                    " --view --view-width 640 --view-height 400 --view-paused --view-frames 3"
+                                    " --view-script 2:n --view-fps-cap 0 --view-screenshot " + quote(shot_png.string()) +
+                                    " --view-report " + quote(report_json.string()));
+  INFO(r.out);
+  REQUIRE(r.rc == 0);
+  REQUIRE(r.out.find("done: 3 steps") != std::string::npos);
+  const json rep = json::parse(slurp(report_json));
+  INFO(rep.dump(1));
+  // Frame log: step 0, then exactly one step after N, still paused.
+  REQUIRE(rep["frames"].size() == 3);
+  CHECK(rep["frames"][0]["step"] == 0);
+  CHECK(rep["frames"][1]["step"] == 1);
+  CHECK(rep["frames"][2]["step"] == 1);
+  for (const auto& f : rep["frames"]) CHECK(f["paused"] == true);
+  REQUIRE(rep["content"]["step"] == 1);
+  REQUIRE(rep["content"]["view"] == 0);
+  const io::Image shot = io::read_image(shot_png);
+  REQUIRE(shot.width == rep["canvas"][0].get<uint32_t>());
+
+  // The same run in this process: one step, then the renders the panels show.
+  auto& ctx = test::gpu_context();
+  const io::Dataset data = io::load_dataset(data_dir);
+  TrainConfig cfg;
+  for (auto& [k, v] : kKeys) cfg.set(k, v);
+  Trainer t(ctx, data, cfg);
+  t.step();
+  const ExposureTrajectory& traj = t.trajectories().at(0);
+  int max_diff = 0;
+
+  // Blurry input.
+  const json& blurry = panel(rep, "blurry")["tiles"][0];
+  double m = tile_match(shot, blurry, io::planar_rgb(data.train[0].blurry), &max_diff);
+  WARN("blurry panel " << blurry["w"] << "x" << blurry["h"] << ": " << m * 100 << "% within 1 level, max " << max_diff);
+  CHECK(m >= 0.999);
+
+  // Mid-exposure render = Trainer::render of trajectories()[0].camera_at(0.5).
+  const std::vector<float> mid = t.render(traj.camera_at(0.5));
+  m = tile_match(shot, panel(rep, "mid")["tiles"][0], mid, &max_diff);
+  WARN("mid-exposure panel: " << m * 100 << "% within 1 level, max " << max_diff);
+  CHECK(m >= 0.99);
+
+  // Virtual frames at u = 0, 0.5, 1 (virtual_frames = 1), and the PSNR of their mean.
+  const auto& vt = panel(rep, "virtual")["tiles"];
+  REQUIRE(vt.size() == 3);
+  const std::vector<double> us = ExposureTrajectory::virtual_times(1);
+  std::vector<float> mean(mid.size(), 0.f);
+  for (size_t i = 0; i < us.size(); ++i) {
+    const std::vector<float> img = t.render(traj.camera_at(us[i]));
+    for (size_t k = 0; k < img.size(); ++k) mean[k] += img[k] / 3.f;
+    m = tile_match(shot, vt[i], img, &max_diff);
+    CHECK(m >= 0.99);
+  }
+  const std::vector<float> target = io::planar_rgb(data.train[0].blurry);
+  double mse = 0;
+  for (size_t k = 0; k < mean.size(); ++k) mse += double(mean[k] - target[k]) * (mean[k] - target[k]);
+  const double psnr = -10 * std::log10(mse / double(mean.size()));
+  CHECK(std::abs(rep["content"]["psnr"].get<double>() - psnr) < 0.01);
+
+  // Events: 3 positive at (10, 10) -> red, 3 negative at (40, 30) -> blue, else grey; the
+  // event of view 1's exposure does not show.
+  CHECK(rep["content"]["events_pos"] == 3);
+  CHECK(rep["content"]["events_neg"] == 3);
+  const json& ev = panel(rep, "events")["tiles"][0];
+  const viewer::EventImage ei = viewer::event_image(data, 0);
+  m = tile_match(shot, ev, ei.rgb, &max_diff);
+  CHECK(m >= 0.999);
+  size_t red = 0, blue = 0, grey = 0, other = 0;
+  const uint32_t x0 = ev["x"], y0 = ev["y"], w = ev["w"], h = ev["h"];
+  for (uint32_t dy = 0; dy < h; ++dy)
+    for (uint32_t dx = 0; dx < w; ++dx) {
+      const uint32_t sx = viewer::nearest_source(dx, w, 96), sy = viewer::nearest_source(dy, h, 72);
+      const auto p = shot_px(shot, x0 + dx, y0 + dy);
+      const bool is_red = p == std::array<int, 3>{255, 0, 0}, is_blue = p == std::array<int, 3>{0, 0, 255};
+      const bool is_grey = p == std::array<int, 3>{128, 128, 128};
+      if (sx == 10 && sy == 10) red += is_red, other += !is_red;
+      else if (sx == 40 && sy == 30) blue += is_blue, other += !is_blue;
+      else grey += is_grey, other += !is_grey;
+    }
+  INFO("events panel: red " << red << ", blue " << blue << ", grey " << grey << ", other " << other);
+  CHECK(red > 0);
+  CHECK(blue > 0);
+  CHECK(other == 0);
+  // The overlay drew text over the free-camera view (yellow glyph pixels in its top-left corner).
+  size_t yellow = 0;
+  for (uint32_t y = 0; y < 40; ++y)
+    for (uint32_t x = 0; x < 300; ++x) yellow += shot_px(shot, x, y) == std::array<int, 3>{255, 255, 120};
+  CHECK(yellow > 100);
+  test::require_no_validation_messages();
+  fs::remove_all(dir);
+}
+
+TEST_CASE("train --view under Xvfb: pause stops training, N steps exactly once, views and panels switch", "[viewer]") {
+  require_xvfb();
+  const fs::path dir = fresh_dir("keys");
+  const fs::path data_dir = write_dataset(dir);
+  const fs::path report_json = dir / "report.json";
+  // Running at first; Space before frame 3 pauses, Right before 4 shows view 1, N before 5 and
+  // 6 steps once each, 3 before 7 hides the virtual frames, Space before 8 resumes.
+  const Run r = run_evflow(dir, "train " + quote(data_dir.string()) + " --out " + quote((dir / "run").string()) +
+                                    " iterations=40 init_gaussians=300 sh_degree=0 mode=blur virtual_frames=1 densify=false"
+                                    " --view --view-width 480 --view-height 300 --view-frames 9 --view-budget 0.5"
+                                    " --view-fps-cap 0 --view-script 3:space,4:right,5:n,6:n,7:3,8:space"
+                                    " --view-report " + quote(report_json.string()));
+  INFO(r.out);
+  REQUIRE(r.rc == 0);
+  REQUIRE(r.out.find("done: 40 steps") != std::string::npos);
+  const json rep = json::parse(slurp(report_json));
+  INFO(rep["frames"].dump(1));
+  const auto& f = rep["frames"];
+  REQUIRE(f.size() == 9);
+  auto step = [&](int frame) { return f[frame - 1]["step"].get<uint32_t>(); };
+  auto paused = [&](int frame) { return f[frame - 1]["paused"].get<bool>(); };
+  CHECK(step(1) == 0);
+  CHECK_FALSE(paused(2));
+  CHECK(step(2) >= 1);  // training ran between frames 1 and 2
+  for (int k = 3; k <= 7; ++k) CHECK(paused(k));
+  CHECK(step(3) == step(2));      // paused: no step
+  CHECK(step(4) == step(3));
+  CHECK(step(5) == step(4) + 1);  // N: exactly one step
+  CHECK(step(6) == step(5) + 1);
+  CHECK(step(7) == step(6));
+  CHECK_FALSE(paused(8));
+  CHECK(step(9) >= step(8));
+  CHECK(f[2]["view"] == 0);
+  CHECK(f[3]["view"] == 1);
+  CHECK(f[3]["content_step"] == step(4));  // the panels re-rendered for the new view
+  std::vector<std::string> ids;
+  for (const auto& p : rep["panels"]) ids.push_back(p["id"]);
+  CHECK(ids == std::vector<std::string>{"blurry", "mid", "events"});
+  CHECK(rep["content"]["view"] == 1);
+  CHECK(rep["content"]["events_pos"] == 1);
+  CHECK(rep["content"]["events_neg"] == 0);
+  fs::remove_all(dir);
+}
