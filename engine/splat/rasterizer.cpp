@@ -145,6 +145,13 @@ void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const 
   // shared-memory adds (bench raster, lavapipe). GPUs reduce in the subgroup first.
   rp.subgroup_reduce = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 0u : 1u;
   if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) rp.subgroup_reduce = e[0] == '1';
+  // Compositing kernels: one pixel per invocation (GPUs) or a block of pixels per invocation
+  // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
+  block_suffix_ = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? "_block" : "";
+  if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
+    std::string k = e;
+    block_suffix_ = k == "pixel" ? "" : k == "block" ? "_block" : "_block" + k.substr(5);
+  }
   std::memcpy(raster_pc_.data(), &rp, sizeof(rp));
 }
 
@@ -203,7 +210,7 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   cmd_.fill(tile_range_, 0);
   cmd_.dispatch("splat/tile_ranges", {*sorted_keys, tile_range_}, raster_pc_.data(), sizeof(RasterPC),
                 cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
-  cmd_.dispatch("splat/rasterize",
+  cmd_.dispatch("splat/rasterize" + block_suffix_,
                 {tile_range_, *sorted_slots_, gaussian_id_from_slot_, proj_mean_conic_, proj_misc_, proj_color_, out_.rgb,
                  out_.alpha, out_.depth, final_T_, last_isect_},
                 raster_pc_.data(), sizeof(RasterPC), cmd_.linear_groups(num_tiles));
@@ -233,7 +240,7 @@ void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rg
                                  [](auto& s) { return s.first.find("backward") != std::string::npos; }),
                   stage_ms_.end());
 
-  const std::string raster_bwd = ctx_.caps().shared_float_atomic_add ? "splat/rasterize_bwd" : "splat/rasterize_bwd_cas";
+  const std::string raster_bwd = "splat/rasterize_bwd" + block_suffix_ + (ctx_.caps().shared_float_atomic_add ? "" : "_cas");
   cmd_.dispatch(raster_bwd,
                 {tile_range_, *sorted_slots_, gaussian_id_from_slot_, proj_mean_conic_, proj_misc_, proj_color_, final_T_,
                  last_isect_, v_rgb, v_alpha, plane(0), plane(1), plane(2), plane(3), plane(4), plane(5), plane(6), plane(7),

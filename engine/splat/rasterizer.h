@@ -74,6 +74,7 @@ class Rasterizer {
   std::array<uint8_t, 128> project_pc_{}, raster_pc_{};
   uint32_t width_ = 0, height_ = 0, tiles_x_ = 0, tiles_y_ = 0, num_isects_ = 0, depth_bits_ = 0, sort_bits_ = 0;
   size_t count_ = 0;
+  std::string block_suffix_;  // "" (one pixel per invocation) or "_block" (see set_pc)
   std::vector<std::pair<std::string, double>> stage_ms_;
 };
 

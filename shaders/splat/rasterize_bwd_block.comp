@@ -1,0 +1,205 @@
+#version 450
+// Backward rasterization for CPU drivers: one workgroup per 16x16 tile, each invocation owns a
+// block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s), as rasterize_block.comp. It walks the
+// tile's Gaussians back to front; per Gaussian it sums its block's 9 gradient terms in registers
+// (fixed order) and adds them to the workgroup's shared accumulator only if some pixel of the
+// block received a contribution. Same maths as rasterize_bwd.comp.
+// Why: on lavapipe each shared-memory load and each shared atomic is a loop over the 8 SIMD
+// lanes (atomic float adds become compare-and-swap loops); one read and one set of 9 adds per
+// block instead of per pixel divides that cost by the block size.
+#extension GL_GOOGLE_include_directive : require
+#ifndef EVF_CAS_ATOMICS
+#extension GL_EXT_shader_atomic_float : require
+#endif
+#include "splat/splat_layout.h"
+#include "common/dispatch.glsl"
+#include "splat/splat_math.glsl"
+#ifndef EVF_ROWS
+#define EVF_ROWS 4
+#endif
+// EVF_RUNS(X) expands X(i) for each row i of the block.
+#if EVF_ROWS == 1
+#define EVF_RUNS(X) X(0)
+#elif EVF_ROWS == 2
+#define EVF_RUNS(X) X(0) X(1)
+#elif EVF_ROWS == 4
+#define EVF_RUNS(X) X(0) X(1) X(2) X(3)
+#elif EVF_ROWS == 8
+#define EVF_RUNS(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7)
+#else
+#error EVF_ROWS must be 1, 2, 4 or 8
+#endif
+#define EVF_THREADS (64 / EVF_ROWS)
+layout(local_size_x = EVF_THREADS) in;
+#include "splat/raster_io.glsl"
+layout(std430, binding = 6) readonly buffer InT { float final_T[]; };
+layout(std430, binding = 7) readonly buffer InLast { uint last_isect[]; };
+layout(std430, binding = 8) readonly buffer VRgb { float v_rgb[]; };      // [3][H][W]
+layout(std430, binding = 9) readonly buffer VAlpha { float v_alpha[]; };  // [H][W]
+// Per-slot gradients, one plane per quantity: v_mean2d.xy, v_conic.xyz, v_opacity, v_rgb.
+layout(std430, binding = 10) writeonly buffer G0 { float g_mean_x[]; };
+layout(std430, binding = 11) writeonly buffer G1 { float g_mean_y[]; };
+layout(std430, binding = 12) writeonly buffer G2 { float g_conic_x[]; };
+layout(std430, binding = 13) writeonly buffer G3 { float g_conic_y[]; };
+layout(std430, binding = 14) writeonly buffer G4 { float g_conic_z[]; };
+layout(std430, binding = 15) writeonly buffer G5 { float g_opacity[]; };
+layout(std430, binding = 16) writeonly buffer G6 { float g_red[]; };
+layout(std430, binding = 17) writeonly buffer G7 { float g_green[]; };
+layout(std430, binding = 18) writeonly buffer G8 { float g_blue[]; };
+layout(push_constant) uniform PC { RasterPC pc; };
+shared uint tile_last;
+
+#ifdef EVF_CAS_ATOMICS
+shared uint acc[256 * 9];
+void acc_add(uint i, float v) {
+  uint old = acc[i];
+  for (;;) {
+    uint prev = atomicCompSwap(acc[i], old, floatBitsToUint(uintBitsToFloat(old) + v));
+    if (prev == old) break;
+    old = prev;
+  }
+}
+float acc_get(uint i) { return uintBitsToFloat(acc[i]); }
+void acc_zero(uint i) { acc[i] = 0u; }
+#else
+shared float acc[256 * 9];
+void acc_add(uint i, float v) { atomicAdd(acc[i], v); }
+float acc_get(uint i) { return acc[i]; }
+void acc_zero(uint i) { acc[i] = 0.0; }
+#endif
+
+struct Run {     // 4 horizontally adjacent pixels
+  vec4 T, Sr, Sg, Sb;      // transmittance before the current Gaussian; colour behind it
+  vec4 vr, vg, vb, vAT;    // v_rgb, v_alpha * final T
+  uvec4 last;              // one past the last blended Gaussian (0 blends nothing)
+};
+
+struct Grad {    // one Gaussian's gradient summed over a block
+  vec2 mean;
+  vec3 conic;
+  float opac;
+  vec3 rgb;
+};
+
+Run run_init(ivec2 p0, uint first) {
+  Run r;
+  uint hw = pc.width * pc.height;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 p = p0 + ivec2(k, 0);
+    bool inside = p.x < int(pc.width) && p.y < int(pc.height);
+    uint i = inside ? uint(p.y) * pc.width + uint(p.x) : 0u;
+    float T = inside ? final_T[i] : 1.0;
+    r.T[k] = T;
+    r.last[k] = inside ? last_isect[i] : first;
+    r.vr[k] = inside ? v_rgb[i] : 0.0;
+    r.vg[k] = inside ? v_rgb[hw + i] : 0.0;
+    r.vb[k] = inside ? v_rgb[2 * hw + i] : 0.0;
+    r.vAT[k] = inside ? v_alpha[i] * T : 0.0;
+  }
+  r.Sr = pc.background.r * r.T;
+  r.Sg = pc.background.g * r.T;
+  r.Sb = pc.background.b * r.T;
+  return r;
+}
+
+uint run_last(Run r) { return max(max(r.last.x, r.last.y), max(r.last.z, r.last.w)); }
+
+// Gaussian `idx` (already read) against the run whose pixel centres are (cx, cy): updates the
+// run's state and adds the run's gradient terms to g. Returns whether any pixel contributed.
+bool accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity, vec3 col,
+                uint idx) {
+  bvec4 live = lessThan(uvec4(idx), r.last);
+  if (!any(live)) return false;
+  vec4 dx = mean.x - cx;
+  float dy = mean.y - cy;
+  vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
+  vec4 G = exp(power);
+  vec4 raw = opacity * G;
+  vec4 alpha = min(vec4(kAlphaMax), raw);
+  bvec4 c = bvec4(uvec4(live) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
+  if (!any(c)) return false;
+  vec4 one_minus = 1.0 - alpha;
+  vec4 T_before = r.T / one_minus;
+  vec4 w = mix(vec4(0.0), alpha * T_before, c);
+  g.rgb += vec3(dot(w, r.vr), dot(w, r.vg), dot(w, r.vb));
+  vec4 col_dot_v = col.r * r.vr + col.g * r.vg + col.b * r.vb;
+  vec4 s_dot_v = r.Sr * r.vr + r.Sg * r.vg + r.Sb * r.vb;
+  vec4 v_alpha_j = T_before * col_dot_v - s_dot_v / one_minus + r.vAT / one_minus;
+  r.Sr += w * col.r;
+  r.Sg += w * col.g;
+  r.Sb += w * col.b;
+  r.T = mix(r.T, T_before, c);
+  bvec4 smooth_part = bvec4(uvec4(c) & uvec4(lessThan(raw, vec4(kAlphaMax))));
+  vec4 v_power = mix(vec4(0.0), alpha * v_alpha_j, smooth_part);
+  g.mean -= vec2(dot(v_power, conic.x * dx + conic.y * dy), dot(v_power, conic.y * dx + conic.z * dy));
+  g.conic += vec3(-0.5 * dot(v_power, dx * dx), -dy * dot(v_power, dx), -0.5 * dy * dy * dot(v_power, vec4(1.0)));
+  g.opac += dot(mix(vec4(0.0), G * v_alpha_j, smooth_part), vec4(1.0));
+  return true;
+}
+
+void main() {
+  ivec2 tile = tile_of_group(pc.tiles_x);
+  uint lid = gl_LocalInvocationIndex;
+  ivec2 p0 = tile * int(kTileSize) + ivec2(int(lid % 4u) * 4, int(lid / 4u) * EVF_ROWS);
+  vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
+  float cy = float(p0.y) + 0.5;
+  uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
+  uint last = range.x;
+#define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x); last = max(last, run_last(r##i));
+  EVF_RUNS(EVF_INIT)
+#define EVF_ACC(i) any_c = accumulate(r##i, g, cx, cy + float(i), a.xy, conic, b.y, col, start + j) || any_c;
+  uint count = range.y - range.x;
+  // Gaussians at or past the tile's largest `last` blended into no pixel: their slots get zeros
+  // without being visited.
+  if (lid == 0) tile_last = range.x;
+  barrier();
+  atomicMax(tile_last, last);
+  barrier();
+  uint visit_end = tile_last;
+  for (uint nb = (count + 255u) / 256u; nb > 0u; --nb) {
+    uint start = range.x + (nb - 1u) * 256u;
+    uint n = min(256u, range.y - start);
+    barrier();
+    for (uint k = lid; k < 256u; k += EVF_THREADS) {
+      if (k < n && start + k < visit_end) load_batch_entry(k, start + k);
+      for (uint q = 0; q < 9; ++q) acc_zero(k * 9 + q);
+    }
+    barrier();
+    // Each block starts at its own last Gaussian.
+    uint n_visit = start < last ? min(n, last - start) : 0u;
+    for (uint jj = n_visit; jj > 0u; --jj) {
+      uint j = jj - 1u;
+      vec4 a = batch_mean_conic[j];
+      vec4 b = batch_misc[j];
+      vec3 col = batch_color[j];
+      vec3 conic = vec3(a.zw, b.x);
+      Grad g;
+      g.mean = vec2(0.0);
+      g.conic = vec3(0.0);
+      g.opac = 0.0;
+      g.rgb = vec3(0.0);
+      bool any_c = false;
+      EVF_RUNS(EVF_ACC)
+      if (any_c) {
+        uint o = j * 9u;
+        acc_add(o, g.mean.x); acc_add(o + 1, g.mean.y);
+        acc_add(o + 2, g.conic.x); acc_add(o + 3, g.conic.y); acc_add(o + 4, g.conic.z);
+        acc_add(o + 5, g.opac);
+        acc_add(o + 6, g.rgb.r); acc_add(o + 7, g.rgb.g); acc_add(o + 8, g.rgb.b);
+      }
+    }
+    barrier();
+    for (uint k = lid; k < n; k += EVF_THREADS) {
+      uint slot = slot_from_isect[start + k], o = k * 9;
+      g_mean_x[slot] = acc_get(o);
+      g_mean_y[slot] = acc_get(o + 1);
+      g_conic_x[slot] = acc_get(o + 2);
+      g_conic_y[slot] = acc_get(o + 3);
+      g_conic_z[slot] = acc_get(o + 4);
+      g_opacity[slot] = acc_get(o + 5);
+      g_red[slot] = acc_get(o + 6);
+      g_green[slot] = acc_get(o + 7);
+      g_blue[slot] = acc_get(o + 8);
+    }
+  }
+}
