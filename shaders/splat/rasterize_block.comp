@@ -1,10 +1,12 @@
 #version 450
 // Forward rasterization for CPU drivers: one workgroup per 16x16 tile, each invocation owns a
-// block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s). Same result as rasterize.comp, pixel for
-// pixel; see docs/rasterizer.md.
-// Why: lavapipe turns every shared-memory load into a loop over the 8 SIMD lanes, so the cost of
-// a (vector, Gaussian) step is dominated by reading the Gaussian, not by the blending maths.
-// With 4 x EVF_ROWS pixels per invocation one read serves that many pixels.
+// block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s) and visits, front to back, only the
+// Gaussians whose support's bounding box covers its block. Same result as rasterize.comp, pixel
+// for pixel; see docs/rasterizer.md.
+// Why: lavapipe runs the invocations of a SIMD vector in lockstep with masks (an `if` skips
+// nothing; only loops end early) and turns every shared-memory access into a loop over the
+// lanes. So each invocation walks its own list (the lanes read different Gaussians, which costs
+// no more), and one read of a Gaussian serves 4 x EVF_ROWS pixels.
 #extension GL_GOOGLE_include_directive : require
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
@@ -25,7 +27,9 @@
 #error EVF_ROWS must be 1, 2, 4 or 8
 #endif
 #define EVF_THREADS (64 / EVF_ROWS)
+#define EVF_BLOCKS EVF_THREADS
 layout(local_size_x = EVF_THREADS) in;
+#define EVF_BLOCK_BATCH 1
 #include "splat/raster_io.glsl"
 layout(std430, binding = 6) writeonly buffer OutRgb { float out_rgb[]; };      // [3][H][W]
 layout(std430, binding = 7) writeonly buffer OutAlpha { float out_alpha[]; };  // [H][W]
@@ -52,14 +56,13 @@ Run run_init(ivec2 p0, uint first) {
 }
 
 // Blends Gaussian `idx` (already read) into the run whose pixel centres are (cx, cy).
-void blend(inout Run r, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity, vec3 col, float depth, uint idx) {
-  vec4 dx = mean.x - cx;
-  float dy = mean.y - cy;
+void blend(inout Run r, vec4 cx, float cy, vec4 box, vec3 conic, float opacity, vec3 col, float depth, uint idx) {
+  float dy = box.y - cy;
+  vec4 dx = box.x - cx;
   vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
   vec4 alpha = min(vec4(kAlphaMax), opacity * exp(power));
   bvec4 use = not(r.done);
   use = bvec4(uvec4(use) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
-  if (!any(use)) return;
   vec4 next_T = r.T * (1.0 - alpha);
   bvec4 stop = bvec4(uvec4(use) & uvec4(lessThan(next_T, vec4(kTransmittanceMin))));
   r.done = bvec4(uvec4(r.done) | uvec4(stop));
@@ -99,28 +102,33 @@ void main() {
   ivec2 p0 = tile * int(kTileSize) + ivec2(int(lid % 4u) * 4, int(lid / 4u) * EVF_ROWS);
   vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
   float cy = float(p0.y) + 0.5;
+  vec2 tile_origin = vec2(tile * int(kTileSize));
   uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x);
   EVF_RUNS(EVF_INIT)
 #define EVF_DONE(i) && run_done(r##i)
-#define EVF_BLEND(i) blend(r##i, cx, cy + float(i), a.xy, conic, b.y, col, b.z, start + j);
+#define EVF_BLEND(i) blend(r##i, cx, cy + float(i), box, co.xyz, co.w, cd.rgb, cd.w, start + j);
   for (uint start = range.x; start < range.y; start += 256u) {
+    uint n = min(256u, range.y - start);
     barrier();
     if (lid == 0) done_count = 0;
-    for (uint k = lid; k < 256u; k += EVF_THREADS)
-      if (start + k < range.y) load_batch_entry(k, start + k);
+    for (uint w = 0; w < 8u; ++w) block_bits[lid][w] = 0u;
     bool done = true EVF_RUNS(EVF_DONE);
     barrier();
+    for (uint k = lid; k < n; k += EVF_THREADS) load_batch_entry(k, start + k, tile_origin);
     if (done) atomicAdd(done_count, 1u);
     barrier();
     if (done_count == EVF_THREADS) break;
-    uint n = min(256u, range.y - start);
-    for (uint j = 0; j < n && !done; ++j) {
-      vec4 a = batch_mean_conic[j], b = batch_misc[j];
-      vec3 col = batch_color[j];
-      vec3 conic = vec3(a.zw, b.x);
-      EVF_RUNS(EVF_BLEND)
-      done = true EVF_RUNS(EVF_DONE);
+    // This block's Gaussians, front to back: 32 at a time from the bit set.
+    for (uint w = 0; w < (n + 31u) / 32u && !done; ++w) {
+      uint bits = block_bits[lid][w];
+      while (bits != 0u && !done) {
+        uint j = w * 32u + uint(findLSB(bits));
+        bits &= bits - 1u;
+        vec4 box = batch_box[j], co = batch_conic_op[j], cd = batch_color[j];
+        EVF_RUNS(EVF_BLEND)
+        done = true EVF_RUNS(EVF_DONE);
+      }
     }
   }
 #define EVF_STORE(i) store_run(r##i, p0 + ivec2(0, i));

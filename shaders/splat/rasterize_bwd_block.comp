@@ -1,12 +1,11 @@
 #version 450
 // Backward rasterization for CPU drivers: one workgroup per 16x16 tile, each invocation owns a
-// block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s), as rasterize_block.comp. It walks the
-// tile's Gaussians back to front; per Gaussian it sums its block's 9 gradient terms in registers
-// (fixed order) and adds them to the workgroup's shared accumulator only if some pixel of the
-// block received a contribution. Same maths as rasterize_bwd.comp.
-// Why: on lavapipe each shared-memory load and each shared atomic is a loop over the 8 SIMD
-// lanes (atomic float adds become compare-and-swap loops); one read and one set of 9 adds per
-// block instead of per pixel divides that cost by the block size.
+// block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s), as rasterize_block.comp, and visits
+// back to front only the Gaussians whose support's bounding box covers its block. Per Gaussian
+// it sums its block's 9 gradient terms in registers (fixed order) and adds them to the
+// workgroup's shared accumulator. Same maths as rasterize_bwd.comp.
+// Why: see rasterize_block.comp; in addition, one set of 9 shared adds per block instead of per
+// pixel (lavapipe runs each as a loop over the lanes; float adds as compare-and-swap loops).
 #extension GL_GOOGLE_include_directive : require
 #ifndef EVF_CAS_ATOMICS
 #extension GL_EXT_shader_atomic_float : require
@@ -30,7 +29,9 @@
 #error EVF_ROWS must be 1, 2, 4 or 8
 #endif
 #define EVF_THREADS (64 / EVF_ROWS)
+#define EVF_BLOCKS EVF_THREADS
 layout(local_size_x = EVF_THREADS) in;
+#define EVF_BLOCK_BATCH 1
 #include "splat/raster_io.glsl"
 layout(std430, binding = 6) readonly buffer InT { float final_T[]; };
 layout(std430, binding = 7) readonly buffer InLast { uint last_isect[]; };
@@ -105,19 +106,17 @@ Run run_init(ivec2 p0, uint first) {
 uint run_last(Run r) { return max(max(r.last.x, r.last.y), max(r.last.z, r.last.w)); }
 
 // Gaussian `idx` (already read) against the run whose pixel centres are (cx, cy): updates the
-// run's state and adds the run's gradient terms to g. Returns whether any pixel contributed.
-bool accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity, vec3 col,
+// run's state and adds the run's gradient terms to g (zeros where no pixel contributed).
+void accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec4 box, vec3 conic, float opacity, vec3 col,
                 uint idx) {
+  float dy = box.y - cy;
   bvec4 live = lessThan(uvec4(idx), r.last);
-  if (!any(live)) return false;
-  vec4 dx = mean.x - cx;
-  float dy = mean.y - cy;
+  vec4 dx = box.x - cx;
   vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
   vec4 G = exp(power);
   vec4 raw = opacity * G;
   vec4 alpha = min(vec4(kAlphaMax), raw);
   bvec4 c = bvec4(uvec4(live) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
-  if (!any(c)) return false;
   vec4 one_minus = 1.0 - alpha;
   vec4 T_before = r.T / one_minus;
   vec4 w = mix(vec4(0.0), alpha * T_before, c);
@@ -134,7 +133,6 @@ bool accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec2 mean, vec3 co
   g.mean -= vec2(dot(v_power, conic.x * dx + conic.y * dy), dot(v_power, conic.y * dx + conic.z * dy));
   g.conic += vec3(-0.5 * dot(v_power, dx * dx), -dy * dot(v_power, dx), -0.5 * dy * dy * dot(v_power, vec4(1.0)));
   g.opac += dot(mix(vec4(0.0), G * v_alpha_j, smooth_part), vec4(1.0));
-  return true;
 }
 
 void main() {
@@ -143,11 +141,12 @@ void main() {
   ivec2 p0 = tile * int(kTileSize) + ivec2(int(lid % 4u) * 4, int(lid / 4u) * EVF_ROWS);
   vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
   float cy = float(p0.y) + 0.5;
+  vec2 tile_origin = vec2(tile * int(kTileSize));
   uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
   uint last = range.x;
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x); last = max(last, run_last(r##i));
   EVF_RUNS(EVF_INIT)
-#define EVF_ACC(i) any_c = accumulate(r##i, g, cx, cy + float(i), a.xy, conic, b.y, col, start + j) || any_c;
+#define EVF_ACC(i) accumulate(r##i, g, cx, cy + float(i), box, co.xyz, co.w, col, start + j);
   uint count = range.y - range.x;
   // Gaussians at or past the tile's largest `last` blended into no pixel: their slots get zeros
   // without being visited.
@@ -160,27 +159,31 @@ void main() {
     uint start = range.x + (nb - 1u) * 256u;
     uint n = min(256u, range.y - start);
     barrier();
-    for (uint k = lid; k < 256u; k += EVF_THREADS) {
-      if (k < n && start + k < visit_end) load_batch_entry(k, start + k);
+    for (uint w = 0; w < 8u; ++w) block_bits[lid][w] = 0u;
+    for (uint k = lid; k < 256u; k += EVF_THREADS)
       for (uint q = 0; q < 9; ++q) acc_zero(k * 9 + q);
-    }
     barrier();
-    // Each block starts at its own last Gaussian.
+    uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
+    for (uint k = lid; k < n_load; k += EVF_THREADS) load_batch_entry(k, start + k, tile_origin);
+    barrier();
+    // This block's Gaussians below its last blended one, back to front: 32 at a time.
     uint n_visit = start < last ? min(n, last - start) : 0u;
-    for (uint jj = n_visit; jj > 0u; --jj) {
-      uint j = jj - 1u;
-      vec4 a = batch_mean_conic[j];
-      vec4 b = batch_misc[j];
-      vec3 col = batch_color[j];
-      vec3 conic = vec3(a.zw, b.x);
-      Grad g;
-      g.mean = vec2(0.0);
-      g.conic = vec3(0.0);
-      g.opac = 0.0;
-      g.rgb = vec3(0.0);
-      bool any_c = false;
-      EVF_RUNS(EVF_ACC)
-      if (any_c) {
+    for (uint w = (n_visit + 31u) / 32u; w > 0u; --w) {
+      uint bits = block_bits[lid][w - 1u];
+      uint above = n_visit - (w - 1u) * 32u;  // entries of this word below n_visit
+      if (above < 32u) bits &= (1u << above) - 1u;
+      while (bits != 0u) {
+        uint b = uint(findMSB(bits));
+        bits &= ~(1u << b);
+        uint j = (w - 1u) * 32u + b;
+        vec4 box = batch_box[j], co = batch_conic_op[j];
+        vec3 col = batch_color[j].rgb;
+        Grad g;
+        g.mean = vec2(0.0);
+        g.conic = vec3(0.0);
+        g.opac = 0.0;
+        g.rgb = vec3(0.0);
+        EVF_RUNS(EVF_ACC)
         uint o = j * 9u;
         acc_add(o, g.mean.x); acc_add(o + 1, g.mean.y);
         acc_add(o + 2, g.conic.x); acc_add(o + 3, g.conic.y); acc_add(o + 4, g.conic.z);
