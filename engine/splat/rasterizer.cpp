@@ -249,7 +249,7 @@ void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rg
   cmd_.mark("rasterize backward");
   auto* pp = reinterpret_cast<ProjectPC*>(project_pc_.data());
   pp->flags = accumulate ? (pp->flags | kFlagAccumulate) : (pp->flags & ~kFlagAccumulate);
-  cmd_.dispatch("splat/project_bwd",
+  cmd_.dispatch(accumulate ? "splat/project_bwd_acc" : "splat/project_bwd",
                 {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1),
                  sh_band(params, 2), sh_band(params, 3), isect_offset_, gaussian_id_from_slot_, plane(0), plane(1), plane(2),
                  plane(3), plane(4), plane(5), plane(6), plane(7), plane(8), grads.means, grads.log_scales, grads.quats,

@@ -27,11 +27,11 @@ void main() {
   uint g = evf_linear_invocation(128);
   if (g >= pc.num_gaussians) return;
   Camera cam = camera_from(pc.cam);
-  vec3 mean = load_vec3(g, 0);
+  vec3 mean = load_mean(g);
   vec3 p = cam.R * mean + cam.t;
   if (!(p.z >= pc.cam.near_plane && p.z <= pc.cam.far_plane)) { cull(g); return; }
   vec4 qn = normalize(load_quat(g));
-  mat3 Sigma_c = cam.R * covariance_3d(load_vec3(g, 1), qn) * transpose(cam.R);
+  mat3 Sigma_c = cam.R * covariance_3d(load_log_scale(g), qn) * transpose(cam.R);
   mat3x2 J = ewa_jacobian(p, cam);
   mat2 cov = J * Sigma_c * transpose(J);
   vec3 cov2d = vec3(cov[0][0], cov[0][1], cov[1][1]);
@@ -63,8 +63,8 @@ void main() {
   vec3 dir = normalize(mean - camera_center(cam));
   float Y[16];
   sh_basis(dir, pc.sh_degree, Y);
-  vec3 rgb = vec3(0.5);
-  uint K = (pc.sh_degree + 1) * (pc.sh_degree + 1);
-  for (uint k = 0; k < K; ++k) rgb += Y[k] * load_sh(g, k);
+  vec3 coeffs[16];
+  load_sh_all(g, (pc.flags >> 8) & 3u, coeffs);
+  vec3 rgb = sh_eval(vec3(0.5), Y, coeffs);
   proj_color[g] = vec4(max(rgb, vec3(0.0)), 0.0);
 }
