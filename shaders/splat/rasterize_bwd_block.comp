@@ -117,13 +117,13 @@ void accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec4 box, vec3 con
   vec4 raw = opacity * G;
   vec4 alpha = min(vec4(kAlphaMax), raw);
   bvec4 c = bvec4(uvec4(live) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
-  vec4 one_minus = 1.0 - alpha;
-  vec4 T_before = r.T / one_minus;
+  vec4 inv_one_minus = 1.0 / (1.0 - alpha);  // alpha <= 0.99
+  vec4 T_before = r.T * inv_one_minus;
   vec4 w = mix(vec4(0.0), alpha * T_before, c);
   g.rgb += vec3(dot(w, r.vr), dot(w, r.vg), dot(w, r.vb));
   vec4 col_dot_v = col.r * r.vr + col.g * r.vg + col.b * r.vb;
   vec4 s_dot_v = r.Sr * r.vr + r.Sg * r.vg + r.Sb * r.vb;
-  vec4 v_alpha_j = T_before * col_dot_v - s_dot_v / one_minus + r.vAT / one_minus;
+  vec4 v_alpha_j = T_before * col_dot_v + (r.vAT - s_dot_v) * inv_one_minus;
   r.Sr += w * col.r;
   r.Sg += w * col.g;
   r.Sb += w * col.b;
