@@ -70,7 +70,8 @@ void acc_zero(uint i) { acc[i] = 0.0; }
 #endif
 
 struct Run {     // 4 horizontally adjacent pixels
-  vec4 T, Sr, Sg, Sb;      // transmittance before the current Gaussian; colour behind it
+  vec4 T;                  // transmittance before the current Gaussian
+  vec4 Sv;                 // dot(colour of everything behind it, v_rgb)
   vec4 vr, vg, vb, vAT;    // v_rgb, v_alpha * final T
   uvec4 last;              // one past the last blended Gaussian (0 blends nothing)
 };
@@ -97,9 +98,7 @@ Run run_init(ivec2 p0, uint first) {
     r.vb[k] = inside ? v_rgb[2 * hw + i] : 0.0;
     r.vAT[k] = inside ? v_alpha[i] * T : 0.0;
   }
-  r.Sr = pc.background.r * r.T;
-  r.Sg = pc.background.g * r.T;
-  r.Sb = pc.background.b * r.T;
+  r.Sv = (pc.background.r * r.vr + pc.background.g * r.vg + pc.background.b * r.vb) * r.T;
   return r;
 }
 
@@ -122,11 +121,8 @@ void accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec4 box, vec3 con
   vec4 w = mix(vec4(0.0), alpha * T_before, c);
   g.rgb += vec3(dot(w, r.vr), dot(w, r.vg), dot(w, r.vb));
   vec4 col_dot_v = col.r * r.vr + col.g * r.vg + col.b * r.vb;
-  vec4 s_dot_v = r.Sr * r.vr + r.Sg * r.vg + r.Sb * r.vb;
-  vec4 v_alpha_j = T_before * col_dot_v + (r.vAT - s_dot_v) * inv_one_minus;
-  r.Sr += w * col.r;
-  r.Sg += w * col.g;
-  r.Sb += w * col.b;
+  vec4 v_alpha_j = T_before * col_dot_v + (r.vAT - r.Sv) * inv_one_minus;
+  r.Sv += w * col_dot_v;  // only S . v_rgb is ever needed
   r.T = mix(r.T, T_before, c);
   bvec4 smooth_part = bvec4(uvec4(c) & uvec4(lessThan(raw, vec4(kAlphaMax))));
   vec4 v_power = mix(vec4(0.0), alpha * v_alpha_j, smooth_part);
