@@ -25,10 +25,11 @@ void load_batch_entry(uint local, uint isect) {
 // Block kernels (rasterize_block, rasterize_bwd_block): the tile is split into EVF_BLOCKS blocks
 // of 4 x EVF_ROWS pixels, one per invocation. Loading a batch also records, per block, which of
 // the batch's Gaussians can reach it (a 256-bit set per block), so that each invocation visits
-// only those. What the visit reads comes in three vec4s.
-shared vec4 batch_box[256];       // mean.xy, half extents of the support (padded)
-shared vec4 batch_conic_op[256];  // conic.xyz, opacity
-shared vec4 batch_color[256];     // rgb, depth
+// only those. A visit reads 9 (backward) or 10 (forward) floats: each float read is a loop over
+// the SIMD lanes on lavapipe, so nothing else is kept.
+shared vec4 batch_a[256];  // mean.xy, conic.xy
+shared vec4 batch_b[256];  // conic.z, opacity, red, green
+shared vec2 batch_c[256];  // blue, depth
 shared uint block_bits[EVF_BLOCKS][8];
 
 // Half extents of the support {d : d^T conic d <= q_max}: its bounding box is
@@ -46,9 +47,10 @@ void load_batch_entry(uint local, uint isect, vec2 tile_origin) {
   vec4 a = proj_mean_conic[g], b = proj_misc[g];
   vec3 conic = vec3(a.zw, b.x);
   vec2 ext = support_half_extent(conic, b.w);
-  batch_box[local] = vec4(a.xy, ext);
-  batch_conic_op[local] = vec4(conic, b.y);
-  batch_color[local] = vec4(proj_color[g].rgb, b.z);
+  vec3 col = proj_color[g].rgb;
+  batch_a[local] = a;
+  batch_b[local] = vec4(b.xy, col.rg);
+  batch_c[local] = vec2(col.b, b.z);
   // Block column c holds pixel centres x in [4c + 0.5, 4c + 3.5] (tile coordinates); rows alike.
   vec2 m = a.xy - tile_origin, bsize = vec2(4.0, float(EVF_ROWS));
   vec2 nblk = vec2(4.0, float(EVF_BLOCKS / 4));

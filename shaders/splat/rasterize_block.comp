@@ -56,9 +56,9 @@ Run run_init(ivec2 p0, uint first) {
 }
 
 // Blends Gaussian `idx` (already read) into the run whose pixel centres are (cx, cy).
-void blend(inout Run r, vec4 cx, float cy, vec4 box, vec3 conic, float opacity, vec3 col, float depth, uint idx) {
-  float dy = box.y - cy;
-  vec4 dx = box.x - cx;
+void blend(inout Run r, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity, vec3 col, float depth, uint idx) {
+  float dy = mean.y - cy;
+  vec4 dx = mean.x - cx;
   vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
   vec4 alpha = min(vec4(kAlphaMax), opacity * exp(power));
   bvec4 use = not(r.done);
@@ -107,7 +107,7 @@ void main() {
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x);
   EVF_RUNS(EVF_INIT)
 #define EVF_DONE(i) && run_done(r##i)
-#define EVF_BLEND(i) blend(r##i, cx, cy + float(i), box, co.xyz, co.w, cd.rgb, cd.w, start + j);
+#define EVF_BLEND(i) blend(r##i, cx, cy + float(i), a.xy, conic, b.y, col, c.y, start + j);
   for (uint start = range.x; start < range.y; start += 256u) {
     uint n = min(256u, range.y - start);
     barrier();
@@ -125,7 +125,9 @@ void main() {
       while (bits != 0u && !done) {
         uint j = w * 32u + uint(findLSB(bits));
         bits &= bits - 1u;
-        vec4 box = batch_box[j], co = batch_conic_op[j], cd = batch_color[j];
+        vec4 a = batch_a[j], b = batch_b[j];
+        vec2 c = batch_c[j];
+        vec3 conic = vec3(a.zw, b.x), col = vec3(b.zw, c.x);
         EVF_RUNS(EVF_BLEND)
         done = true EVF_RUNS(EVF_DONE);
       }

@@ -106,11 +106,11 @@ uint run_last(Run r) { return max(max(r.last.x, r.last.y), max(r.last.z, r.last.
 
 // Gaussian `idx` (already read) against the run whose pixel centres are (cx, cy): updates the
 // run's state and adds the run's gradient terms to g (zeros where no pixel contributed).
-void accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec4 box, vec3 conic, float opacity, vec3 col,
+void accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity, vec3 col,
                 uint idx) {
-  float dy = box.y - cy;
+  float dy = mean.y - cy;
   bvec4 live = lessThan(uvec4(idx), r.last);
-  vec4 dx = box.x - cx;
+  vec4 dx = mean.x - cx;
   vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
   vec4 G = exp(power);
   vec4 raw = opacity * G;
@@ -142,7 +142,7 @@ void main() {
   uint last = range.x;
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x); last = max(last, run_last(r##i));
   EVF_RUNS(EVF_INIT)
-#define EVF_ACC(i) accumulate(r##i, g, cx, cy + float(i), box, co.xyz, co.w, col, start + j);
+#define EVF_ACC(i) accumulate(r##i, g, cx, cy + float(i), a.xy, conic, b.y, col, start + j);
   uint count = range.y - range.x;
   // Gaussians at or past the tile's largest `last` blended into no pixel: their slots get zeros
   // without being visited.
@@ -169,11 +169,11 @@ void main() {
       uint above = n_visit - (w - 1u) * 32u;  // entries of this word below n_visit
       if (above < 32u) bits &= (1u << above) - 1u;
       while (bits != 0u) {
-        uint b = uint(findMSB(bits));
-        bits &= ~(1u << b);
-        uint j = (w - 1u) * 32u + b;
-        vec4 box = batch_box[j], co = batch_conic_op[j];
-        vec3 col = batch_color[j].rgb;
+        uint top = uint(findMSB(bits));
+        bits &= ~(1u << top);
+        uint j = (w - 1u) * 32u + top;
+        vec4 a = batch_a[j], b = batch_b[j];
+        vec3 conic = vec3(a.zw, b.x), col = vec3(b.zw, batch_c[j].x);
         Grad g;
         g.mean = vec2(0.0);
         g.conic = vec3(0.0);
