@@ -156,10 +156,11 @@ void main() {
     uint n = min(256u, range.y - start);
     barrier();
     for (uint w = 0; w < 8u; ++w) block_bits[lid][w] = 0u;
-    for (uint k = lid; k < 256u; k += EVF_THREADS)
+    // Entries at or past visit_end are neither loaded nor visited (their slots get zeros).
+    uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
+    for (uint k = lid; k < n_load; k += EVF_THREADS)
       for (uint q = 0; q < 9; ++q) acc_zero(k * 9 + q);
     barrier();
-    uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
     for (uint k = lid; k < n_load; k += EVF_THREADS) load_batch_entry(k, start + k, tile_origin);
     barrier();
     // This block's Gaussians below its last blended one, back to front: 32 at a time.
@@ -188,7 +189,7 @@ void main() {
       }
     }
     barrier();
-    for (uint k = lid; k < n; k += EVF_THREADS) {
+    for (uint k = lid; k < n_load; k += EVF_THREADS) {
       uint slot = slot_from_isect[start + k], o = k * 9;
       g_mean_x[slot] = acc_get(o);
       g_mean_y[slot] = acc_get(o + 1);
@@ -199,6 +200,18 @@ void main() {
       g_red[slot] = acc_get(o + 6);
       g_green[slot] = acc_get(o + 7);
       g_blue[slot] = acc_get(o + 8);
+    }
+    for (uint k = n_load + lid; k < n; k += EVF_THREADS) {
+      uint slot = slot_from_isect[start + k];
+      g_mean_x[slot] = 0.0;
+      g_mean_y[slot] = 0.0;
+      g_conic_x[slot] = 0.0;
+      g_conic_y[slot] = 0.0;
+      g_conic_z[slot] = 0.0;
+      g_opacity[slot] = 0.0;
+      g_red[slot] = 0.0;
+      g_green[slot] = 0.0;
+      g_blue[slot] = 0.0;
     }
   }
 }
