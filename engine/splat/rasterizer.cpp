@@ -149,8 +149,9 @@ void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const 
   // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
   block_suffix_ = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? "_block" : "";
   if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
-    std::string k = e;
-    block_suffix_ = k == "pixel" ? "" : k == "block" ? "_block" : "_block" + k.substr(5);
+    const std::string k = e;
+    if (k != "pixel" && k != "block") throw gpu::Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + k + "'");
+    block_suffix_ = k == "block" ? "_block" : "";
   }
   std::memcpy(raster_pc_.data(), &rp, sizeof(rp));
 }

@@ -14,6 +14,7 @@
 #ifndef EVF_ROWS
 #define EVF_ROWS 4
 #endif
+// 4 rows measured best on lavapipe (bench raster 100k: 2 and 8 rows slower or equal).
 // EVF_RUNS(X) expands X(i) for each row i of the block.
 #if EVF_ROWS == 1
 #define EVF_RUNS(X) X(0)
