@@ -120,10 +120,14 @@ void main() {
     if (done) atomicAdd(done_count, 1u);
     barrier();
     if (done_count == EVF_THREADS) break;
-    // This block's Gaussians, front to back: 32 at a time from the bit set.
-    for (uint w = 0; w < (n + 31u) / 32u && !done; ++w) {
-      uint bits = block_bits[lid][w];
-      while (bits != 0u && !done) {
+    // This block's Gaussians, front to back, from its bit set. One loop over the whole batch
+    // (not one per 32-bit word): the lanes of a SIMD vector run as many iterations as their
+    // busiest lane, and per batch that is fewer than the sum of the per-word maxima.
+    uint nwords = (n + 31u) / 32u, w = 0u, bits = block_bits[lid][0];
+    while (!done) {
+      while (bits == 0u && w + 1u < nwords) bits = block_bits[lid][++w];
+      if (bits == 0u) break;
+      {
         uint j = w * 32u + uint(findLSB(bits));
         bits &= bits - 1u;
         vec4 a = batch_a[j], b = batch_b[j];

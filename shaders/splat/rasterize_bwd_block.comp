@@ -164,16 +164,22 @@ void main() {
     barrier();
     for (uint k = lid; k < n_load; k += EVF_THREADS) load_batch_entry(k, start + k, tile_origin);
     barrier();
-    // This block's Gaussians below its last blended one, back to front: 32 at a time.
+    // This block's Gaussians below its last blended one, back to front, from its bit set: one
+    // loop over the batch (see rasterize_block.comp).
     uint n_visit = start < last ? min(n, last - start) : 0u;
-    for (uint w = (n_visit + 31u) / 32u; w > 0u; --w) {
-      uint bits = block_bits[lid][w - 1u];
-      uint above = n_visit - (w - 1u) * 32u;  // entries of this word below n_visit
-      if (above < 32u) bits &= (1u << above) - 1u;
-      while (bits != 0u) {
+    uint w = (n_visit + 31u) / 32u, bits = 0u;  // w: one past the current word
+    for (;;) {
+      while (bits == 0u && w > 0u) {
+        --w;
+        bits = block_bits[lid][w];
+        uint below = n_visit - w * 32u;  // entries of this word below n_visit
+        if (below < 32u) bits &= (1u << below) - 1u;
+      }
+      if (bits == 0u) break;
+      {
         uint top = uint(findMSB(bits));
         bits &= ~(1u << top);
-        uint j = (w - 1u) * 32u + top;
+        uint j = w * 32u + top;
         vec4 a = batch_a[j], b = batch_b[j];
         vec3 conic = vec3(a.zw, b.x), col = vec3(b.zw, batch_c[j].x);
         Grad g;
