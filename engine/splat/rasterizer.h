@@ -61,7 +61,7 @@ class Rasterizer {
   PrefixSum scan_;
   RadixSort sort_;
   // Per Gaussian.
-  gpu::Buffer proj_mean_conic_, proj_misc_, proj_color_, tile_rect_, tiles_touched_, isect_offset_;
+  gpu::Buffer proj_mean_conic_, proj_misc_, proj_color_, proj_dcolor_, tile_rect_, tiles_touched_, isect_offset_;
   // Per intersection.
   gpu::Buffer keys_, slot_from_isect_, gaussian_id_from_slot_, isect_grad_;
   const gpu::Buffer* sorted_slots_ = nullptr;

@@ -13,6 +13,9 @@ layout(std430, binding = 9) writeonly buffer ProjB { vec4 proj_misc[]; };       
 layout(std430, binding = 10) writeonly buffer ProjC { vec4 proj_color[]; };      // rgb, 0
 layout(std430, binding = 11) writeonly buffer Rect { uvec4 tile_rect[]; };       // tile x0, y0, x1, y1 (exclusive)
 layout(std430, binding = 12) writeonly buffer Count { uint tiles_touched[]; };
+// d(raw colour channel c)/d(view direction), [N][3 channels][3], for project_bwd (SH degree >= 1;
+// a placeholder buffer at degree 0, never written). project_bwd then needs no SH coefficients.
+layout(std430, binding = 13) writeonly buffer DColor { float proj_dcolor[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
 
 // Culling selects zeros at the end instead of returning early: on CPU drivers (lavapipe) an
@@ -57,6 +60,17 @@ void main() {
   vec3 coeffs[16];
   load_sh_all(g, (pc.flags >> 8) & 3u, coeffs);
   vec3 rgb = sh_eval(vec3(0.5), Y, coeffs);
+  if (pc.sh_degree >= 1) {
+    float wr[16], wg[16], wb[16];
+#define EVF_SPLIT(k) wr[k] = coeffs[k].r; wg[k] = coeffs[k].g; wb[k] = coeffs[k].b;
+    EVF_SPLIT(0) EVF_SPLIT(1) EVF_SPLIT(2) EVF_SPLIT(3) EVF_SPLIT(4) EVF_SPLIT(5) EVF_SPLIT(6) EVF_SPLIT(7)
+    EVF_SPLIT(8) EVF_SPLIT(9) EVF_SPLIT(10) EVF_SPLIT(11) EVF_SPLIT(12) EVF_SPLIT(13) EVF_SPLIT(14) EVF_SPLIT(15)
+    vec3 jr = sh_basis_vjp(dir, pc.sh_degree, wr), jg = sh_basis_vjp(dir, pc.sh_degree, wg),
+         jb = sh_basis_vjp(dir, pc.sh_degree, wb);
+    proj_dcolor[9 * g] = jr.x; proj_dcolor[9 * g + 1] = jr.y; proj_dcolor[9 * g + 2] = jr.z;
+    proj_dcolor[9 * g + 3] = jg.x; proj_dcolor[9 * g + 4] = jg.y; proj_dcolor[9 * g + 5] = jg.z;
+    proj_dcolor[9 * g + 6] = jb.x; proj_dcolor[9 * g + 7] = jb.y; proj_dcolor[9 * g + 8] = jb.z;
+  }
   tiles_touched[g] = count;  // 0 when culled
   tile_rect[g] = uvec4(t0, t1);
   proj_mean_conic[g] = keep ? vec4(mean2d, conic.xy) : vec4(0.0);

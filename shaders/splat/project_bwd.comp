@@ -31,6 +31,10 @@ layout(std430, binding = 25) buffer VSh2 { float v_sh2[]; };
 layout(std430, binding = 26) buffer VSh3 { float v_sh3[]; };
 layout(std430, binding = 27) buffer Grad2d { float grad2d_norm[]; };
 layout(std430, binding = 28) writeonly buffer PosePartial { float pose_partial[]; };  // [groups][6]
+// From the forward (project.comp): the clamped colour max(raw, 0) (raw > 0 exactly where it is
+// > 0) and d(raw)/d(direction), so that no SH coefficient is read here.
+layout(std430, binding = 29) readonly buffer ProjC { vec4 proj_color[]; };
+layout(std430, binding = 30) readonly buffer DColor { float proj_dcolor[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
 
 shared float red[6][128];
@@ -108,19 +112,23 @@ void main() {
     vec3 dir = dvec / dlen;
     float Y[16];
     sh_basis(dir, pc.sh_degree, Y);
-    vec3 coeffs[16];
-    load_sh_all(g, buffer_degree, coeffs);
-    vec3 raw = sh_eval(vec3(0.5), Y, coeffs);
-    vec3 v_raw = listed ? v_color * vec3(greaterThan(raw, vec3(0.0))) : vec3(0.0);
+    vec3 clamped = proj_color[g].rgb;
+    vec3 v_raw = listed ? v_color * vec3(greaterThan(clamped, vec3(0.0))) : vec3(0.0);
     // Coefficients above the active degree have Y_k = 0: zero gradient, as the contract says.
     vec3 v_sh[16];
-    float w[16];
-#define EVF_SH_GRAD(k) v_sh[k] = listed ? Y[k] * v_raw : vec3(0.0); w[k] = dot(coeffs[k], v_raw);
+#define EVF_SH_GRAD(k) v_sh[k] = listed ? Y[k] * v_raw : vec3(0.0);
     EVF_SH_GRAD(0) EVF_SH_GRAD(1) EVF_SH_GRAD(2) EVF_SH_GRAD(3) EVF_SH_GRAD(4) EVF_SH_GRAD(5) EVF_SH_GRAD(6)
     EVF_SH_GRAD(7) EVF_SH_GRAD(8) EVF_SH_GRAD(9) EVF_SH_GRAD(10) EVF_SH_GRAD(11) EVF_SH_GRAD(12)
     EVF_SH_GRAD(13) EVF_SH_GRAD(14) EVF_SH_GRAD(15)
     store_sh_all(g, buffer_degree, v_sh);
-    vec3 v_dir = sh_basis_vjp(dir, pc.sh_degree, w);
+    // v_dir = sum_c v_raw_c d(raw_c)/d(dir) (zero at degree 0).
+    vec3 v_dir = vec3(0.0);
+    if (pc.sh_degree >= 1) {
+      uint i = 9 * g;
+      v_dir = v_raw.r * vec3(proj_dcolor[i], proj_dcolor[i + 1], proj_dcolor[i + 2]) +
+              v_raw.g * vec3(proj_dcolor[i + 3], proj_dcolor[i + 4], proj_dcolor[i + 5]) +
+              v_raw.b * vec3(proj_dcolor[i + 6], proj_dcolor[i + 7], proj_dcolor[i + 8]);
+    }
     vec3 v_dvec = (v_dir - dir * dot(dir, v_dir)) / dlen;
     vec3 v_mean = v_dvec;
     vec3 v_campos = -v_dvec;
