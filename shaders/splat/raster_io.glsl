@@ -27,10 +27,13 @@ void load_batch_entry(uint local, uint isect) {
 // the batch's Gaussians can reach it (a 256-bit set per block), so that each invocation visits
 // only those. A visit reads 9 (backward) or 10 (forward) floats: each float read is a loop over
 // the SIMD lanes on lavapipe, so nothing else is kept.
-shared vec4 batch_a[256];  // mean.xy, conic.xy
-shared vec4 batch_b[256];  // conic.z, opacity, red, green
-shared vec2 batch_c[256];  // blue, depth
-shared uint block_bits[EVF_BLOCKS][8];
+#ifndef EVF_BATCH
+#define EVF_BATCH 256  // Gaussians per batch, a multiple of 32
+#endif
+shared vec4 batch_a[EVF_BATCH];  // mean.xy, conic.xy
+shared vec4 batch_b[EVF_BATCH];  // conic.z, opacity, red, green
+shared vec2 batch_c[EVF_BATCH];  // blue, depth
+shared uint block_bits[EVF_BLOCKS][EVF_BATCH / 32];
 
 // Half extents of the support {d : d^T conic d <= q_max}: its bounding box is
 // sqrt(q_max * diag(inverse(conic))). Padded so that float rounding never drops a pixel whose

@@ -33,6 +33,7 @@
 #define EVF_BLOCKS EVF_THREADS
 layout(local_size_x = EVF_THREADS) in;
 #define EVF_BLOCK_BATCH 1
+// Batches of 256 (32, 64, 128 measured: no better; the backward loads only what it visits).
 #include "splat/raster_io.glsl"
 layout(std430, binding = 6) readonly buffer InT { float final_T[]; };
 layout(std430, binding = 7) readonly buffer InLast { uint last_isect[]; };
@@ -52,7 +53,7 @@ layout(push_constant) uniform PC { RasterPC pc; };
 shared uint tile_last;
 
 #ifdef EVF_CAS_ATOMICS
-shared uint acc[256 * 9];
+shared uint acc[EVF_BATCH * 9];
 void acc_add(uint i, float v) {
   uint old = acc[i];
   for (;;) {
@@ -64,7 +65,7 @@ void acc_add(uint i, float v) {
 float acc_get(uint i) { return uintBitsToFloat(acc[i]); }
 void acc_zero(uint i) { acc[i] = 0u; }
 #else
-shared float acc[256 * 9];
+shared float acc[EVF_BATCH * 9];
 void acc_add(uint i, float v) { atomicAdd(acc[i], v); }
 float acc_get(uint i) { return acc[i]; }
 void acc_zero(uint i) { acc[i] = 0.0; }
@@ -152,11 +153,11 @@ void main() {
   atomicMax(tile_last, last);
   barrier();
   uint visit_end = tile_last;
-  for (uint nb = (count + 255u) / 256u; nb > 0u; --nb) {
-    uint start = range.x + (nb - 1u) * 256u;
-    uint n = min(256u, range.y - start);
+  for (uint nb = (count + EVF_BATCH - 1u) / EVF_BATCH; nb > 0u; --nb) {
+    uint start = range.x + (nb - 1u) * EVF_BATCH;
+    uint n = min(uint(EVF_BATCH), range.y - start);
     barrier();
-    for (uint w = 0; w < 8u; ++w) block_bits[lid][w] = 0u;
+    for (uint w = 0; w < EVF_BATCH / 32; ++w) block_bits[lid][w] = 0u;
     // Entries at or past visit_end are neither loaded nor visited (their slots get zeros).
     uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
     for (uint k = lid; k < n_load; k += EVF_THREADS)
