@@ -19,6 +19,9 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Command
   keys_tmp_.ensure(uint64_t(n) * 4);
   values_tmp_.ensure(uint64_t(n) * 4);
   uint32_t items = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? kSortItemsCpu : kSortItemsGpu;
+  // Short inputs: smaller blocks so that at least two workgroups share the work (a single block
+  // runs on one CPU thread). More than two made medium sizes slower (bench train's sort).
+  while (items > kSortItemsGpu && uint64_t(n) < uint64_t(2) * kSortGroupSize * items) items /= 2;
   if (const char* e = std::getenv("EVF_SORT_ITEMS")) items = std::clamp<uint32_t>(uint32_t(std::atoi(e)), 1u, 256u);
   const uint32_t blocks = gpu::Commands::div_up(n, kSortGroupSize * items);
   const uint32_t n_counts = blocks * kSortBins;
