@@ -178,13 +178,14 @@ void main() {
     EVF_PUT(v_opacity_logits, g, v_logit);
     EVF_PUT(grad2d_norm, g, length(v_mean2d));
   }
-  // Workgroup reduction of the pose contributions (fixed order: deterministic).
+  // Workgroup reduction of the pose contributions, in a fixed order (deterministic): invocations
+  // 0..5 each sum one component over the workgroup. Not a tree: on CPU drivers every step of a
+  // tree costs every SIMD vector its masked shared accesses (over half of this kernel's time);
+  // this loop has zero trips for all vectors but the first.
   for (uint k = 0; k < 6; ++k) red[k][lid] = pose[k];
   barrier();
-  for (uint s = 64u; s > 0u; s >>= 1) {
-    if (lid < s)
-      for (uint k = 0; k < 6; ++k) red[k][lid] += red[k][lid + s];
-    barrier();
-  }
-  if (lid < 6) pose_partial[evf_linear_group() * 6 + lid] = red[lid][0];
+  uint len = lid < 6u ? 128u : 0u;
+  float sum = 0.0;
+  for (uint i = 0; i < len; ++i) sum += red[lid][i];
+  if (lid < 6) pose_partial[evf_linear_group() * 6 + lid] = sum;
 }
