@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstdlib>
 #include <numeric>
 #include <random>
 
@@ -39,7 +40,12 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
   auto& ctx = test::gpu_context();
   RadixSort sort(ctx);
   std::mt19937 rng(11);
-  for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{{1, 8}, {17, 4}, {4096, 12}, {4097, 32}, {250000, 20}, {600000, 32}}) {
+  // Both block sizes (16 keys per invocation on GPUs, up to 128 on CPU drivers) whatever the
+  // device, and the device's own choice (smaller blocks for short inputs).
+  for (const char* items : {"16", "128", ""})
+  for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{{1, 8}, {17, 4}, {4096, 12}, {4097, 32}, {16385, 8}, {70000, 16}, {250000, 20}, {600000, 32}}) {
+    if (*items) setenv("EVF_SORT_ITEMS", items, 1);
+    else unsetenv("EVF_SORT_ITEMS");
     std::vector<uint32_t> keys(n), vals(n);
     // Few distinct keys in the sorted bits so stability is exercised; junk above `bits`.
     for (auto& k : keys) k = (rng() % 977) * 2654435761u;
@@ -59,8 +65,9 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
     std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return (keys[a] & mask) < (keys[b] & mask); });
     bool ok = true;
     for (uint32_t i = 0; i < n; ++i) ok = ok && gv[i] == order[i] && gk[i] == keys[order[i]];
-    INFO("n = " << n << ", bits = " << bits);
+    INFO("n = " << n << ", bits = " << bits << ", items " << items);
     REQUIRE(ok);
   }
+  unsetenv("EVF_SORT_ITEMS");
   test::require_no_validation_messages();
 }

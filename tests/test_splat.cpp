@@ -158,8 +158,9 @@ TEST_CASE("splat gradients match finite differences of the reference", "[gpu][sp
   test::require_no_validation_messages();
 }
 
-TEST_CASE("splat backward: compare-and-swap and subgroup-reduction paths give the same gradients", "[gpu][splat]") {
+TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-reduction paths agree", "[gpu][splat]") {
   Scene s = make_scene(31, 600, 2, 96, 80, false);
+  struct Result { GaussianCloud grads; std::vector<float> rgb, alpha; };
   auto run = [&](gpu::Context& ctx) {
     GaussianBuffers params(ctx, s.cloud.size(), 2, "p_"), grads(ctx, s.cloud.size(), 2, "v_");
     params.upload(s.cloud);
@@ -170,25 +171,43 @@ TEST_CASE("splat backward: compare-and-swap and subgroup-reduction paths give th
     Rasterizer r(ctx);
     r.forward(params, s.cam, s.settings);
     r.backward(params, vr, va, grads);
-    return grads.download();
+    return Result{grads.download(), r.outputs().rgb.read<float>(3 * hw), r.outputs().alpha.read<float>(hw)};
   };
+  auto same = [](const Result& a, const Result& b) {
+    for (size_t i = 0; i < a.rgb.size(); ++i) REQUIRE(a.rgb[i] == Approx(b.rgb[i]).margin(1e-6));
+    for (size_t i = 0; i < a.alpha.size(); ++i) REQUIRE(a.alpha[i] == Approx(b.alpha[i]).margin(1e-6));
+    for (size_t i = 0; i < a.grads.means.size(); ++i)
+      REQUIRE(a.grads.means[i] == Approx(b.grads.means[i]).margin(1e-6).epsilon(1e-4));
+    for (size_t i = 0; i < a.grads.quats.size(); ++i)
+      REQUIRE(a.grads.quats[i] == Approx(b.grads.quats[i]).margin(1e-6).epsilon(1e-4));
+    for (size_t i = 0; i < a.grads.sh.size(); ++i) REQUIRE(a.grads.sh[i] == Approx(b.grads.sh[i]).margin(1e-6).epsilon(1e-4));
+  };
+  // The device's default kernels (CPU drivers: several pixels per invocation).
   auto a = run(test::gpu_context());
+  // Without shared float atomics: the compare-and-swap build.
   gpu::ContextOptions o = gpu::ContextOptions::from_env();
   o.validation = true;
   o.poison = true;
   o.force_cas = true;
   gpu::Context cas_ctx(o);
   REQUIRE_FALSE(cas_ctx.caps().shared_float_atomic_add);
-  auto b = run(cas_ctx);
-  for (size_t i = 0; i < a.means.size(); ++i) REQUIRE(a.means[i] == Approx(b.means[i]).margin(1e-6).epsilon(1e-4));
-  for (size_t i = 0; i < a.sh.size(); ++i) REQUIRE(a.sh[i] == Approx(b.sh[i]).margin(1e-6).epsilon(1e-4));
+  same(a, run(cas_ctx));
   REQUIRE(cas_ctx.take_validation_messages().empty());
+  // Both compositing kernels, whichever the device picks by default.
+  for (const char* kernel : {"pixel", "block"}) {
+    INFO(kernel);
+    setenv("EVF_RASTER_KERNEL", kernel, 1);
+    same(a, run(test::gpu_context()));
+    same(a, run(cas_ctx));
+    REQUIRE(cas_ctx.take_validation_messages().empty());
+  }
   // And the subgroup-reduction path GPUs take (lavapipe defaults to per-lane adds).
+  setenv("EVF_RASTER_KERNEL", "pixel", 1);
   setenv("EVF_SUBGROUP_REDUCE", "1", 1);
   auto c = run(test::gpu_context());
   unsetenv("EVF_SUBGROUP_REDUCE");
-  for (size_t i = 0; i < a.means.size(); ++i) REQUIRE(a.means[i] == Approx(c.means[i]).margin(1e-6).epsilon(1e-4));
-  for (size_t i = 0; i < a.quats.size(); ++i) REQUIRE(a.quats[i] == Approx(c.quats[i]).margin(1e-6).epsilon(1e-4));
+  unsetenv("EVF_RASTER_KERNEL");
+  same(a, c);
   test::require_no_validation_messages();
 }
 

@@ -1,5 +1,8 @@
 #include "sort/radix_sort.h"
 
+#include <algorithm>
+#include <cstdlib>
+
 #include "sort/sort_layout.h"
 
 namespace evflow {
@@ -15,7 +18,12 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Command
   if (n <= 1 || bits == 0) return {&keys, &values};
   keys_tmp_.ensure(uint64_t(n) * 4);
   values_tmp_.ensure(uint64_t(n) * 4);
-  const uint32_t blocks = gpu::Commands::div_up(n, kSortBlock);
+  uint32_t items = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? kSortItemsCpu : kSortItemsGpu;
+  // Short inputs: smaller blocks so that at least two workgroups share the work (a single block
+  // runs on one CPU thread). More than two made medium sizes slower (bench train's sort).
+  while (items > kSortItemsGpu && uint64_t(n) < uint64_t(2) * kSortGroupSize * items) items /= 2;
+  if (const char* e = std::getenv("EVF_SORT_ITEMS")) items = std::clamp<uint32_t>(uint32_t(std::atoi(e)), 1u, 256u);
+  const uint32_t blocks = gpu::Commands::div_up(n, kSortGroupSize * items);
   const uint32_t n_counts = blocks * kSortBins;
   counts_.ensure(uint64_t(n_counts + 1) * 4);
   const gpu::Buffer* kin = &keys;
@@ -23,7 +31,7 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Command
   const gpu::Buffer* kout = &keys_tmp_;
   const gpu::Buffer* vout = &values_tmp_;
   for (uint32_t shift = 0; shift < bits; shift += 4) {
-    SortPC pc{n, shift, blocks, 0};
+    SortPC pc{n, shift, blocks, items};
     cmd.dispatch("sort/radix_count", {*kin, counts_}, pc, cmd.linear_groups(blocks));
     scan_.record(cmd, counts_, counts_, n_counts, n_counts);
     cmd.dispatch("sort/radix_scatter", {*kin, *vin, *kout, *vout, counts_}, pc, cmd.linear_groups(blocks));

@@ -33,7 +33,8 @@ GaussianBuffers::GaussianBuffers(gpu::Context& ctx, size_t n, int degree, const 
 
 size_t GaussianBuffers::max_count(const gpu::Context& ctx, int degree) {
   // The widest per-Gaussian buffer: the degree-3 band (84 B), else quats (16 B) or the
-  // projection/intersection state of the rasterizer (16 B per Gaussian).
+  // projection/intersection state of the rasterizer (16 B per Gaussian; 36 B of d(colour)/d(direction)
+  // at SH degree >= 1, no wider than the degree-1 band).
   uint64_t widest = degree >= 3 ? 84 : degree >= 2 ? 60 : degree >= 1 ? 36 : 16;
   return static_cast<size_t>(ctx.caps().max_storage_buffer_range / widest);
 }
@@ -84,6 +85,7 @@ Rasterizer::Rasterizer(gpu::Context& ctx)
       proj_mean_conic_(ctx, 16, "proj_mean_conic"),
       proj_misc_(ctx, 16, "proj_misc"),
       proj_color_(ctx, 16, "proj_color"),
+      proj_dcolor_(ctx, 16, "proj_dcolor"),
       tile_rect_(ctx, 16, "tile_rect"),
       tiles_touched_(ctx, 16, "tiles_touched"),
       isect_offset_(ctx, 16, "isect_offset"),
@@ -145,6 +147,14 @@ void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const 
   // shared-memory adds (bench raster, lavapipe). GPUs reduce in the subgroup first.
   rp.subgroup_reduce = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 0u : 1u;
   if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) rp.subgroup_reduce = e[0] == '1';
+  // Compositing kernels: one pixel per invocation (GPUs) or a block of pixels per invocation
+  // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
+  block_suffix_ = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? "_block" : "";
+  if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
+    const std::string k = e;
+    if (k != "pixel" && k != "block") throw gpu::Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + k + "'");
+    block_suffix_ = k == "block" ? "_block" : "";
+  }
   std::memcpy(raster_pc_.data(), &rp, sizeof(rp));
 }
 
@@ -158,6 +168,9 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   proj_mean_conic_.ensure(n * 16);
   proj_misc_.ensure(n * 16);
   proj_color_.ensure(n * 16);
+  // d(colour)/d(direction) for project_bwd: only with view-dependent colour (SH degree >= 1), where
+  // its 36 B per Gaussian fit the binding limit like the degree-1 band does.
+  if (reinterpret_cast<const ProjectPC*>(project_pc_.data())->sh_degree >= 1) proj_dcolor_.ensure(n * 36);
   tile_rect_.ensure(n * 16);
   tiles_touched_.ensure(n * 4);
   isect_offset_.ensure((n + 1) * 4);
@@ -171,7 +184,7 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   auto* pp = reinterpret_cast<ProjectPC*>(project_pc_.data());
   cmd_.dispatch("splat/project",
                 {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1), sh_band(params, 2),
-                 sh_band(params, 3), proj_mean_conic_, proj_misc_, proj_color_, tile_rect_, tiles_touched_},
+                 sh_band(params, 3), proj_mean_conic_, proj_misc_, proj_color_, tile_rect_, tiles_touched_, proj_dcolor_},
                 project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
   cmd_.mark("project");
   scan_.record(cmd_, tiles_touched_, isect_offset_, uint32_t(n), uint32_t(n + 1));
@@ -203,7 +216,7 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   cmd_.fill(tile_range_, 0);
   cmd_.dispatch("splat/tile_ranges", {*sorted_keys, tile_range_}, raster_pc_.data(), sizeof(RasterPC),
                 cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
-  cmd_.dispatch("splat/rasterize",
+  cmd_.dispatch("splat/rasterize" + block_suffix_,
                 {tile_range_, *sorted_slots_, gaussian_id_from_slot_, proj_mean_conic_, proj_misc_, proj_color_, out_.rgb,
                  out_.alpha, out_.depth, final_T_, last_isect_},
                 raster_pc_.data(), sizeof(RasterPC), cmd_.linear_groups(num_tiles));
@@ -233,7 +246,7 @@ void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rg
                                  [](auto& s) { return s.first.find("backward") != std::string::npos; }),
                   stage_ms_.end());
 
-  const std::string raster_bwd = ctx_.caps().shared_float_atomic_add ? "splat/rasterize_bwd" : "splat/rasterize_bwd_cas";
+  const std::string raster_bwd = "splat/rasterize_bwd" + block_suffix_ + (ctx_.caps().shared_float_atomic_add ? "" : "_cas");
   cmd_.dispatch(raster_bwd,
                 {tile_range_, *sorted_slots_, gaussian_id_from_slot_, proj_mean_conic_, proj_misc_, proj_color_, final_T_,
                  last_isect_, v_rgb, v_alpha, plane(0), plane(1), plane(2), plane(3), plane(4), plane(5), plane(6), plane(7),
@@ -242,12 +255,12 @@ void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rg
   cmd_.mark("rasterize backward");
   auto* pp = reinterpret_cast<ProjectPC*>(project_pc_.data());
   pp->flags = accumulate ? (pp->flags | kFlagAccumulate) : (pp->flags & ~kFlagAccumulate);
-  cmd_.dispatch("splat/project_bwd",
+  cmd_.dispatch(accumulate ? "splat/project_bwd_acc" : "splat/project_bwd",
                 {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1),
                  sh_band(params, 2), sh_band(params, 3), isect_offset_, gaussian_id_from_slot_, plane(0), plane(1), plane(2),
                  plane(3), plane(4), plane(5), plane(6), plane(7), plane(8), grads.means, grads.log_scales, grads.quats,
                  grads.opacity_logits, sh_band(grads, 0), sh_band(grads, 1), sh_band(grads, 2), sh_band(grads, 3), grad2d_norm_,
-                 pose_partial_},
+                 pose_partial_, proj_color_, proj_dcolor_},
                 project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(groups));
   ReducePC rp{groups, 0, 0, 0};
   cmd_.dispatch("splat/pose_reduce", {pose_partial_, pose_}, rp, gpu::Groups{1, 1, 1});

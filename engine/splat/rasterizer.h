@@ -61,7 +61,7 @@ class Rasterizer {
   PrefixSum scan_;
   RadixSort sort_;
   // Per Gaussian.
-  gpu::Buffer proj_mean_conic_, proj_misc_, proj_color_, tile_rect_, tiles_touched_, isect_offset_;
+  gpu::Buffer proj_mean_conic_, proj_misc_, proj_color_, proj_dcolor_, tile_rect_, tiles_touched_, isect_offset_;
   // Per intersection.
   gpu::Buffer keys_, slot_from_isect_, gaussian_id_from_slot_, isect_grad_;
   const gpu::Buffer* sorted_slots_ = nullptr;
@@ -74,6 +74,7 @@ class Rasterizer {
   std::array<uint8_t, 128> project_pc_{}, raster_pc_{};
   uint32_t width_ = 0, height_ = 0, tiles_x_ = 0, tiles_y_ = 0, num_isects_ = 0, depth_bits_ = 0, sort_bits_ = 0;
   size_t count_ = 0;
+  std::string block_suffix_;  // "" (one pixel per invocation) or "_block" (see set_pc)
   std::vector<std::pair<std::string, double>> stage_ms_;
 };
 

@@ -11,6 +11,6 @@ void main() {
   uint block = evf_linear_group();
   uint add = block_offsets[block];
   uint base = block * kScanBlock + gl_LocalInvocationIndex * kScanItems;
-  for (uint k = 0; k < 4; ++k)
+  for (uint k = 0; k < kScanItems; ++k)
     if (base + k < pc.n_out) values[base + k] += add;
 }

@@ -1,5 +1,5 @@
 #version 450
-// Exclusive scan within blocks of 1024 elements. One invocation scans 4 consecutive elements;
+// Exclusive scan within blocks of kScanBlock elements. One invocation scans kScanItems consecutive elements;
 // the workgroup combines the 256 partial sums in shared memory; the block total goes to sums[].
 #extension GL_GOOGLE_include_directive : require
 #include "scan/scan_layout.h"
@@ -15,12 +15,10 @@ void main() {
   uint block = evf_linear_group();
   uint lid = gl_LocalInvocationIndex;
   uint base = block * kScanBlock + lid * kScanItems;
-  uint v[4];
   uint sum = 0;
-  for (uint k = 0; k < 4; ++k) {
+  for (uint k = 0; k < kScanItems; ++k) {
     uint i = base + k;
-    v[k] = (i < pc.n_in) ? values_in[i] : 0u;
-    sum += v[k];
+    sum += (i < pc.n_in) ? values_in[i] : 0u;
   }
   partial[0][lid] = sum;
   barrier();
@@ -33,10 +31,11 @@ void main() {
     barrier();
   }
   uint run = partial[src][lid] - sum;  // exclusive prefix of this invocation
-  for (uint k = 0; k < 4; ++k) {
+  for (uint k = 0; k < kScanItems; ++k) {  // the inputs read again (in and out may alias)
     uint i = base + k;
+    uint v = (i < pc.n_in) ? values_in[i] : 0u;
     if (i < pc.n_out) values_out[i] = run;
-    run += v[k];
+    run += v;
   }
   if (lid == 255) block_sums[block] = partial[src][255];
 }

@@ -1,6 +1,6 @@
 #version 450
-// Radix sort pass, step 1: digit histogram of one block of 4096 keys.
-// One invocation reads 16 consecutive keys; counts meet in shared memory; the histogram is
+// Radix sort pass, step 1: digit histogram of one block of 256 x pc.items keys.
+// One invocation reads pc.items consecutive keys; counts meet in shared memory; the histogram is
 // written digit-major (counts[digit * num_blocks + block]) so one exclusive scan over it gives
 // every (digit, block) its global output offset.
 #extension GL_GOOGLE_include_directive : require
@@ -19,8 +19,8 @@ void main() {
   barrier();
   uint local[16];
   for (uint d = 0; d < 16; ++d) local[d] = 0;
-  uint base = block * kSortBlock + lid * kSortItems;
-  for (uint k = 0; k < kSortItems; ++k) {
+  uint base = block * kSortGroupSize * pc.items + lid * pc.items;
+  for (uint k = 0; k < pc.items; ++k) {
     uint i = base + k;
     if (i < pc.n) local[(keys[i] >> pc.shift) & 15u] += 1;
   }

@@ -1,6 +1,6 @@
 #version 450
-// Radix sort pass, step 2: stable scatter of one block of 4096 pairs.
-// One invocation owns 16 consecutive pairs. Its per-digit counts go to shared memory as a
+// Radix sort pass, step 2: stable scatter of one block of 256 x pc.items pairs.
+// One invocation owns pc.items consecutive pairs. Its per-digit counts go to shared memory as a
 // [digit][invocation] table; an exclusive scan of that table (digit-major) gives each
 // invocation, for each digit, how many earlier pairs of the block share that digit. The
 // invocation then writes its pairs in order, so equal digits keep their input order (stable).
@@ -22,10 +22,10 @@ shared uint partial[2][256];
 void main() {
   uint block = evf_linear_group();
   uint lid = gl_LocalInvocationIndex;
-  uint base = block * kSortBlock + lid * kSortItems;
+  uint base = block * kSortGroupSize * pc.items + lid * pc.items;
   uint local[16];
   for (uint d = 0; d < 16; ++d) local[d] = 0;
-  for (uint k = 0; k < kSortItems; ++k) {
+  for (uint k = 0; k < pc.items; ++k) {
     uint i = base + k;
     if (i < pc.n) local[(keys_in[i] >> pc.shift) & 15u] += 1;
   }
@@ -55,7 +55,7 @@ void main() {
   uint dest[16];
   for (uint d = 0; d < 16; ++d)
     dest[d] = global_offset[d * pc.num_blocks + block] + table[d * 256 + lid] - table[d * 256];
-  for (uint k = 0; k < kSortItems; ++k) {
+  for (uint k = 0; k < pc.items; ++k) {
     uint i = base + k;
     if (i < pc.n) {
       uint key = keys_in[i];

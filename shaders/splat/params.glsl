@@ -10,19 +10,51 @@ layout(std430, binding = 5) readonly buffer Sh1 { float sh1[]; };               
 layout(std430, binding = 6) readonly buffer Sh2 { float sh2[]; };                     // [N][5][3]
 layout(std430, binding = 7) readonly buffer Sh3 { float sh3[]; };                     // [N][7][3]
 
-vec3 load_vec3(uint g, uint which) {
-  if (which == 0) return vec3(means[3 * g], means[3 * g + 1], means[3 * g + 2]);
-  return vec3(log_scales[3 * g], log_scales[3 * g + 1], log_scales[3 * g + 2]);
-}
+// Every access below uses constant indices and no data-dependent branch: CPU drivers (lavapipe)
+// run both sides of an if and turn each buffer access into a loop over the SIMD lanes, so a
+// generic "coefficient k" accessor would touch every band for every k.
+vec3 load_mean(uint g) { return vec3(means[3 * g], means[3 * g + 1], means[3 * g + 2]); }
+vec3 load_log_scale(uint g) { return vec3(log_scales[3 * g], log_scales[3 * g + 1], log_scales[3 * g + 2]); }
 vec4 load_quat(uint g) { return vec4(quats[4 * g], quats[4 * g + 1], quats[4 * g + 2], quats[4 * g + 3]); }
 
-// Coefficient k (0..15) of Gaussian g.
-vec3 load_sh(uint g, uint k) {
-  if (k == 0) return vec3(sh0[3 * g], sh0[3 * g + 1], sh0[3 * g + 2]);
-  if (k < 4) { uint i = (g * 3 + (k - 1)) * 3; return vec3(sh1[i], sh1[i + 1], sh1[i + 2]); }
-  if (k < 9) { uint i = (g * 5 + (k - 4)) * 3; return vec3(sh2[i], sh2[i + 1], sh2[i + 2]); }
-  uint i = (g * 7 + (k - 9)) * 3;
-  return vec3(sh3[i], sh3[i + 1], sh3[i + 2]);
+// All 16 SH coefficients of Gaussian g; bands above `degree` (the buffers' degree) are zero.
+void load_sh_all(uint g, uint degree, out vec3 c[16]) {
+  c[0] = vec3(sh0[3 * g], sh0[3 * g + 1], sh0[3 * g + 2]);
+  for (int k = 1; k < 16; ++k) c[k] = vec3(0.0);
+  if (degree >= 1) {
+    uint i = g * 9;
+    c[1] = vec3(sh1[i], sh1[i + 1], sh1[i + 2]);
+    c[2] = vec3(sh1[i + 3], sh1[i + 4], sh1[i + 5]);
+    c[3] = vec3(sh1[i + 6], sh1[i + 7], sh1[i + 8]);
+  }
+  if (degree >= 2) {
+    uint i = g * 15;
+    c[4] = vec3(sh2[i], sh2[i + 1], sh2[i + 2]);
+    c[5] = vec3(sh2[i + 3], sh2[i + 4], sh2[i + 5]);
+    c[6] = vec3(sh2[i + 6], sh2[i + 7], sh2[i + 8]);
+    c[7] = vec3(sh2[i + 9], sh2[i + 10], sh2[i + 11]);
+    c[8] = vec3(sh2[i + 12], sh2[i + 13], sh2[i + 14]);
+  }
+  if (degree >= 3) {
+    uint i = g * 21;
+    c[9] = vec3(sh3[i], sh3[i + 1], sh3[i + 2]);
+    c[10] = vec3(sh3[i + 3], sh3[i + 4], sh3[i + 5]);
+    c[11] = vec3(sh3[i + 6], sh3[i + 7], sh3[i + 8]);
+    c[12] = vec3(sh3[i + 9], sh3[i + 10], sh3[i + 11]);
+    c[13] = vec3(sh3[i + 12], sh3[i + 13], sh3[i + 14]);
+    c[14] = vec3(sh3[i + 15], sh3[i + 16], sh3[i + 17]);
+    c[15] = vec3(sh3[i + 18], sh3[i + 19], sh3[i + 20]);
+  }
+}
+
+// base + sum_k Y[k] c[k], summed in order k = 0..15, written out (constant indices).
+vec3 sh_eval(vec3 base, float Y[16], vec3 c[16]) {
+  vec3 r = base;
+  r += Y[0] * c[0]; r += Y[1] * c[1]; r += Y[2] * c[2]; r += Y[3] * c[3];
+  r += Y[4] * c[4]; r += Y[5] * c[5]; r += Y[6] * c[6]; r += Y[7] * c[7];
+  r += Y[8] * c[8]; r += Y[9] * c[9]; r += Y[10] * c[10]; r += Y[11] * c[11];
+  r += Y[12] * c[12]; r += Y[13] * c[13]; r += Y[14] * c[14]; r += Y[15] * c[15];
+  return r;
 }
 
 Camera camera_from(CameraPC c) {

@@ -13,58 +13,67 @@ layout(std430, binding = 9) writeonly buffer ProjB { vec4 proj_misc[]; };       
 layout(std430, binding = 10) writeonly buffer ProjC { vec4 proj_color[]; };      // rgb, 0
 layout(std430, binding = 11) writeonly buffer Rect { uvec4 tile_rect[]; };       // tile x0, y0, x1, y1 (exclusive)
 layout(std430, binding = 12) writeonly buffer Count { uint tiles_touched[]; };
+// d(raw colour channel c)/d(view direction), [N][3 channels][3], for project_bwd (SH degree >= 1;
+// a placeholder buffer at degree 0, never written). project_bwd then needs no SH coefficients.
+layout(std430, binding = 13) writeonly buffer DColor { float proj_dcolor[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
 
-void cull(uint g) {
-  tiles_touched[g] = 0;
-  tile_rect[g] = uvec4(0);
-  proj_mean_conic[g] = vec4(0);
-  proj_misc[g] = vec4(0);
-  proj_color[g] = vec4(0);
-}
-
+// Culling selects zeros at the end instead of returning early: on CPU drivers (lavapipe) an
+// early return is a lane mask, and each of several culling exits would run its own stores.
 void main() {
   uint g = evf_linear_invocation(128);
   if (g >= pc.num_gaussians) return;
   Camera cam = camera_from(pc.cam);
-  vec3 mean = load_vec3(g, 0);
+  vec3 mean = load_mean(g);
   vec3 p = cam.R * mean + cam.t;
-  if (!(p.z >= pc.cam.near_plane && p.z <= pc.cam.far_plane)) { cull(g); return; }
+  bool keep = p.z >= pc.cam.near_plane && p.z <= pc.cam.far_plane;
   vec4 qn = normalize(load_quat(g));
-  mat3 Sigma_c = cam.R * covariance_3d(load_vec3(g, 1), qn) * transpose(cam.R);
+  mat3 Sigma_c = cam.R * covariance_3d(load_log_scale(g), qn) * transpose(cam.R);
   mat3x2 J = ewa_jacobian(p, cam);
   mat2 cov = J * Sigma_c * transpose(J);
   vec3 cov2d = vec3(cov[0][0], cov[0][1], cov[1][1]);
   float detd = (cov2d.x + kDilation) * (cov2d.z + kDilation) - cov2d.y * cov2d.y;
-  if (!(detd > 0.0)) { cull(g); return; }
+  keep = keep && detd > 0.0;
   vec3 conic = conic_of(cov2d);
   float opacity = 1.0 / (1.0 + exp(-opacity_logits[g]));
   if ((pc.flags & kFlagAntialiased) != 0) opacity *= aa_compensation(cov2d);
-  if (!(opacity >= kAlphaMin)) { cull(g); return; }
+  keep = keep && opacity >= kAlphaMin;
   float q_max = 2.0 * log(255.0 * opacity);
   vec2 mean2d = vec2(cam.intrin.x * p.x / p.z + cam.intrin.z, cam.intrin.y * p.y / p.z + cam.intrin.w);
   vec2 ext = support_extent(cov2d, q_max);
   // Pixels whose centre (x + 0.5) lies in [mean - ext, mean + ext].
   vec2 lo_px = max(ceil(mean2d - ext - 0.5), vec2(0.0));
   vec2 hi_px = min(floor(mean2d + ext - 0.5), cam.size - 1.0);
-  if (any(greaterThan(lo_px, hi_px))) { cull(g); return; }
-  uvec2 t0 = uvec2(lo_px) / kTileSize, t1 = uvec2(hi_px) / kTileSize + 1u;
+  keep = keep && !any(greaterThan(lo_px, hi_px));
+  // (Values of culled Gaussians may be non-finite: nothing below uses them unselected.)
+  uvec2 t0 = keep ? uvec2(lo_px) / kTileSize : uvec2(0), t1 = keep ? uvec2(hi_px) / kTileSize + 1u : uvec2(0);
   uint count = 0;
   for (uint ty = t0.y; ty < t1.y; ++ty)
     for (uint tx = t0.x; tx < t1.x; ++tx) {
       vec2 lo = vec2(tx * kTileSize, ty * kTileSize) + 0.5, hi = lo + float(kTileSize - 1);
       if (ellipse_meets_rect(mean2d, conic, q_max, lo, hi)) count++;
     }
-  tiles_touched[g] = count;
-  tile_rect[g] = uvec4(t0, t1);
-  proj_mean_conic[g] = vec4(mean2d, conic.xy);
-  proj_misc[g] = vec4(conic.z, opacity, p.z, q_max);
   // Colour from SH along the viewing direction.
   vec3 dir = normalize(mean - camera_center(cam));
   float Y[16];
   sh_basis(dir, pc.sh_degree, Y);
-  vec3 rgb = vec3(0.5);
-  uint K = (pc.sh_degree + 1) * (pc.sh_degree + 1);
-  for (uint k = 0; k < K; ++k) rgb += Y[k] * load_sh(g, k);
-  proj_color[g] = vec4(max(rgb, vec3(0.0)), 0.0);
+  vec3 coeffs[16];
+  load_sh_all(g, (pc.flags >> 8) & 3u, coeffs);
+  vec3 rgb = sh_eval(vec3(0.5), Y, coeffs);
+  if (pc.sh_degree >= 1) {
+    float wr[16], wg[16], wb[16];
+#define EVF_SPLIT(k) wr[k] = coeffs[k].r; wg[k] = coeffs[k].g; wb[k] = coeffs[k].b;
+    EVF_SPLIT(0) EVF_SPLIT(1) EVF_SPLIT(2) EVF_SPLIT(3) EVF_SPLIT(4) EVF_SPLIT(5) EVF_SPLIT(6) EVF_SPLIT(7)
+    EVF_SPLIT(8) EVF_SPLIT(9) EVF_SPLIT(10) EVF_SPLIT(11) EVF_SPLIT(12) EVF_SPLIT(13) EVF_SPLIT(14) EVF_SPLIT(15)
+    vec3 jr = sh_basis_vjp(dir, pc.sh_degree, wr), jg = sh_basis_vjp(dir, pc.sh_degree, wg),
+         jb = sh_basis_vjp(dir, pc.sh_degree, wb);
+    proj_dcolor[9 * g] = jr.x; proj_dcolor[9 * g + 1] = jr.y; proj_dcolor[9 * g + 2] = jr.z;
+    proj_dcolor[9 * g + 3] = jg.x; proj_dcolor[9 * g + 4] = jg.y; proj_dcolor[9 * g + 5] = jg.z;
+    proj_dcolor[9 * g + 6] = jb.x; proj_dcolor[9 * g + 7] = jb.y; proj_dcolor[9 * g + 8] = jb.z;
+  }
+  tiles_touched[g] = count;  // 0 when culled
+  tile_rect[g] = uvec4(t0, t1);
+  proj_mean_conic[g] = keep ? vec4(mean2d, conic.xy) : vec4(0.0);
+  proj_misc[g] = keep ? vec4(conic.z, opacity, p.z, q_max) : vec4(0.0);
+  proj_color[g] = keep ? vec4(max(rgb, vec3(0.0)), 0.0) : vec4(0.0);
 }

@@ -31,22 +31,42 @@ layout(std430, binding = 25) buffer VSh2 { float v_sh2[]; };
 layout(std430, binding = 26) buffer VSh3 { float v_sh3[]; };
 layout(std430, binding = 27) buffer Grad2d { float grad2d_norm[]; };
 layout(std430, binding = 28) writeonly buffer PosePartial { float pose_partial[]; };  // [groups][6]
+// From the forward (project.comp): the clamped colour max(raw, 0) (raw > 0 exactly where it is
+// > 0) and d(raw)/d(direction), so that no SH coefficient is read here.
+layout(std430, binding = 29) readonly buffer ProjC { vec4 proj_color[]; };
+layout(std430, binding = 30) readonly buffer DColor { float proj_dcolor[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
 
 shared float red[6][128];
 
-// kFlagAccumulate: add to the gradient buffers (several renders of one step, e.g. the virtual
-// frames of an exposure) instead of overwriting them.
-bool accumulate() { return (pc.flags & kFlagAccumulate) != 0; }
-#define EVF_PUT(buf, i, value) buf[i] = (accumulate() ? buf[i] : 0.0) + (value)
+// EVF_ACCUMULATE (the "_acc" build, kFlagAccumulate): add to the gradient buffers (several
+// renders of one step, e.g. the virtual frames of an exposure) instead of overwriting them. A
+// build of its own rather than a branch: CPU drivers would run the reads of a branch anyway.
+#ifdef EVF_ACCUMULATE
+#define EVF_PUT(buf, i, value) buf[i] += (value)
+#else
+#define EVF_PUT(buf, i, value) buf[i] = (value)
+#endif
+#define EVF_PUT3(buf, i, v) EVF_PUT(buf, (i), (v).x); EVF_PUT(buf, (i) + 1, (v).y); EVF_PUT(buf, (i) + 2, (v).z)
 
-void store_sh(uint g, uint k, vec3 v) {
-  if (k == 0) { EVF_PUT(v_sh0, 3 * g, v.x); EVF_PUT(v_sh0, 3 * g + 1, v.y); EVF_PUT(v_sh0, 3 * g + 2, v.z); return; }
-  uint i;
-  if (k < 4) { i = (g * 3 + (k - 1)) * 3; EVF_PUT(v_sh1, i, v.x); EVF_PUT(v_sh1, i + 1, v.y); EVF_PUT(v_sh1, i + 2, v.z); return; }
-  if (k < 9) { i = (g * 5 + (k - 4)) * 3; EVF_PUT(v_sh2, i, v.x); EVF_PUT(v_sh2, i + 1, v.y); EVF_PUT(v_sh2, i + 2, v.z); return; }
-  i = (g * 7 + (k - 9)) * 3;
-  EVF_PUT(v_sh3, i, v.x); EVF_PUT(v_sh3, i + 1, v.y); EVF_PUT(v_sh3, i + 2, v.z);
+// SH gradients of every band the buffers hold (constant indices, see params.glsl).
+void store_sh_all(uint g, uint degree, vec3 v[16]) {
+  EVF_PUT3(v_sh0, 3 * g, v[0]);
+  if (degree >= 1) {
+    uint i = g * 9;
+    EVF_PUT3(v_sh1, i, v[1]); EVF_PUT3(v_sh1, i + 3, v[2]); EVF_PUT3(v_sh1, i + 6, v[3]);
+  }
+  if (degree >= 2) {
+    uint i = g * 15;
+    EVF_PUT3(v_sh2, i, v[4]); EVF_PUT3(v_sh2, i + 3, v[5]); EVF_PUT3(v_sh2, i + 6, v[6]);
+    EVF_PUT3(v_sh2, i + 9, v[7]); EVF_PUT3(v_sh2, i + 12, v[8]);
+  }
+  if (degree >= 3) {
+    uint i = g * 21;
+    EVF_PUT3(v_sh3, i, v[9]); EVF_PUT3(v_sh3, i + 3, v[10]); EVF_PUT3(v_sh3, i + 6, v[11]);
+    EVF_PUT3(v_sh3, i + 9, v[12]); EVF_PUT3(v_sh3, i + 12, v[13]); EVF_PUT3(v_sh3, i + 15, v[14]);
+    EVF_PUT3(v_sh3, i + 18, v[15]);
+  }
 }
 
 void main() {
@@ -55,8 +75,6 @@ void main() {
   float pose[6] = float[6](0, 0, 0, 0, 0, 0);
   if (g < pc.num_gaussians) {
     uint buffer_degree = (pc.flags >> 8) & 3u;
-    uint K_buf = (buffer_degree + 1) * (buffer_degree + 1);
-    uint K = (pc.sh_degree + 1) * (pc.sh_degree + 1);
     // Sum of this Gaussian's per-tile gradients, in slot order.
     vec2 v_mean2d = vec2(0.0);
     vec3 v_conic = vec3(0.0), v_color = vec3(0.0);
@@ -69,92 +87,105 @@ void main() {
       v_opac += g_opacity[s];
       v_color += vec3(g_red[s], g_green[s], g_blue[s]);
     }
-    vec3 v_mean = vec3(0.0), v_ls = vec3(0.0);
-    vec4 v_q = vec4(0.0);
-    float v_logit = 0.0;
-    for (uint k = K; k < K_buf; ++k) store_sh(g, k, vec3(0.0));
-    if (begin == end) {
-      for (uint k = 0; k < K; ++k) store_sh(g, k, vec3(0.0));
-    } else {
-      // Recompute the forward intermediates.
-      Camera cam = camera_from(pc.cam);
-      vec3 mean = load_vec3(g, 0), log_scale = load_vec3(g, 1);
-      vec4 q = load_quat(g);
-      vec4 qn = normalize(q);
-      vec3 p = cam.R * mean + cam.t;
-      mat3 Sigma = covariance_3d(log_scale, qn);
-      mat3 Sigma_c = cam.R * Sigma * transpose(cam.R);
-      mat3x2 J = ewa_jacobian(p, cam);
-      mat2 cov = J * Sigma_c * transpose(J);
-      vec3 cov2d = vec3(cov[0][0], cov[0][1], cov[1][1]);
-      float sig = 1.0 / (1.0 + exp(-opacity_logits[g]));
-      bool aa = (pc.flags & kFlagAntialiased) != 0;
+    // A Gaussian in no tile (culled) gets zeros. Everything below is computed for every
+    // Gaussian and selected at the end (a culled one may give non-finite intermediates).
+    bool listed = begin != end;
 
-      // Colour: rgb = max(sum_k Y_k sh_k + 0.5, 0).
-      vec3 campos = camera_center(cam);
-      vec3 dvec = mean - campos;
-      float dlen = length(dvec);
-      vec3 dir = dvec / dlen;
-      float Y[16];
-      sh_basis(dir, pc.sh_degree, Y);
-      vec3 raw = vec3(0.5);
-      for (uint k = 0; k < K; ++k) raw += Y[k] * load_sh(g, k);
-      vec3 v_raw = v_color * vec3(greaterThan(raw, vec3(0.0)));
-      float w[16];
-      for (uint k = 0; k < 16; ++k) w[k] = 0.0;
-      for (uint k = 0; k < K; ++k) {
-        store_sh(g, k, Y[k] * v_raw);
-        w[k] = dot(load_sh(g, k), v_raw);
-      }
-      vec3 v_dir = sh_basis_vjp(dir, pc.sh_degree, w);
-      vec3 v_dvec = (v_dir - dir * dot(dir, v_dir)) / dlen;
-      v_mean += v_dvec;
-      vec3 v_campos = -v_dvec;
+    // Recompute the forward intermediates.
+    Camera cam = camera_from(pc.cam);
+    vec3 mean = load_mean(g), log_scale = load_log_scale(g);
+    vec4 q = load_quat(g);
+    vec4 qn = normalize(q);
+    vec3 p = cam.R * mean + cam.t;
+    mat3 Sigma = covariance_3d(log_scale, qn);
+    mat3 Sigma_c = cam.R * Sigma * transpose(cam.R);
+    mat3x2 J = ewa_jacobian(p, cam);
+    mat2 cov = J * Sigma_c * transpose(J);
+    vec3 cov2d = vec3(cov[0][0], cov[0][1], cov[1][1]);
+    float sig = 1.0 / (1.0 + exp(-opacity_logits[g]));
+    bool aa = (pc.flags & kFlagAntialiased) != 0;
 
-      // Opacity (and the antialiasing compensation).
-      float comp = aa ? aa_compensation(cov2d) : 1.0;
-      v_logit = v_opac * comp * sig * (1.0 - sig);
-      vec3 v_cov2d = aa ? aa_compensation_vjp(cov2d, v_opac * sig) : vec3(0.0);
-      // Conic.
-      v_cov2d += conic_vjp(cov2d, v_conic);
-      // cov2d = J Sigma_c J^T.
-      mat2 G = mat2(v_cov2d.x, 0.5 * v_cov2d.y, 0.5 * v_cov2d.y, v_cov2d.z);
-      mat3x2 v_J = 2.0 * (G * J * Sigma_c);
-      mat3 v_Sigma_c = transpose(J) * G * J;
-      vec3 v_p = ewa_jacobian_vjp(p, cam, v_J);
-      // mean2d = (fx x/z + cx, fy y/z + cy).
-      float iz = 1.0 / p.z;
-      v_p.x += v_mean2d.x * cam.intrin.x * iz;
-      v_p.y += v_mean2d.y * cam.intrin.y * iz;
-      v_p.z -= (v_mean2d.x * cam.intrin.x * p.x + v_mean2d.y * cam.intrin.y * p.y) * iz * iz;
-      // p = R mean + t;  Sigma_c = R Sigma R^T.
-      v_mean += transpose(cam.R) * v_p;
-      mat3 v_Sigma = transpose(cam.R) * v_Sigma_c * cam.R;
-      vec4 v_qn;
-      covariance_3d_vjp(log_scale, qn, v_Sigma, v_ls, v_qn);
-      v_q = normalize_vjp(q, v_qn);
+    // Colour: rgb = max(sum_k Y_k sh_k + 0.5, 0).
+    vec3 campos = camera_center(cam);
+    vec3 dvec = mean - campos;
+    float dlen = length(dvec);
+    vec3 dir = dvec / dlen;
+    float Y[16];
+    sh_basis(dir, pc.sh_degree, Y);
+    vec3 clamped = proj_color[g].rgb;
+    vec3 v_raw = listed ? v_color * vec3(greaterThan(clamped, vec3(0.0))) : vec3(0.0);
+    // Coefficients above the active degree have Y_k = 0: zero gradient, as the contract says.
+    vec3 v_sh[16];
+#define EVF_SH_GRAD(k) v_sh[k] = listed ? Y[k] * v_raw : vec3(0.0);
+    EVF_SH_GRAD(0) EVF_SH_GRAD(1) EVF_SH_GRAD(2) EVF_SH_GRAD(3) EVF_SH_GRAD(4) EVF_SH_GRAD(5) EVF_SH_GRAD(6)
+    EVF_SH_GRAD(7) EVF_SH_GRAD(8) EVF_SH_GRAD(9) EVF_SH_GRAD(10) EVF_SH_GRAD(11) EVF_SH_GRAD(12)
+    EVF_SH_GRAD(13) EVF_SH_GRAD(14) EVF_SH_GRAD(15)
+    store_sh_all(g, buffer_degree, v_sh);
+    // v_dir = sum_c v_raw_c d(raw_c)/d(dir) (zero at degree 0).
+    vec3 v_dir = vec3(0.0);
+    if (pc.sh_degree >= 1) {
+      uint i = 9 * g;
+      v_dir = v_raw.r * vec3(proj_dcolor[i], proj_dcolor[i + 1], proj_dcolor[i + 2]) +
+              v_raw.g * vec3(proj_dcolor[i + 3], proj_dcolor[i + 4], proj_dcolor[i + 5]) +
+              v_raw.b * vec3(proj_dcolor[i + 6], proj_dcolor[i + 7], proj_dcolor[i + 8]);
+    }
+    vec3 v_dvec = (v_dir - dir * dot(dir, v_dir)) / dlen;
+    vec3 v_mean = v_dvec;
+    vec3 v_campos = -v_dvec;
 
-      // Pose, w2c' = Exp(-delta) w2c: d p = -rho - phi x p, d Sigma_c = -[phi]x Sigma_c + Sigma_c [phi]x,
-      // d campos = R^T rho. With N = p v_p^T + 2 Sigma_c v_Sigma_c: dL/dphi = -(N12-N21, N20-N02, N01-N10).
-      vec3 v_rho = -v_p + cam.R * v_campos;
-      mat3 N = outerProduct(p, v_p) + 2.0 * (Sigma_c * v_Sigma_c);
+    // Opacity (and the antialiasing compensation).
+    float comp = aa ? aa_compensation(cov2d) : 1.0;
+    float v_logit = v_opac * comp * sig * (1.0 - sig);
+    vec3 v_cov2d = aa ? aa_compensation_vjp(cov2d, v_opac * sig) : vec3(0.0);
+    // Conic.
+    v_cov2d += conic_vjp(cov2d, v_conic);
+    // cov2d = J Sigma_c J^T.
+    mat2 G = mat2(v_cov2d.x, 0.5 * v_cov2d.y, 0.5 * v_cov2d.y, v_cov2d.z);
+    mat3x2 v_J = 2.0 * (G * J * Sigma_c);
+    mat3 v_Sigma_c = transpose(J) * G * J;
+    vec3 v_p = ewa_jacobian_vjp(p, cam, v_J);
+    // mean2d = (fx x/z + cx, fy y/z + cy).
+    float iz = 1.0 / p.z;
+    v_p.x += v_mean2d.x * cam.intrin.x * iz;
+    v_p.y += v_mean2d.y * cam.intrin.y * iz;
+    v_p.z -= (v_mean2d.x * cam.intrin.x * p.x + v_mean2d.y * cam.intrin.y * p.y) * iz * iz;
+    // p = R mean + t;  Sigma_c = R Sigma R^T.
+    v_mean += transpose(cam.R) * v_p;
+    mat3 v_Sigma = transpose(cam.R) * v_Sigma_c * cam.R;
+    vec3 v_ls;
+    vec4 v_qn;
+    covariance_3d_vjp(log_scale, qn, v_Sigma, v_ls, v_qn);
+    vec4 v_q = normalize_vjp(q, v_qn);
+
+    // Pose, w2c' = Exp(-delta) w2c: d p = -rho - phi x p, d Sigma_c = -[phi]x Sigma_c + Sigma_c [phi]x,
+    // d campos = R^T rho. With N = p v_p^T + 2 Sigma_c v_Sigma_c: dL/dphi = -(N12-N21, N20-N02, N01-N10).
+    vec3 v_rho = -v_p + cam.R * v_campos;
+    mat3 N = outerProduct(p, v_p) + 2.0 * (Sigma_c * v_Sigma_c);
+    if (listed) {
       pose[0] = v_rho.x; pose[1] = v_rho.y; pose[2] = v_rho.z;
       pose[3] = -(N[2][1] - N[1][2]);
       pose[4] = -(N[0][2] - N[2][0]);
       pose[5] = -(N[1][0] - N[0][1]);
     }
-    for (uint k = 0; k < 3; ++k) { EVF_PUT(v_means, 3 * g + k, v_mean[k]); EVF_PUT(v_log_scales, 3 * g + k, v_ls[k]); }
-    for (uint k = 0; k < 4; ++k) EVF_PUT(v_quats, 4 * g + k, v_q[k]);
+    v_mean = listed ? v_mean : vec3(0.0);
+    v_ls = listed ? v_ls : vec3(0.0);
+    v_q = listed ? v_q : vec4(0.0);
+    v_logit = listed ? v_logit : 0.0;
+    EVF_PUT3(v_means, 3 * g, v_mean);
+    EVF_PUT3(v_log_scales, 3 * g, v_ls);
+    EVF_PUT(v_quats, 4 * g, v_q.x); EVF_PUT(v_quats, 4 * g + 1, v_q.y);
+    EVF_PUT(v_quats, 4 * g + 2, v_q.z); EVF_PUT(v_quats, 4 * g + 3, v_q.w);
     EVF_PUT(v_opacity_logits, g, v_logit);
     EVF_PUT(grad2d_norm, g, length(v_mean2d));
   }
-  // Workgroup reduction of the pose contributions (fixed order: deterministic).
+  // Workgroup reduction of the pose contributions, in a fixed order (deterministic): invocations
+  // 0..5 each sum one component over the workgroup. Not a tree: on CPU drivers every step of a
+  // tree costs every SIMD vector its masked shared accesses (over half of this kernel's time);
+  // this loop has zero trips for all vectors but the first.
   for (uint k = 0; k < 6; ++k) red[k][lid] = pose[k];
   barrier();
-  for (uint s = 64u; s > 0u; s >>= 1) {
-    if (lid < s)
-      for (uint k = 0; k < 6; ++k) red[k][lid] += red[k][lid + s];
-    barrier();
-  }
-  if (lid < 6) pose_partial[evf_linear_group() * 6 + lid] = red[lid][0];
+  uint len = lid < 6u ? 128u : 0u;
+  float sum = 0.0;
+  for (uint i = 0; i < len; ++i) sum += red[lid][i];
+  if (lid < 6) pose_partial[evf_linear_group() * 6 + lid] = sum;
 }

@@ -11,7 +11,7 @@ EVF_CONST(uint, kTilePixels, 256u)
 EVF_CONST(uint, kProjectGroupSize, 128u)
 EVF_CONST(uint, kIsectGroupSize, 256u)
 EVF_CONST(uint, kFlagAntialiased, 1u)
-EVF_CONST(uint, kFlagAccumulate, 2u)   // project_bwd: add into the gradient buffers
+EVF_CONST(uint, kFlagAccumulate, 2u)   // set when backward accumulates (the shader is the project_bwd_acc build)
 
 struct ProjectPC {   // project, tile count, emit, project backward
   CameraPC cam;

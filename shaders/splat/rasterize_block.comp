@@ -1,0 +1,148 @@
+#version 450
+// Forward rasterization for CPU drivers: one workgroup per 16x16 tile, each invocation owns a
+// block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s) and visits, front to back, only the
+// Gaussians whose support's bounding box covers its block. Same result as rasterize.comp, pixel
+// for pixel; see docs/rasterizer.md.
+// Why: lavapipe runs the invocations of a SIMD vector in lockstep with masks (an `if` skips
+// nothing; only loops end early) and turns every shared-memory access into a loop over the
+// lanes. So each invocation walks its own list (the lanes read different Gaussians, which costs
+// no more), and one read of a Gaussian serves 4 x EVF_ROWS pixels.
+#extension GL_GOOGLE_include_directive : require
+#include "splat/splat_layout.h"
+#include "common/dispatch.glsl"
+#include "splat/splat_math.glsl"
+#ifndef EVF_ROWS
+#define EVF_ROWS 4
+#endif
+// 4 rows measured best on lavapipe (bench raster 100k: 2 and 8 rows slower or equal).
+// EVF_RUNS(X) expands X(i) for each row i of the block.
+#if EVF_ROWS == 1
+#define EVF_RUNS(X) X(0)
+#elif EVF_ROWS == 2
+#define EVF_RUNS(X) X(0) X(1)
+#elif EVF_ROWS == 4
+#define EVF_RUNS(X) X(0) X(1) X(2) X(3)
+#elif EVF_ROWS == 8
+#define EVF_RUNS(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7)
+#else
+#error EVF_ROWS must be 1, 2, 4 or 8
+#endif
+#define EVF_THREADS (64 / EVF_ROWS)
+#define EVF_BLOCKS EVF_THREADS
+layout(local_size_x = EVF_THREADS) in;
+#define EVF_BLOCK_BATCH 1
+// Batches of 64: the tile stops loading Gaussians sooner once all its blocks are opaque (batches
+// of 32, 64, 128, 256 measured: 64 and 32 best, 256 about 30% slower on bench raster 100k).
+#ifndef EVF_BATCH
+#define EVF_BATCH 64
+#endif
+#include "splat/raster_io.glsl"
+layout(std430, binding = 6) writeonly buffer OutRgb { float out_rgb[]; };      // [3][H][W]
+layout(std430, binding = 7) writeonly buffer OutAlpha { float out_alpha[]; };  // [H][W]
+layout(std430, binding = 8) writeonly buffer OutDepth { float out_depth[]; };  // [H][W]
+layout(std430, binding = 9) writeonly buffer OutT { float final_T[]; };        // [H][W]
+layout(std430, binding = 10) writeonly buffer OutLast { uint last_isect[]; };  // [H][W] one past the last blended
+layout(push_constant) uniform PC { RasterPC pc; };
+shared uint done_count;
+
+struct Run {     // 4 horizontally adjacent pixels
+  vec4 T, Cr, Cg, Cb, D;
+  uvec4 last;
+  bvec4 done;
+};
+
+Run run_init(ivec2 p0, uint first) {
+  Run r;
+  r.T = vec4(1.0);
+  r.Cr = r.Cg = r.Cb = r.D = vec4(0.0);
+  r.last = uvec4(first);
+  r.done = not(lessThan(ivec4(p0.x) + ivec4(0, 1, 2, 3), ivec4(pc.width)));
+  if (p0.y >= int(pc.height)) r.done = bvec4(true);
+  return r;
+}
+
+// Blends Gaussian `idx` (already read) into the run whose pixel centres are (cx, cy).
+void blend(inout Run r, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity, vec3 col, float depth, uint idx) {
+  float dy = mean.y - cy;
+  vec4 dx = mean.x - cx;
+  vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
+  vec4 alpha = min(vec4(kAlphaMax), opacity * exp(power));
+  bvec4 use = not(r.done);
+  use = bvec4(uvec4(use) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
+  vec4 next_T = r.T * (1.0 - alpha);
+  bvec4 stop = bvec4(uvec4(use) & uvec4(lessThan(next_T, vec4(kTransmittanceMin))));
+  r.done = bvec4(uvec4(r.done) | uvec4(stop));
+  use = bvec4(uvec4(use) & ~uvec4(stop));
+  vec4 w = alpha * r.T;
+  r.Cr = mix(r.Cr, r.Cr + w * col.r, use);
+  r.Cg = mix(r.Cg, r.Cg + w * col.g, use);
+  r.Cb = mix(r.Cb, r.Cb + w * col.b, use);
+  r.D = mix(r.D, r.D + w * depth, use);
+  r.T = mix(r.T, next_T, use);
+  r.last = mix(r.last, uvec4(idx + 1u), use);
+}
+
+void store_run(Run r, ivec2 p0) {
+  if (p0.y >= int(pc.height)) return;
+  uint hw = pc.width * pc.height;
+  for (int k = 0; k < 4; ++k) {
+    if (p0.x + k >= int(pc.width)) break;
+    uint i = uint(p0.y) * pc.width + uint(p0.x + k);
+    float T = r.T[k];
+    out_rgb[i] = r.Cr[k] + T * pc.background.r;
+    out_rgb[hw + i] = r.Cg[k] + T * pc.background.g;
+    out_rgb[2 * hw + i] = r.Cb[k] + T * pc.background.b;
+    out_alpha[i] = 1.0 - T;
+    out_depth[i] = (T < 1.0) ? r.D[k] / (1.0 - T) : 0.0;
+    final_T[i] = T;
+    last_isect[i] = r.last[k];
+  }
+}
+
+bool run_done(Run r) { return all(r.done); }
+
+void main() {
+  ivec2 tile = tile_of_group(pc.tiles_x);
+  uint lid = gl_LocalInvocationIndex;
+  // Block of 4 x EVF_ROWS pixels: 4 blocks per tile row.
+  ivec2 p0 = tile * int(kTileSize) + ivec2(int(lid % 4u) * 4, int(lid / 4u) * EVF_ROWS);
+  vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
+  float cy = float(p0.y) + 0.5;
+  vec2 tile_origin = vec2(tile * int(kTileSize));
+  uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
+#define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x);
+  EVF_RUNS(EVF_INIT)
+#define EVF_DONE(i) && run_done(r##i)
+#define EVF_BLEND(i) blend(r##i, cx, cy + float(i), a.xy, conic, b.y, col, c.y, start + j);
+  for (uint start = range.x; start < range.y; start += EVF_BATCH) {
+    uint n = min(uint(EVF_BATCH), range.y - start);
+    barrier();
+    if (lid == 0) done_count = 0;
+    for (uint w = 0; w < EVF_BATCH / 32; ++w) block_bits[lid][w] = 0u;
+    bool done = true EVF_RUNS(EVF_DONE);
+    barrier();
+    for (uint k = lid; k < n; k += EVF_THREADS) load_batch_entry(k, start + k, tile_origin);
+    if (done) atomicAdd(done_count, 1u);
+    barrier();
+    if (done_count == EVF_THREADS) break;
+    // This block's Gaussians, front to back, from its bit set. One loop over the whole batch
+    // (not one per 32-bit word): the lanes of a SIMD vector run as many iterations as their
+    // busiest lane, and per batch that is fewer than the sum of the per-word maxima.
+    uint nwords = (n + 31u) / 32u, w = 0u, bits = block_bits[lid][0];
+    while (!done) {
+      while (bits == 0u && w + 1u < nwords) bits = block_bits[lid][++w];
+      if (bits == 0u) break;
+      {
+        uint j = w * 32u + uint(findLSB(bits));
+        bits &= bits - 1u;
+        vec4 a = batch_a[j], b = batch_b[j];
+        vec2 c = batch_c[j];
+        vec3 conic = vec3(a.zw, b.x), col = vec3(b.zw, c.x);
+        EVF_RUNS(EVF_BLEND)
+        done = true EVF_RUNS(EVF_DONE);
+      }
+    }
+  }
+#define EVF_STORE(i) store_run(r##i, p0 + ivec2(0, i));
+  EVF_RUNS(EVF_STORE)
+}

@@ -1,0 +1,225 @@
+#version 450
+// Backward rasterization for CPU drivers: one workgroup per 16x16 tile, each invocation owns a
+// block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s), as rasterize_block.comp, and visits
+// back to front only the Gaussians whose support's bounding box covers its block. Per Gaussian
+// it sums its block's 9 gradient terms in registers (fixed order) and adds them to the
+// workgroup's shared accumulator. Same maths as rasterize_bwd.comp.
+// Why: see rasterize_block.comp; in addition, one set of 9 shared adds per block instead of per
+// pixel (lavapipe runs each as a loop over the lanes; float adds as compare-and-swap loops).
+#extension GL_GOOGLE_include_directive : require
+#ifndef EVF_CAS_ATOMICS
+#extension GL_EXT_shader_atomic_float : require
+#endif
+#include "splat/splat_layout.h"
+#include "common/dispatch.glsl"
+#include "splat/splat_math.glsl"
+#ifndef EVF_ROWS
+#define EVF_ROWS 4
+#endif
+// 4 rows measured best on lavapipe (bench raster 100k: 2 and 8 rows slower or equal).
+// EVF_RUNS(X) expands X(i) for each row i of the block.
+#if EVF_ROWS == 1
+#define EVF_RUNS(X) X(0)
+#elif EVF_ROWS == 2
+#define EVF_RUNS(X) X(0) X(1)
+#elif EVF_ROWS == 4
+#define EVF_RUNS(X) X(0) X(1) X(2) X(3)
+#elif EVF_ROWS == 8
+#define EVF_RUNS(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7)
+#else
+#error EVF_ROWS must be 1, 2, 4 or 8
+#endif
+#define EVF_THREADS (64 / EVF_ROWS)
+#define EVF_BLOCKS EVF_THREADS
+layout(local_size_x = EVF_THREADS) in;
+#define EVF_BLOCK_BATCH 1
+// Batches of 256 (32, 64, 128 measured: no better; the backward loads only what it visits).
+#include "splat/raster_io.glsl"
+layout(std430, binding = 6) readonly buffer InT { float final_T[]; };
+layout(std430, binding = 7) readonly buffer InLast { uint last_isect[]; };
+layout(std430, binding = 8) readonly buffer VRgb { float v_rgb[]; };      // [3][H][W]
+layout(std430, binding = 9) readonly buffer VAlpha { float v_alpha[]; };  // [H][W]
+// Per-slot gradients, one plane per quantity: v_mean2d.xy, v_conic.xyz, v_opacity, v_rgb.
+layout(std430, binding = 10) writeonly buffer G0 { float g_mean_x[]; };
+layout(std430, binding = 11) writeonly buffer G1 { float g_mean_y[]; };
+layout(std430, binding = 12) writeonly buffer G2 { float g_conic_x[]; };
+layout(std430, binding = 13) writeonly buffer G3 { float g_conic_y[]; };
+layout(std430, binding = 14) writeonly buffer G4 { float g_conic_z[]; };
+layout(std430, binding = 15) writeonly buffer G5 { float g_opacity[]; };
+layout(std430, binding = 16) writeonly buffer G6 { float g_red[]; };
+layout(std430, binding = 17) writeonly buffer G7 { float g_green[]; };
+layout(std430, binding = 18) writeonly buffer G8 { float g_blue[]; };
+layout(push_constant) uniform PC { RasterPC pc; };
+shared uint tile_last;
+
+#ifdef EVF_CAS_ATOMICS
+shared uint acc[EVF_BATCH * 9];
+void acc_add(uint i, float v) {
+  uint old = acc[i];
+  for (;;) {
+    uint prev = atomicCompSwap(acc[i], old, floatBitsToUint(uintBitsToFloat(old) + v));
+    if (prev == old) break;
+    old = prev;
+  }
+}
+float acc_get(uint i) { return uintBitsToFloat(acc[i]); }
+void acc_zero(uint i) { acc[i] = 0u; }
+#else
+shared float acc[EVF_BATCH * 9];
+void acc_add(uint i, float v) { atomicAdd(acc[i], v); }
+float acc_get(uint i) { return acc[i]; }
+void acc_zero(uint i) { acc[i] = 0.0; }
+#endif
+
+struct Run {     // 4 horizontally adjacent pixels
+  vec4 T;                  // transmittance before the current Gaussian
+  vec4 Sv;                 // dot(colour of everything behind it, v_rgb)
+  vec4 vr, vg, vb, vAT;    // v_rgb, v_alpha * final T
+  uvec4 last;              // one past the last blended Gaussian (0 blends nothing)
+};
+
+struct Grad {    // one Gaussian's gradient summed over a block
+  vec2 mean;
+  vec3 conic;
+  float opac;
+  vec3 rgb;
+};
+
+Run run_init(ivec2 p0, uint first) {
+  Run r;
+  uint hw = pc.width * pc.height;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 p = p0 + ivec2(k, 0);
+    bool inside = p.x < int(pc.width) && p.y < int(pc.height);
+    uint i = inside ? uint(p.y) * pc.width + uint(p.x) : 0u;
+    float T = inside ? final_T[i] : 1.0;
+    r.T[k] = T;
+    r.last[k] = inside ? last_isect[i] : first;
+    r.vr[k] = inside ? v_rgb[i] : 0.0;
+    r.vg[k] = inside ? v_rgb[hw + i] : 0.0;
+    r.vb[k] = inside ? v_rgb[2 * hw + i] : 0.0;
+    r.vAT[k] = inside ? v_alpha[i] * T : 0.0;
+  }
+  r.Sv = (pc.background.r * r.vr + pc.background.g * r.vg + pc.background.b * r.vb) * r.T;
+  return r;
+}
+
+uint run_last(Run r) { return max(max(r.last.x, r.last.y), max(r.last.z, r.last.w)); }
+
+// Gaussian `idx` (already read) against the run whose pixel centres are (cx, cy): updates the
+// run's state and adds the run's gradient terms to g (zeros where no pixel contributed).
+void accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity, vec3 col,
+                uint idx) {
+  float dy = mean.y - cy;
+  bvec4 live = lessThan(uvec4(idx), r.last);
+  vec4 dx = mean.x - cx;
+  vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
+  vec4 G = exp(power);
+  vec4 raw = opacity * G;
+  vec4 alpha = min(vec4(kAlphaMax), raw);
+  bvec4 c = bvec4(uvec4(live) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
+  vec4 inv_one_minus = 1.0 / (1.0 - alpha);  // alpha <= 0.99
+  vec4 T_before = r.T * inv_one_minus;
+  vec4 w = mix(vec4(0.0), alpha * T_before, c);
+  g.rgb += vec3(dot(w, r.vr), dot(w, r.vg), dot(w, r.vb));
+  vec4 col_dot_v = col.r * r.vr + col.g * r.vg + col.b * r.vb;
+  vec4 v_alpha_j = T_before * col_dot_v + (r.vAT - r.Sv) * inv_one_minus;
+  r.Sv += w * col_dot_v;  // only S . v_rgb is ever needed
+  r.T = mix(r.T, T_before, c);
+  bvec4 smooth_part = bvec4(uvec4(c) & uvec4(lessThan(raw, vec4(kAlphaMax))));
+  vec4 v_power = mix(vec4(0.0), alpha * v_alpha_j, smooth_part);
+  g.mean -= vec2(dot(v_power, conic.x * dx + conic.y * dy), dot(v_power, conic.y * dx + conic.z * dy));
+  g.conic += vec3(-0.5 * dot(v_power, dx * dx), -dy * dot(v_power, dx), -0.5 * dy * dy * dot(v_power, vec4(1.0)));
+  g.opac += dot(mix(vec4(0.0), G * v_alpha_j, smooth_part), vec4(1.0));
+}
+
+void main() {
+  ivec2 tile = tile_of_group(pc.tiles_x);
+  uint lid = gl_LocalInvocationIndex;
+  ivec2 p0 = tile * int(kTileSize) + ivec2(int(lid % 4u) * 4, int(lid / 4u) * EVF_ROWS);
+  vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
+  float cy = float(p0.y) + 0.5;
+  vec2 tile_origin = vec2(tile * int(kTileSize));
+  uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
+  uint last = range.x;
+#define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x); last = max(last, run_last(r##i));
+  EVF_RUNS(EVF_INIT)
+#define EVF_ACC(i) accumulate(r##i, g, cx, cy + float(i), a.xy, conic, b.y, col, start + j);
+  uint count = range.y - range.x;
+  // Gaussians at or past the tile's largest `last` blended into no pixel: their slots get zeros
+  // without being visited.
+  if (lid == 0) tile_last = range.x;
+  barrier();
+  atomicMax(tile_last, last);
+  barrier();
+  uint visit_end = tile_last;
+  for (uint nb = (count + EVF_BATCH - 1u) / EVF_BATCH; nb > 0u; --nb) {
+    uint start = range.x + (nb - 1u) * EVF_BATCH;
+    uint n = min(uint(EVF_BATCH), range.y - start);
+    barrier();
+    for (uint w = 0; w < EVF_BATCH / 32; ++w) block_bits[lid][w] = 0u;
+    // Entries at or past visit_end are neither loaded nor visited (their slots get zeros).
+    uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
+    for (uint k = lid; k < n_load; k += EVF_THREADS)
+      for (uint q = 0; q < 9; ++q) acc_zero(k * 9 + q);
+    barrier();
+    for (uint k = lid; k < n_load; k += EVF_THREADS) load_batch_entry(k, start + k, tile_origin);
+    barrier();
+    // This block's Gaussians below its last blended one, back to front, from its bit set: one
+    // loop over the batch (see rasterize_block.comp).
+    uint n_visit = start < last ? min(n, last - start) : 0u;
+    uint w = (n_visit + 31u) / 32u, bits = 0u;  // w: one past the current word
+    for (;;) {
+      while (bits == 0u && w > 0u) {
+        --w;
+        bits = block_bits[lid][w];
+        uint below = n_visit - w * 32u;  // entries of this word below n_visit
+        if (below < 32u) bits &= (1u << below) - 1u;
+      }
+      if (bits == 0u) break;
+      {
+        uint top = uint(findMSB(bits));
+        bits &= ~(1u << top);
+        uint j = w * 32u + top;
+        vec4 a = batch_a[j], b = batch_b[j];
+        vec3 conic = vec3(a.zw, b.x), col = vec3(b.zw, batch_c[j].x);
+        Grad g;
+        g.mean = vec2(0.0);
+        g.conic = vec3(0.0);
+        g.opac = 0.0;
+        g.rgb = vec3(0.0);
+        EVF_RUNS(EVF_ACC)
+        uint o = j * 9u;
+        acc_add(o, g.mean.x); acc_add(o + 1, g.mean.y);
+        acc_add(o + 2, g.conic.x); acc_add(o + 3, g.conic.y); acc_add(o + 4, g.conic.z);
+        acc_add(o + 5, g.opac);
+        acc_add(o + 6, g.rgb.r); acc_add(o + 7, g.rgb.g); acc_add(o + 8, g.rgb.b);
+      }
+    }
+    barrier();
+    for (uint k = lid; k < n_load; k += EVF_THREADS) {
+      uint slot = slot_from_isect[start + k], o = k * 9;
+      g_mean_x[slot] = acc_get(o);
+      g_mean_y[slot] = acc_get(o + 1);
+      g_conic_x[slot] = acc_get(o + 2);
+      g_conic_y[slot] = acc_get(o + 3);
+      g_conic_z[slot] = acc_get(o + 4);
+      g_opacity[slot] = acc_get(o + 5);
+      g_red[slot] = acc_get(o + 6);
+      g_green[slot] = acc_get(o + 7);
+      g_blue[slot] = acc_get(o + 8);
+    }
+    for (uint k = n_load + lid; k < n; k += EVF_THREADS) {
+      uint slot = slot_from_isect[start + k];
+      g_mean_x[slot] = 0.0;
+      g_mean_y[slot] = 0.0;
+      g_conic_x[slot] = 0.0;
+      g_conic_y[slot] = 0.0;
+      g_conic_z[slot] = 0.0;
+      g_opacity[slot] = 0.0;
+      g_red[slot] = 0.0;
+      g_green[slot] = 0.0;
+      g_blue[slot] = 0.0;
+    }
+  }
+}
