@@ -39,10 +39,14 @@ TEST_CASE("trainer: fits held-out views of a scene of random Gaussians", "[gpu][
   auto& ctx = test::gpu_context();
   io::Dataset data = make_dataset(ctx, 200, 150, 12, 4);
   TrainConfig cfg;
-  cfg.iterations = 300;
+  // 3000 steps with density control from step 200 (about 3 min on 2 cores with lavapipe).
+  cfg.iterations = 3000;
   cfg.init_gaussians = 3000;
   cfg.sh_degree = 0;
   cfg.target = "sharp";
+  cfg.densify_from = 200;
+  cfg.densify_every = 100;
+  cfg.densify_until = 1500;
   Trainer t(ctx, data, cfg);
   const double before = mean_psnr(ctx, t, data.novel);
   auto t0 = std::chrono::steady_clock::now();
@@ -59,6 +63,7 @@ TEST_CASE("trainer: fits held-out views of a scene of random Gaussians", "[gpu][
               after, cfg.iterations, cfg.iterations / secs, first_loss / 12, last_loss / 12);
   REQUIRE(last_loss < 0.5 * first_loss);
   REQUIRE(after > before + 6.0);
+  REQUIRE(after >= 30.0);  // issue 4: held-out PSNR >= 30 dB at 200x150 within the test budget
   test::require_no_validation_messages();
 }
 
