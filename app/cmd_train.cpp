@@ -130,7 +130,11 @@ static int run_train(const Args& a) {
   }
   std::ofstream log(fs::path(out) / "train.log", resume ? std::ios::app : std::ios::trunc);
   std::ofstream curve(fs::path(out) / "curve.csv", resume ? std::ios::app : std::ios::trunc);
-  if (!resume) curve << "step,view,loss,ms\n";
+  if (!resume) {  // the weighted total, then every registered term's unweighted value
+    curve << "step,view,loss,ms";
+    for (auto& t : trainer->losses()) curve << "," << t->name();
+    curve << "\n";
+  }
   const bool tty = isatty(fileno(stdout));
   std::printf("training %zu views (%s) on %s, %u Gaussians, %u iterations, preset %s\n", data.train.size(), data.layout.c_str(),
               ctx.caps().name.c_str(), cfg.init_gaussians, cfg.iterations, cfg.preset.c_str());
@@ -150,7 +154,9 @@ static int run_train(const Args& a) {
     if (tv) tv->after_step(st);
     ema_ms = ema_ms ? 0.95 * ema_ms + 0.05 * st.ms : st.ms;
     if (!st.skipped) ema_loss = ema_loss ? 0.95 * ema_loss + 0.05 * st.loss : st.loss;
-    curve << st.step << "," << st.view << "," << st.loss << "," << st.ms << "\n";
+    curve << st.step << "," << st.view << "," << st.loss << "," << st.ms;
+    for (double v : st.term_values) curve << "," << v;
+    curve << "\n";
     if (st.skipped) log << "step " << st.step << ": non-finite loss on view " << st.view << ", skipped\n";
     const double eta = (cfg.iterations - st.step) * ema_ms / 1000.0;
     if (tty) {
