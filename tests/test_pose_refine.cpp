@@ -184,9 +184,10 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
     }
     REQUIRE(agree >= 3);
   }
-  auto run = [&](double sign) {
+  auto run = [&](double sign, bool flip = false) {
     TrainConfig cfg;
     cfg.apply_method("blur+events");
+    cfg.event_flip_until = flip ? 1.0 : 0.0;
     cfg.sh_degree = 0;
     cfg.iterations = 8;  // two steps per view, parameters frozen: this measures the terms
     cfg.densify = false;
@@ -202,15 +203,21 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
     Trainer t(ctx, data, cfg, init);
     REQUIRE(t.losses().size() == 2);
     REQUIRE(t.losses()[1]->name() == "events");
-    std::array<double, 2> mean{0, 0};
+    std::array<double, 3> mean{0, 0, 0};
     while (t.current_step() < cfg.iterations) {
       auto st = t.step();
+      if (st.step > 4) mean[2] += st.term_values[1] / (cfg.iterations - 4);  // after every view's first visit
       REQUIRE_FALSE(st.skipped);
       REQUIRE(st.term_values.size() == 2);
       REQUIRE(std::isfinite(st.term_values[1]));
       REQUIRE(st.term_values[1] >= 0.0);
       REQUIRE(st.term_values[1] <= 4.0);
       for (int k = 0; k < 2; ++k) mean[k] += st.term_values[k] / cfg.iterations;
+    }
+    if (flip) {
+      // Every reversed trajectory was flipped on its view's first visit, back to the true knots.
+      REQUIRE(t.trajectory_flips() == data.train.size());
+      for (auto& tr : t.trajectories()) REQUIRE(tr.data()[8 * 6] == Approx(kDrift).margin(1e-9));
     }
     return mean;
   };
@@ -220,6 +227,10 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
   REQUIRE(std::abs(fwd[0] - rev[0]) < 0.25 * fwd[0]);  // the blur term barely sees the difference
   REQUIRE(fwd[1] < 0.6);                               // the events agree with the true motion
   REQUIRE(rev[1] > 2.0 * fwd[1]);                      // and not with its reversal
+  // With the direction check on, the trainer turns the reversed trajectories around.
+  auto fixed = run(-1.0, true);
+  std::printf("blur+events: reversed start with the direction check: events %.4f after the flips\n", fixed[2]);
+  REQUIRE(fixed[2] < 0.6);
   // Without events in the dataset the configuration is refused, naming the reason.
   io::Dataset no_events = data;
   no_events.events = EventStream{};

@@ -291,6 +291,23 @@ StepStats Trainer::step() {
     ef.t0 = view.exposure_start, ef.t1 = view.exposure_end;
     ef.u = us;
     ef.seed = cfg_.seed * 0x100000001B3ull + step_;
+    EventLoss* events = nullptr;
+    for (auto& t : terms_)
+      if (auto* e = dynamic_cast<EventLoss*>(t.get())) events = e;
+    const bool check_flip = events && step_ <= uint32_t(cfg_.event_flip_until * cfg_.iterations);
+    double reversed = 0;
+    if (check_flip) {
+      // Score the time-reversed frame order first (its gradients are overwritten below).
+      for (uint32_t i = 0; i < frames; ++i) {
+        ef.rgb.push_back(&frame_rgb_[frames - 1 - i]);
+        ef.grad.push_back(&frame_grad_[i]);
+      }
+      cmd_.submit();  // the image terms' value slots are read after the next submit; keep them
+      events->record(cmd_, ef);
+      cmd_.submit();
+      reversed = events->value();
+      ef.rgb.clear(), ef.grad.clear();
+    }
     for (uint32_t i = 0; i < frames; ++i) {
       cmd_.copy(v_rgb_, frame_grad_[i], n_pix * 4);
       ef.rgb.push_back(&frame_rgb_[i]);
@@ -298,6 +315,13 @@ StepStats Trainer::step() {
     }
     for (auto& t : terms_)
       if (auto* ex = dynamic_cast<ExposureLossTerm*>(t.get())) ex->record(cmd_, ef);
+    if (check_flip) {
+      cmd_.submit();
+      if (std::isfinite(reversed) && reversed + cfg_.event_flip_margin < events->value()) {
+        flip_trajectory(st.view);
+        st.flipped = true;
+      }
+    }
   }
   cmd_.submit();
   st.loss_ms = lap();
@@ -309,7 +333,9 @@ StepStats Trainer::step() {
     st.loss += t->weight() * v;
     if (!std::isfinite(v) && !bad_term) bad_term = t.get();
   }
-  if (!std::isfinite(st.loss)) {
+  if (st.flipped) {
+    // This step's gradients belong to the other time direction: the flip is the update.
+  } else if (!std::isfinite(st.loss)) {
     st.skipped = true;
     std::fprintf(stderr, "step %u: non-finite loss on view '%s' (term %s): update skipped\n", st.step, view.name.c_str(),
                  bad_term ? bad_term->name().c_str() : "sum");
@@ -368,6 +394,22 @@ void Trainer::camera_adam(uint32_t v, const double* grad, double lr_init, double
     st.exp_avg_sq[k] = b2 * st.exp_avg_sq[k] + (1 - b2) * grad[k] * grad[k];
     x[k] -= lr * (st.exp_avg[k] / c1) / (std::sqrt(st.exp_avg_sq[k] / c2) + eps);
   }
+}
+
+// Time reversal of a view's trajectory: T'(u) = T(1 - u) up to the order of the factors (exact
+// for commuting knots, close for exposure-sized motions): knot k takes knot 8 - k, and so do its
+// Adam moments.
+void Trainer::flip_trajectory(uint32_t v) {
+  double* k = trajectories_[v].data();
+  TrajectoryState& st = trajectory_state_[v];
+  const int K = ExposureTrajectory::kKnots, D = ExposureTrajectory::kDof;
+  for (int j = 0; j < K / 2; ++j)
+    for (int c = 0; c < D; ++c) {
+      std::swap(k[j * D + c], k[(K - 1 - j) * D + c]);
+      std::swap(st.exp_avg[j * D + c], st.exp_avg[(K - 1 - j) * D + c]);
+      std::swap(st.exp_avg_sq[j * D + c], st.exp_avg_sq[(K - 1 - j) * D + c]);
+    }
+  ++flips_;
 }
 
 std::vector<float> Trainer::render(const Camera& cam) {

@@ -25,6 +25,7 @@ struct StepStats {
   uint32_t view = 0;
   double loss = 0;
   bool skipped = false;  // non-finite loss: the update was not applied
+  bool flipped = false;  // the view's trajectory was reversed in time (events scored it better); no update this step
   double ms = 0;
   // Wall-clock split of the step (each part ends in a submit and wait).
   double raster_forward_ms = 0, loss_ms = 0, raster_backward_ms = 0, optimizer_ms = 0;
@@ -72,6 +73,7 @@ class Trainer {
   void setup(const GaussianCloud& start);
   double blur_step(const io::View& view, uint32_t v, const RenderSettings& s, StepStats& st);
   void camera_adam(uint32_t v, const double* grad, double lr_init, double lr_final);
+  void flip_trajectory(uint32_t v);
   gpu::Context& ctx_;
   const io::Dataset& data_;
   TrainConfig cfg_;
@@ -93,6 +95,9 @@ class Trainer {
   size_t means_group_ = 0;
   double extent_ = 1.0;
   uint32_t step_ = 0;
+  uint32_t flips_ = 0;
+ public:
+  uint32_t trajectory_flips() const { return flips_; }
 };
 
 }  // namespace evflow
