@@ -256,6 +256,7 @@ StepStats Trainer::step() {
   const size_t n_pix = size_t(view.camera.width) * view.camera.height * 3;
   bool exposure_terms = false;
   for (auto& t : terms_) exposure_terms |= dynamic_cast<ExposureLossTerm*>(t.get()) != nullptr;
+  if (step_ <= uint32_t(cfg_.event_from * cfg_.iterations)) exposure_terms = false;  // not started yet
   if (exposure_terms && frame_rgb_.size() != frames) {
     frame_rgb_.clear(), frame_grad_.clear();
     for (uint32_t i = 0; i < frames; ++i) {
@@ -328,6 +329,10 @@ StepStats Trainer::step() {
   st.loss = 0;
   const LossTerm* bad_term = nullptr;
   for (auto& t : terms_) {
+    if (!exposure_terms && dynamic_cast<ExposureLossTerm*>(t.get())) {  // not recorded this step
+      st.term_values.push_back(0.0);
+      continue;
+    }
     const double v = t->value();
     st.term_values.push_back(v);
     st.loss += t->weight() * v;
