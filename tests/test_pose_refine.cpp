@@ -188,6 +188,7 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
     TrainConfig cfg;
     cfg.apply_method("blur+events");
     cfg.event_flip_until = flip ? 1.0 : 0.0;
+    cfg.event_from = 0.0;
     cfg.sh_degree = 0;
     cfg.iterations = 8;  // two steps per view, parameters frozen: this measures the terms
     cfg.densify = false;

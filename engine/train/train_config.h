@@ -32,10 +32,10 @@ struct TrainConfig {
   // The blur loss cannot tell a trajectory from its time reversal; the events can. Until this
   // fraction of the run, each step also scores the time-reversed frame order with the event
   // loss and flips the view's trajectory when that scores lower by event_flip_margin.
-  double event_flip_until = 0.5, event_flip_margin = 0.05;
+  double event_flip_until = 0.8, event_flip_margin = 0.05;
   // Fraction of the run after which the event term starts (its gradients swamp a model that
   // does not yet resemble the scene: log-luminance differences of a poor render are noise).
-  double event_from = 0.0;
+  double event_from = 0.5;
   // Plain mode: per-view se(3) pose refinement (c2w' = c2w Exp(delta)), its own learning rate.
   bool pose_refine = false;
   double lr_pose_init = 1e-3, lr_pose_final = 1e-5;
