@@ -14,6 +14,7 @@
 #include <string>
 
 #include "../app/viewer/view_camera.h"
+#include "cli_helpers.h"
 #include "gpu_fixture.h"
 #include "io/image.h"
 #include "io/ply_splats.h"
@@ -26,32 +27,11 @@ namespace fs = std::filesystem;
 namespace {
 
 // <build>/tests/evflow_tests -> <build>/evflow
-fs::path evflow_binary() {
-  fs::path self = fs::read_symlink("/proc/self/exe");
-  return self.parent_path().parent_path() / "evflow";
-}
-
-bool on_path(const std::string& prog) {
-  return std::system(("command -v " + prog + " >/dev/null 2>&1").c_str()) == 0;
-}
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-uint8_t encode8(float linear) {
-  float v = std::isnan(linear) ? 0.f : std::clamp(linear, 0.f, 1.f);
-  return static_cast<uint8_t>(std::lround(io::linear_to_srgb(v) * 255.f));
-}
+using test::encode8;
+using test::evflow_binary;
+using test::on_path;
+using test::quote;
+using test::slurp;
 
 // Runs `evflow view` on a synthetic PLY under Xvfb with a window of W x H (plus `extra`
 // arguments), then compares its screenshot (expected size OW x OH) with the offscreen render of

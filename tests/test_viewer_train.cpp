@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "camera/trajectory.h"
+#include "cli_helpers.h"
 #include "gpu_fixture.h"
 #include "io/dataset.h"
 #include "io/image.h"
@@ -32,27 +33,11 @@ using nlohmann::json;
 
 namespace {
 
-fs::path evflow_binary() { return fs::read_symlink("/proc/self/exe").parent_path().parent_path() / "evflow"; }
-
-bool on_path(const std::string& prog) { return std::system(("command -v " + prog + " >/dev/null 2>&1").c_str()) == 0; }
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-uint8_t encode8(float linear) {
-  float v = std::isnan(linear) ? 0.f : std::clamp(linear, 0.f, 1.f);
-  return static_cast<uint8_t>(std::lround(io::linear_to_srgb(v) * 255.f));
-}
+using test::encode8;
+using test::evflow_binary;
+using test::on_path;
+using test::quote;
+using test::slurp;
 
 // A fresh folder with a 0700 XDG_RUNTIME_DIR inside.
 fs::path fresh_dir(const std::string& tag) {

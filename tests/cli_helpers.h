@@ -1,0 +1,43 @@
+// Helpers of the tests that run the `evflow` program (viewer tests under Xvfb).
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "io/image.h"
+
+namespace evflow::test {
+
+// build/evflow, next to build/tests/evflow_tests.
+inline std::filesystem::path evflow_binary() {
+  return std::filesystem::read_symlink("/proc/self/exe").parent_path().parent_path() / "evflow";
+}
+
+inline bool on_path(const std::string& prog) { return std::system(("command -v " + prog + " >/dev/null 2>&1").c_str()) == 0; }
+
+// Single-quoted for sh.
+inline std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// A linear value as the 8-bit sRGB byte a screenshot holds.
+inline uint8_t encode8(float linear) {
+  float v = std::isnan(linear) ? 0.f : std::clamp(linear, 0.f, 1.f);
+  return static_cast<uint8_t>(std::lround(io::linear_to_srgb(v) * 255.f));
+}
+
+}  // namespace evflow::test
