@@ -5,6 +5,7 @@
 
 #include "camera/se3.h"
 #include "loss/image_losses.h"
+#include "optim/host_adam.h"
 
 namespace evflow {
 
@@ -20,7 +21,6 @@ PoseRefineResult refine_pose(gpu::Context& ctx, Rasterizer& raster, const Gaussi
   gpu::Commands cmd(ctx);
   lie::Vec6 delta{}, m{}, v{};
   PoseRefineResult best{start, 0, std::numeric_limits<double>::infinity(), {}};
-  const double b1 = 0.9, b2 = 0.999;
   for (uint32_t it = 0; it <= o.iterations; ++it) {
     const Camera cam = start.perturbed(delta);
     raster.forward(params, cam, o.settings);
@@ -34,12 +34,7 @@ PoseRefineResult refine_pose(gpu::Context& ctx, Rasterizer& raster, const Gaussi
     raster.backward(params, v_rgb, v_alpha, grads, false);
     auto g = raster.pose_gradient();
     const lie::Vec6 gd = lie::mul_transposed(lie::se3_right_jacobian(delta), lie::Vec6{g[0], g[1], g[2], g[3], g[4], g[5]});
-    const double c1 = 1 - std::pow(b1, it + 1.0), c2 = 1 - std::pow(b2, it + 1.0);
-    for (int k = 0; k < 6; ++k) {
-      m[k] = b1 * m[k] + (1 - b1) * gd[k];
-      v[k] = b2 * v[k] + (1 - b2) * gd[k] * gd[k];
-      delta[k] -= o.lr * (m[k] / c1) / (std::sqrt(v[k] / c2) + 1e-15);
-    }
+    host_adam_step(delta.data(), gd.data(), m.data(), v.data(), 6, it + 1, o.lr);
   }
   return best;
 }

@@ -8,6 +8,7 @@
 #include "events/edi.h"
 #include "loss/event_loss.h"
 #include "loss/image_losses.h"
+#include "optim/host_adam.h"
 #include "optim/schedule.h"
 #include "train/train_layout.h"
 
@@ -388,17 +389,9 @@ StepStats Trainer::step() {
 // host (a few hundred flops), learning rate decaying exponentially over the run.
 void Trainer::camera_adam(uint32_t v, const double* grad, double lr_init, double lr_final) {
   TrajectoryState& st = trajectory_state_[v];
-  const double b1 = 0.9, b2 = 0.999, eps = 1e-15;
   ExponentialDecay sched{lr_init, lr_final, cfg_.iterations};
-  const double lr = sched(step_);
-  ++st.step;
-  const double c1 = 1 - std::pow(b1, double(st.step)), c2 = 1 - std::pow(b2, double(st.step));
   double* x = trajectories_.empty() ? pose_deltas_[v].data() : trajectories_[v].data();
-  for (size_t k = 0; k < st.exp_avg.size(); ++k) {
-    st.exp_avg[k] = b1 * st.exp_avg[k] + (1 - b1) * grad[k];
-    st.exp_avg_sq[k] = b2 * st.exp_avg_sq[k] + (1 - b2) * grad[k] * grad[k];
-    x[k] -= lr * (st.exp_avg[k] / c1) / (std::sqrt(st.exp_avg_sq[k] / c2) + eps);
-  }
+  host_adam_step(x, grad, st.exp_avg.data(), st.exp_avg_sq.data(), st.exp_avg.size(), ++st.step, sched(step_));
 }
 
 // Time reversal of a view's trajectory: T'(u) = T(1 - u) up to the order of the factors (exact
