@@ -86,18 +86,29 @@ static int bench_raster(ArgParser& p) {
 // Training steps on sharp views rendered from a synthetic ground-truth cloud: it/s and the split
 // between rasterization, loss and optimizer.
 static int bench_train(ArgParser& p) {
-  const uint32_t W = uint32_t(p.integer("--width", 346)), H = uint32_t(p.integer("--height", 260));
+  uint32_t W = uint32_t(p.integer("--width", 346)), H = uint32_t(p.integer("--height", 260));
   const uint32_t N = uint32_t(p.integer("--gaussians", 100000));
   const int steps = int(p.integer("--steps", 20));
   const int views = int(p.integer("--views", 8));
   const bool json = p.flag("--json");
+  const std::string data_dir = p.value("--data");
+  std::string method = p.value("--method");
+  if (method.empty()) method = "plain";
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   gpu::Context ctx(o);
-  io::Dataset data = render_synthetic_dataset(ctx, W, H, views, 0, 20000);
+  // A dataset folder (blurry views + events: every method), or sharp views rendered from a
+  // synthetic cloud (plain only: it has no exposures or events).
+  io::Dataset data = data_dir.empty() ? render_synthetic_dataset(ctx, W, H, views, 0, 20000) : io::load_dataset(data_dir);
+  W = data.train.at(0).camera.width, H = data.train.at(0).camera.height;
   TrainConfig cfg;
+  cfg.apply_method(method);
+  if (data_dir.empty() && method != "plain") throw std::invalid_argument("bench train: --method " + method + " needs --data DIR");
   cfg.init_gaussians = N;
-  cfg.iterations = uint32_t(steps);
+  cfg.iterations = uint32_t(steps) + 1;
+  cfg.densify = false;           // a fixed count: the steps are comparable
+  cfg.event_from = 0;            // the event term (when the method has one) is on in every timed step
+  cfg.event_flip_until = 1;      // and so is the direction check
   Trainer t(ctx, data, cfg);
   t.step();  // warm-up: pipelines compiled, buffers sized
   std::vector<double> total, fwd, loss, bwd, opt;
@@ -117,17 +128,17 @@ static int bench_train(ArgParser& p) {
   }
   const double m = median(total);
   if (json) {
-    std::printf("{\"bench\": \"train\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": %u, \"steps\": %d, "
+    std::printf("{\"bench\": \"train\", \"method\": \"%s\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": %u, \"steps\": %d, "
                 "\"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, \"rasterize_backward\": %.2f, "
                 "\"optimizer\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
-                ctx.caps().name.c_str(), W, H, N, steps, 1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), m);
+                method.c_str(), ctx.caps().name.c_str(), W, H, N, steps, 1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), m);
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
     std::printf("}}\n");
   } else {
-    std::printf("train bench on %s: %ux%u, %u Gaussians, one view per step, median of %d steps\n", ctx.caps().name.c_str(), W, H,
-                N, steps);
-    std::printf("  rasterize forward   %9.2f ms\n  loss (L1 + D-SSIM)  %9.2f ms\n  rasterize backward  %9.2f ms\n"
+    std::printf("train bench (%s) on %s: %ux%u, %u Gaussians, one view per step, median of %d steps\n", method.c_str(),
+                ctx.caps().name.c_str(), W, H, N, steps);
+    std::printf("  rasterize forward   %9.2f ms\n  loss terms          %9.2f ms\n  rasterize backward  %9.2f ms\n"
                 "  optimizer (Adam)    %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
                 median(fwd), median(loss), median(bwd), median(opt), m, 1000.0 / m);
     std::printf("  rasterizer stages:");
@@ -145,7 +156,9 @@ static int run_bench(const Args& a) {
                 "                           [--repeats 10] [--warmup 2] [--antialiased] [--json] [--device N|name]\n"
                 "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians).\n"
                 "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--views 8] [--json]\n"
-                "  Training steps (render, L1 + D-SSIM, backward, Adam): it/s and the split per part.\n");
+                "                          [--data DIR --method plain|edi|blur-only|blur+events]\n"
+                "  Training steps (render, loss terms, backward, Adam): it/s and the split per part. With --data,\n"
+                "  the steps train that dataset with the method (blur modes: 2N+1 renders per step).\n");
     return pos.empty() ? 2 : 0;
   }
   p.args.erase(std::find(p.args.begin(), p.args.end(), pos[0]));

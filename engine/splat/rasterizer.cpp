@@ -226,7 +226,7 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
 }
 
 void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
-                          GaussianBuffers& grads, bool accumulate) {
+                          GaussianBuffers& grads, bool accumulate, gpu::Buffer* grad2d_norm_into) {
   if (params.count != count_) throw gpu::Error("Rasterizer::backward: parameters differ from the last forward");
   if (grads.count != params.count || grads.sh_degree != params.sh_degree)
     throw gpu::Error("Rasterizer::backward: gradient buffers do not match the parameters");
@@ -238,7 +238,8 @@ void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rg
   const uint64_t align = std::max<uint64_t>(256, ctx_.caps().min_storage_offset_alignment);
   grad_plane_stride_ = ((std::max<uint64_t>(m, 1) * 4 + align - 1) / align) * align;
   isect_grad_.ensure(grad_plane_stride_ * 9);
-  grad2d_norm_.ensure(n * 4);
+  gpu::Buffer& grad2d_norm = grad2d_norm_into ? *grad2d_norm_into : grad2d_norm_;
+  grad2d_norm.ensure(n * 4);
   const uint32_t groups = gpu::Commands::div_up(n, kProjectGroupSize);
   pose_partial_.ensure(uint64_t(std::max<uint32_t>(groups, 1)) * 24);
   auto plane = [&](int k) { return gpu::BufferRef(isect_grad_, grad_plane_stride_ * k, grad_plane_stride_); };
@@ -259,7 +260,7 @@ void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rg
                 {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1),
                  sh_band(params, 2), sh_band(params, 3), isect_offset_, gaussian_id_from_slot_, plane(0), plane(1), plane(2),
                  plane(3), plane(4), plane(5), plane(6), plane(7), plane(8), grads.means, grads.log_scales, grads.quats,
-                 grads.opacity_logits, sh_band(grads, 0), sh_band(grads, 1), sh_band(grads, 2), sh_band(grads, 3), grad2d_norm_,
+                 grads.opacity_logits, sh_band(grads, 0), sh_band(grads, 1), sh_band(grads, 2), sh_band(grads, 3), grad2d_norm,
                  pose_partial_, proj_color_, proj_dcolor_},
                 project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(groups));
   ReducePC rp{groups, 0, 0, 0};

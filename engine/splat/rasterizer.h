@@ -44,12 +44,15 @@ class Rasterizer {
   // the per-Gaussian screen-space gradient norm.
   // With `accumulate`, gradients (and the screen-gradient norms) are added to what `grads`
   // holds (several renders in one step); the pose gradient is always this render's alone.
+  // `grad2d_norm_into`: where the screen-gradient norms go (default: this rasterizer's own
+  // buffer), so renders held by several rasterizers can add into one.
   void backward(const GaussianBuffers& params, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
-                GaussianBuffers& grads, bool accumulate = false);
+                GaussianBuffers& grads, bool accumulate = false, gpu::Buffer* grad2d_norm_into = nullptr);
 
   const RasterOutputs& outputs() const { return out_; }
   std::array<float, 6> pose_gradient() const;
   const gpu::Buffer& grad2d_norm() const { return grad2d_norm_; }
+  gpu::Buffer& grad2d_norm() { return grad2d_norm_; }
   uint32_t num_intersections() const { return num_isects_; }
   // Stage times (ms) of the last forward and backward, in order.
   const std::vector<std::pair<std::string, double>>& stage_ms() const { return stage_ms_; }

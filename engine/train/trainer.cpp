@@ -258,21 +258,19 @@ StepStats Trainer::step() {
   bool exposure_terms = false;
   for (auto& t : terms_) exposure_terms |= dynamic_cast<ExposureLossTerm*>(t.get()) != nullptr;
   if (step_ <= uint32_t(cfg_.event_from * cfg_.iterations)) exposure_terms = false;  // not started yet
-  if (exposure_terms && frame_rgb_.size() != frames) {
-    frame_rgb_.clear(), frame_grad_.clear();
-    for (uint32_t i = 0; i < frames; ++i) {
-      frame_rgb_.emplace_back(ctx_, n_pix * 4, "frame_rgb");
-      frame_grad_.emplace_back(ctx_, n_pix * 4, "frame_grad");
-    }
+  if (exposure_terms && frame_grad_.size() != frames) {
+    frame_grad_.clear();
+    for (uint32_t i = 0; i < frames; ++i) frame_grad_.emplace_back(ctx_, n_pix * 4, "frame_grad");
   }
   // Forward: the image model is the mean of the frames' linear renders (one frame in plain mode).
+  // Each frame keeps its render state for the backward pass.
   for (uint32_t i = 0; i < frames; ++i) {
-    raster_.forward(*params_, camera_at(i), s);
+    Rasterizer& r = frame_raster(i);
+    r.forward(*params_, camera_at(i), s);
     if (blur) {
       shaderio::AccumulatePC pc{uint32_t(n_pix), 1.0f / float(frames), i > 0 ? 1u : 0u, 0};
-      cmd_.dispatch("train/accumulate", {raster_.outputs().rgb, mean_image_}, pc,
+      cmd_.dispatch("train/accumulate", {r.outputs().rgb, mean_image_}, pc,
                     cmd_.linear_groups(gpu::Commands::div_up(n_pix, shaderio::kAccumulateGroupSize)));
-      if (exposure_terms) cmd_.copy(raster_.outputs().rgb, frame_rgb_[i], n_pix * 4);
       cmd_.submit();
     }
   }
@@ -301,7 +299,7 @@ StepStats Trainer::step() {
     if (check_flip) {
       // Score the time-reversed frame order first (its gradients are overwritten below).
       for (uint32_t i = 0; i < frames; ++i) {
-        ef.rgb.push_back(&frame_rgb_[frames - 1 - i]);
+        ef.rgb.push_back(&frame_raster(frames - 1 - i).outputs().rgb);
         ef.grad.push_back(&frame_grad_[i]);
       }
       cmd_.submit();  // the image terms' value slots are read after the next submit; keep them
@@ -312,7 +310,7 @@ StepStats Trainer::step() {
     }
     for (uint32_t i = 0; i < frames; ++i) {
       cmd_.copy(v_rgb_, frame_grad_[i], n_pix * 4);
-      ef.rgb.push_back(&frame_rgb_[i]);
+      ef.rgb.push_back(&frame_raster(i).outputs().rgb);
       ef.grad.push_back(&frame_grad_[i]);
     }
     for (auto& t : terms_)
@@ -349,10 +347,10 @@ StepStats Trainer::step() {
     std::array<double, ExposureTrajectory::kSize> knot_grad{};
     lie::Vec6 pose_grad{};
     for (uint32_t i = 0; i < frames; ++i) {
-      if (blur) raster_.forward(*params_, camera_at(i), s);  // the rasterizer keeps one render's state
-      raster_.backward(*params_, exposure_terms ? frame_grad_[i] : v_rgb_, v_alpha_, *grads_, i > 0);
+      Rasterizer& r = frame_raster(i);
+      r.backward(*params_, exposure_terms ? frame_grad_[i] : v_rgb_, v_alpha_, *grads_, i > 0, &raster_.grad2d_norm());
       if (blur || !pose_deltas_.empty()) {
-        auto g = raster_.pose_gradient();
+        auto g = r.pose_gradient();
         const lie::Vec6 g6{g[0], g[1], g[2], g[3], g[4], g[5]};
         if (blur) {
           auto kg = trajectories_[st.view].backward(us[i], g6);
@@ -383,6 +381,12 @@ StepStats Trainer::step() {
   }
   st.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return st;
+}
+
+Rasterizer& Trainer::frame_raster(uint32_t i) {
+  if (i == 0) return raster_;
+  while (frame_raster_.size() < i) frame_raster_.push_back(std::make_unique<Rasterizer>(ctx_));
+  return *frame_raster_[i - 1];
 }
 
 // Adam on one view's camera parameters (54 trajectory knots or a 6-vector pose delta), on the

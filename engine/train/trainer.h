@@ -71,7 +71,9 @@ class Trainer {
 
  private:
   void setup(const GaussianCloud& start);
-  double blur_step(const io::View& view, uint32_t v, const RenderSettings& s, StepStats& st);
+  // Virtual frame i's render state: frame 0 is raster_, the others are held so the backward
+  // pass does not render them again (blur mode).
+  Rasterizer& frame_raster(uint32_t i);
   void camera_adam(uint32_t v, const double* grad, double lr_init, double lr_final);
   void flip_trajectory(uint32_t v);
   gpu::Context& ctx_;
@@ -91,7 +93,8 @@ class Trainer {
   std::vector<lie::Vec6> pose_deltas_;              // plain mode with pose_refine: c2w' = c2w Exp(delta)
   gpu::Buffer mean_image_;
   std::unique_ptr<GpuEvents> events_;               // training views' events (when a term needs them)
-  std::vector<gpu::Buffer> frame_rgb_, frame_grad_;  // per virtual frame (exposure terms only)
+  std::vector<std::unique_ptr<Rasterizer>> frame_raster_;  // virtual frames 1..2N (blur mode)
+  std::vector<gpu::Buffer> frame_grad_;             // per virtual frame (exposure terms only)
   size_t means_group_ = 0;
   double extent_ = 1.0;
   uint32_t step_ = 0;
