@@ -96,6 +96,12 @@ static int bench_train(ArgParser& p) {
   if (method.empty()) method = "plain";
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
+  std::vector<std::pair<std::string, std::string>> overrides;  // training keys, as for evflow train
+  for (auto& kv : p.positional()) {
+    const size_t eq = kv.find('=');
+    if (eq == std::string::npos) throw std::invalid_argument("bench train: unexpected argument '" + kv + "'");
+    overrides.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+  }
   gpu::Context ctx(o);
   // A dataset folder (blurry views + events: every method), or sharp views rendered from a
   // synthetic cloud (plain only: it has no exposures or events).
@@ -109,6 +115,8 @@ static int bench_train(ArgParser& p) {
   cfg.densify = false;           // a fixed count: the steps are comparable
   cfg.event_from = 0;            // the event term (when the method has one) is on in every timed step
   cfg.event_flip_until = 1;      // and so is the direction check
+  for (auto& [k, v] : overrides) cfg.set(k, v);
+  cfg.iterations = std::max<uint32_t>(cfg.iterations, uint32_t(steps) + 1);
   Trainer t(ctx, data, cfg);
   t.step();  // warm-up: pipelines compiled, buffers sized
   std::vector<double> total, fwd, loss, bwd, opt;
@@ -156,7 +164,7 @@ static int run_bench(const Args& a) {
                 "                           [--repeats 10] [--warmup 2] [--antialiased] [--json] [--device N|name]\n"
                 "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians).\n"
                 "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--views 8] [--json]\n"
-                "                          [--data DIR --method plain|edi|blur-only|blur+events]\n"
+                "                          [--data DIR --method plain|edi|blur-only|blur+events] [key=value ...]\n"
                 "  Training steps (render, loss terms, backward, Adam): it/s and the split per part. With --data,\n"
                 "  the steps train that dataset with the method (blur modes: 2N+1 renders per step).\n");
     return pos.empty() ? 2 : 0;
