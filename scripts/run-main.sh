@@ -9,9 +9,9 @@ mkdir -p -m 700 "$XDG_RUNTIME_DIR"
 OUT=runs/main
 mkdir -p "$OUT"
 build/evflow devices
-# simulate the default scene -> train on the blurry views -> evaluate (deblur + novel views) -> export
+# simulate the default scene -> train on the blurry views and the events (blur+events) -> evaluate (deblur + novel views) -> export
 build/evflow simulate --out "$OUT/data"
-build/evflow train "$OUT/data" --out "$OUT/run" --preset fast "${@}"
+build/evflow train "$OUT/data" --out "$OUT/run" --preset fast method=blur+events "${@}"
 build/evflow eval "$OUT/run"
 build/evflow export "$OUT/run" --gltf "$OUT/run/splats.glb" --ply "$OUT/run/splats.ply"
 cat "$OUT/run/eval.md"

@@ -184,10 +184,14 @@ TEST_CASE("densify: prune / clone / split decisions follow the rules; every buff
   const auto specs = cases();
   const uint32_t n = uint32_t(specs.size());
   const Camera cam = test_camera();
-  for (bool prune_big : {true, false}) {
-    INFO("prune_big = " << prune_big);
+  // mode 0: no big-pruning; 1: big-pruning; 2: big-pruning asked for with both limits 0 (off).
+  for (int mode : {1, 0, 2}) {
+    INFO("mode = " << mode);
+    const bool prune_big = mode == 1;  // whether the big rules can fire
     Setup s(ctx, make_cloud(specs));
-    DensityControl dc(ctx);
+    DensityConfig dcfg;
+    if (mode == 2) dcfg.max_screen_radius = 0, dcfg.max_world_scale = 0;
+    DensityControl dc(ctx, dcfg);
     const DensityConfig& cfg = dc.config();
     gpu::Commands cmd(ctx);
     gpu::Buffer norms(ctx, n * 4, "norms");
@@ -251,7 +255,7 @@ TEST_CASE("densify: prune / clone / split decisions follow the rules; every buff
     }
     const GaussianCloud before = s.cloud;
 
-    auto res = dc.refine(cmd, *s.params, *s.grads, *s.adam, s.stats, 1.0f, prune_big);
+    auto res = dc.refine(cmd, *s.params, *s.grads, *s.adam, s.stats, 1.0f, mode != 0);
     const uint32_t m = uint32_t(expect.size());
     REQUIRE(res.before == n);
     REQUIRE(res.after == m);

@@ -174,6 +174,11 @@ TEST_CASE("trainer: config keys, presets and bad values", "[train]") {
   REQUIRE_THROWS_WITH(c.set("iterationz", "1"), Catch::Contains("iterationz"));
   REQUIRE_THROWS_WITH(c.set("iterations", "ten"), Catch::Contains("iterations"));
   REQUIRE(TrainConfig::preset_named("paper").iterations == 40000);
+  c.set("prune_screen_px", "20");
+  c.set("prune_world_scale", "0");
+  REQUIRE(c.prune_screen_px == 20.0);
+  REQUIRE(c.prune_world_scale == 0.0);
+  REQUIRE(TrainConfig{}.prune_screen_px == 0.0);  // the screen-size rule is off by default
   TrainConfig d;
   d.apply_json(c.to_json());
   REQUIRE(d.to_json() == c.to_json());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "densify/densify_layout.h"
@@ -130,8 +131,9 @@ RefineResult DensityControl::refine(gpu::Commands& cmd, GaussianBuffers& params,
   dpc.grad_threshold = cfg_.grad_threshold;
   dpc.clone_max_scale = cfg_.percent_dense * extent;
   dpc.min_opacity_logit = logit(cfg_.min_opacity);
-  dpc.max_screen_radius = cfg_.max_screen_radius;
-  dpc.max_world_scale = cfg_.max_world_scale * extent;
+  // 0 turns a rule off.
+  dpc.max_screen_radius = cfg_.max_screen_radius > 0 ? cfg_.max_screen_radius : std::numeric_limits<float>::infinity();
+  dpc.max_world_scale = cfg_.max_world_scale > 0 ? cfg_.max_world_scale * extent : std::numeric_limits<float>::infinity();
   dpc.log_split_div = log_div;
   dpc.prune_big = prune_big ? 1u : 0u;
   dpc.capped = capped ? 1u : 0u;

@@ -27,8 +27,8 @@ struct DensityConfig {
   float split_divisor = 1.6f;     // children's scale = parent's / split_divisor
   float split_max_sigma = 3.0f;   // children's offsets truncated to this Mahalanobis radius
   float min_opacity = 0.005f;     // prune where opacity < this
-  float max_screen_radius = 20.0f;   // after the first reset: prune where max radius (px) > this
-  float max_world_scale = 0.1f;      // after the first reset: prune where max scale > this * extent
+  float max_screen_radius = 20.0f;   // after the first reset: prune where max radius (px) > this (0: off)
+  float max_world_scale = 0.1f;      // after the first reset: prune where max scale > this * extent (0: off)
   float reset_opacity = 0.01f;       // opacity reset: opacity = min(opacity, this)
   uint32_t max_gaussians = 0;     // cap on the count after growth (0 = none)
   uint32_t seed = 0;              // split sampling

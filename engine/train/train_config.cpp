@@ -76,6 +76,8 @@ const std::map<std::string, Setter>& setters() {
       {"densify_until", [](TrainConfig& c, const std::string& v) { c.densify_until = uint32_t(to_uint("densify_until", v)); }},
       {"densify_every", [](TrainConfig& c, const std::string& v) { c.densify_every = uint32_t(to_uint("densify_every", v)); }},
       {"densify_grad_threshold", [](TrainConfig& c, const std::string& v) { c.densify_grad_threshold = to_double("densify_grad_threshold", v); }},
+      {"prune_screen_px", [](TrainConfig& c, const std::string& v) { c.prune_screen_px = to_double("prune_screen_px", v); }},
+      {"prune_world_scale", [](TrainConfig& c, const std::string& v) { c.prune_world_scale = to_double("prune_world_scale", v); }},
       {"opacity_reset_every", [](TrainConfig& c, const std::string& v) { c.opacity_reset_every = uint32_t(to_uint("opacity_reset_every", v)); }},
       {"max_gaussians", [](TrainConfig& c, const std::string& v) { c.max_gaussians = uint32_t(to_uint("max_gaussians", v)); }},
       {"checkpoint_every", [](TrainConfig& c, const std::string& v) { c.checkpoint_every = uint32_t(to_uint("checkpoint_every", v)); }},
@@ -145,6 +147,7 @@ nlohmann::json TrainConfig::to_json() const {
           {"background", {background[0], background[1], background[2]}}, {"seed", seed}, {"log_every", log_every},
           {"checkpoint_every", checkpoint_every}, {"densify", densify}, {"densify_from", densify_from},
           {"densify_until", densify_until}, {"densify_every", densify_every}, {"densify_grad_threshold", densify_grad_threshold},
+          {"prune_screen_px", prune_screen_px}, {"prune_world_scale", prune_world_scale},
           {"opacity_reset_every", opacity_reset_every}, {"max_gaussians", max_gaussians}};
 }
 

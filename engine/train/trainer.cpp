@@ -217,6 +217,8 @@ void Trainer::setup(const GaussianCloud& start) {
     d.refine_until = cfg_.densify_until;
     d.refine_every = cfg_.densify_every;
     d.grad_threshold = float(cfg_.densify_grad_threshold);
+    d.max_screen_radius = float(cfg_.prune_screen_px);
+    d.max_world_scale = float(cfg_.prune_world_scale);
     d.reset_every = cfg_.opacity_reset_every;
     d.max_gaussians = cfg_.max_gaussians;
     d.seed = uint32_t(cfg_.seed);
