@@ -233,3 +233,51 @@ TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][
   for (size_t i = 0; i < norm_once.size(); ++i) REQUIRE(norm_twice[i] == 2.0f * norm_once[i]);
   test::require_no_validation_messages();
 }
+
+TEST_CASE("splat renders kept side by side: each backward equals a fresh render's, scratch shared, norms added",
+          "[gpu][splat]") {
+  auto& ctx = test::gpu_context();
+  Scene s = make_scene(43, 400, 1, 64, 48, false);
+  GaussianBuffers params(ctx, s.cloud.size(), 1, "p_"), grads(ctx, s.cloud.size(), 1, "v_");
+  params.upload(s.cloud);
+  const size_t hw = 64 * 48;
+  gpu::Buffer vr(ctx, hw * 12, "v_rgb"), va(ctx, hw * 4, "v_alpha");
+  vr.write(reference::random_weights(3, 3 * hw));
+  va.write(reference::random_weights(4, hw));
+  Camera moved = s.cam;
+  moved.t[0] += 0.05;  // a second pose, as a virtual frame along an exposure
+  // One rasterizer, rendering each pose right before its backward (the reference order).
+  Rasterizer one(ctx);
+  std::vector<GaussianCloud> ref;
+  std::vector<std::array<float, 6>> ref_pose;
+  for (const Camera& c : {s.cam, moved}) {
+    one.forward(params, c, s.settings);
+    one.backward(params, vr, va, grads);
+    ref.push_back(grads.download());
+    ref_pose.push_back(one.pose_gradient());
+  }
+  one.forward(params, s.cam, s.settings);
+  one.backward(params, vr, va, grads);
+  one.forward(params, moved, s.settings);
+  one.backward(params, vr, va, grads, true);
+  auto ref_norm_sum = one.grad2d_norm().read<float>(s.cloud.size());
+  // Two rasterizers: both forwards first, then both backwards; the second borrows the first's
+  // scratch and adds its screen-gradient norms into the first's buffer.
+  Rasterizer a(ctx), b(ctx);
+  b.borrow_backward_scratch(a);
+  a.forward(params, s.cam, s.settings);
+  b.forward(params, moved, s.settings);
+  b.backward(params, vr, va, grads);
+  REQUIRE(grads.download().means == ref[1].means);
+  REQUIRE(grads.download().sh == ref[1].sh);
+  REQUIRE(b.pose_gradient() == ref_pose[1]);
+  a.backward(params, vr, va, grads);
+  const GaussianCloud ga = grads.download();
+  REQUIRE(ga.means == ref[0].means);
+  REQUIRE(ga.log_scales == ref[0].log_scales);
+  REQUIRE(ga.opacity_logits == ref[0].opacity_logits);
+  REQUIRE(a.pose_gradient() == ref_pose[0]);
+  b.backward(params, vr, va, grads, true, &a.grad2d_norm());
+  REQUIRE(a.grad2d_norm().read<float>(s.cloud.size()) == ref_norm_sum);
+  test::require_no_validation_messages();
+}

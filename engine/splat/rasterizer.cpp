@@ -237,12 +237,13 @@ void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rg
   const uint32_t m = num_isects_;
   const uint64_t align = std::max<uint64_t>(256, ctx_.caps().min_storage_offset_alignment);
   grad_plane_stride_ = ((std::max<uint64_t>(m, 1) * 4 + align - 1) / align) * align;
-  isect_grad_.ensure(grad_plane_stride_ * 9);
+  gpu::Buffer& isect_grad = scratch_owner_ ? scratch_owner_->isect_grad_ : isect_grad_;
+  isect_grad.ensure(grad_plane_stride_ * 9);
   gpu::Buffer& grad2d_norm = grad2d_norm_into ? *grad2d_norm_into : grad2d_norm_;
   grad2d_norm.ensure(n * 4);
   const uint32_t groups = gpu::Commands::div_up(n, kProjectGroupSize);
   pose_partial_.ensure(uint64_t(std::max<uint32_t>(groups, 1)) * 24);
-  auto plane = [&](int k) { return gpu::BufferRef(isect_grad_, grad_plane_stride_ * k, grad_plane_stride_); };
+  auto plane = [&](int k) { return gpu::BufferRef(isect_grad, grad_plane_stride_ * k, grad_plane_stride_); };
   stage_ms_.erase(std::remove_if(stage_ms_.begin(), stage_ms_.end(),
                                  [](auto& s) { return s.first.find("backward") != std::string::npos; }),
                   stage_ms_.end());

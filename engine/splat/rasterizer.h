@@ -49,6 +49,10 @@ class Rasterizer {
   void backward(const GaussianBuffers& params, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
                 GaussianBuffers& grads, bool accumulate = false, gpu::Buffer* grad2d_norm_into = nullptr);
 
+  // Backward passes of this rasterizer use `owner`'s per-intersection gradient scratch (the
+  // largest backward buffer) instead of their own: for render states kept side by side whose
+  // backward passes run one after the other.
+  void borrow_backward_scratch(Rasterizer& owner) { scratch_owner_ = &owner; }
   const RasterOutputs& outputs() const { return out_; }
   std::array<float, 6> pose_gradient() const;
   const gpu::Buffer& grad2d_norm() const { return grad2d_norm_; }
@@ -77,6 +81,7 @@ class Rasterizer {
   std::array<uint8_t, 128> project_pc_{}, raster_pc_{};
   uint32_t width_ = 0, height_ = 0, tiles_x_ = 0, tiles_y_ = 0, num_isects_ = 0, depth_bits_ = 0, sort_bits_ = 0;
   size_t count_ = 0;
+  Rasterizer* scratch_owner_ = nullptr;
   std::string block_suffix_;  // "" (one pixel per invocation) or "_block" (see set_pc)
   std::vector<std::pair<std::string, double>> stage_ms_;
 };

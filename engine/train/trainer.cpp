@@ -387,7 +387,10 @@ StepStats Trainer::step() {
 
 Rasterizer& Trainer::frame_raster(uint32_t i) {
   if (i == 0) return raster_;
-  while (frame_raster_.size() < i) frame_raster_.push_back(std::make_unique<Rasterizer>(ctx_));
+  while (frame_raster_.size() < i) {
+    frame_raster_.push_back(std::make_unique<Rasterizer>(ctx_));
+    frame_raster_.back()->borrow_backward_scratch(raster_);  // the frames' backward passes run in turn
+  }
   return *frame_raster_[i - 1];
 }
 
