@@ -178,7 +178,8 @@ TEST_CASE("trainer: config keys, presets and bad values", "[train]") {
   c.set("prune_world_scale", "0");
   REQUIRE(c.prune_screen_px == 20.0);
   REQUIRE(c.prune_world_scale == 0.0);
-  REQUIRE(TrainConfig{}.prune_screen_px == 0.0);  // the screen-size rule is off by default
+  REQUIRE(TrainConfig{}.prune_screen_px == 0.0);  // the size rules are off by default
+  REQUIRE(TrainConfig{}.prune_world_scale == 0.0);
   TrainConfig d;
   d.apply_json(c.to_json());
   REQUIRE(d.to_json() == c.to_json());

@@ -53,10 +53,11 @@ struct TrainConfig {
   double densify_grad_threshold = 2e-4;
   // After the first opacity reset, refinements prune Gaussians larger than these: screen radius
   // in pixels (3 sigma) and world scale as a fraction of the scene extent (0: that rule off).
-  // The screen rule is off by default (3DGS: 20 px, sized for ~1000 px images): at 346x260 it
-  // removed the Gaussians that cover the walls, and under the count cap the loss never recovered
-  // (docs/density_control.md).
-  double prune_screen_px = 0, prune_world_scale = 0.1;
+  // Both are off by default (3DGS: 20 px and 0.1): at 346x260, with cameras on an arc whose
+  // spread (the extent) is small next to the scene's depth, they pruned the Gaussians covering
+  // the walls after every refinement, and under the count cap the loss never recovered
+  // (measured in docs/density_control.md).
+  double prune_screen_px = 0, prune_world_scale = 0;
   uint32_t opacity_reset_every = 3000;
   uint32_t max_gaussians = 30000;      // cap on the count (0: none); fast preset sized for 2 CPU cores
 
