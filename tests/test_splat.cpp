@@ -50,6 +50,20 @@ double consensus(const std::vector<double>& v) {
   return out;
 }
 
+// A 64x48 random scene uploaded, gradient buffers, and random image gradients (v_rgb, v_alpha).
+struct BackwardSetup {
+  BackwardSetup(gpu::Context& ctx, uint64_t seed)
+      : s(make_scene(seed, 400, 1, 64, 48, false)), params(ctx, s.cloud.size(), 1, "p_"), grads(ctx, s.cloud.size(), 1, "v_"),
+        vr(ctx, 64 * 48 * 12, "v_rgb"), va(ctx, 64 * 48 * 4, "v_alpha") {
+    params.upload(s.cloud);
+    vr.write(reference::random_weights(seed * 2, 3 * 64 * 48));
+    va.write(reference::random_weights(seed * 2 + 1, 64 * 48));
+  }
+  Scene s;
+  GaussianBuffers params, grads;
+  gpu::Buffer vr, va;
+};
+
 }  // namespace
 
 TEST_CASE("splat forward matches the double-precision reference", "[gpu][splat]") {
@@ -213,13 +227,10 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
 
 TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][splat]") {
   auto& ctx = test::gpu_context();
-  Scene s = make_scene(41, 400, 1, 64, 48, false);
-  GaussianBuffers params(ctx, s.cloud.size(), 1, "p_"), grads(ctx, s.cloud.size(), 1, "v_");
-  params.upload(s.cloud);
-  const size_t hw = 64 * 48;
-  gpu::Buffer vr(ctx, hw * 12, "v_rgb"), va(ctx, hw * 4, "v_alpha");
-  vr.write(reference::random_weights(1, 3 * hw));
-  va.write(reference::random_weights(2, hw));
+  BackwardSetup setup(ctx, 41);
+  Scene& s = setup.s;
+  GaussianBuffers &params = setup.params, &grads = setup.grads;
+  gpu::Buffer &vr = setup.vr, &va = setup.va;
   Rasterizer r(ctx);
   r.forward(params, s.cam, s.settings);
   r.backward(params, vr, va, grads);
@@ -237,13 +248,10 @@ TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][
 TEST_CASE("splat renders kept side by side: each backward equals a fresh render's, scratch shared, norms added",
           "[gpu][splat]") {
   auto& ctx = test::gpu_context();
-  Scene s = make_scene(43, 400, 1, 64, 48, false);
-  GaussianBuffers params(ctx, s.cloud.size(), 1, "p_"), grads(ctx, s.cloud.size(), 1, "v_");
-  params.upload(s.cloud);
-  const size_t hw = 64 * 48;
-  gpu::Buffer vr(ctx, hw * 12, "v_rgb"), va(ctx, hw * 4, "v_alpha");
-  vr.write(reference::random_weights(3, 3 * hw));
-  va.write(reference::random_weights(4, hw));
+  BackwardSetup setup(ctx, 43);
+  Scene& s = setup.s;
+  GaussianBuffers &params = setup.params, &grads = setup.grads;
+  gpu::Buffer &vr = setup.vr, &va = setup.va;
   Camera moved = s.cam;
   moved.t[0] += 0.05;  // a second pose, as a virtual frame along an exposure
   // One rasterizer, rendering each pose right before its backward (the reference order).
