@@ -83,8 +83,8 @@ static int bench_raster(ArgParser& p) {
   return 0;
 }
 
-// Training steps on sharp views rendered from a synthetic ground-truth cloud: it/s and the split
-// between rasterization, loss and optimizer.
+// Training steps (sharp views rendered from a synthetic ground-truth cloud, or a dataset folder
+// with any method): it/s and the split between rasterization, loss terms and optimizer.
 static int bench_train(ArgParser& p) {
   uint32_t W = uint32_t(p.integer("--width", 346)), H = uint32_t(p.integer("--height", 260));
   const uint32_t N = uint32_t(p.integer("--gaussians", 100000));
@@ -111,12 +111,11 @@ static int bench_train(ArgParser& p) {
   cfg.apply_method(method);
   if (data_dir.empty() && method != "plain") throw std::invalid_argument("bench train: --method " + method + " needs --data DIR");
   cfg.init_gaussians = N;
-  cfg.iterations = uint32_t(steps) + 1;
   cfg.densify = false;           // a fixed count: the steps are comparable
   cfg.event_from = 0;            // the event term (when the method has one) is on in every timed step
   cfg.event_flip_until = 1;      // and so is the direction check
   for (auto& [k, v] : overrides) cfg.set(k, v);
-  cfg.iterations = std::max<uint32_t>(cfg.iterations, uint32_t(steps) + 1);
+  cfg.iterations = std::max<uint32_t>(cfg.iterations, uint32_t(steps) + 1);  // the warm-up step and the timed ones
   Trainer t(ctx, data, cfg);
   t.step();  // warm-up: pipelines compiled, buffers sized
   std::vector<double> total, fwd, loss, bwd, opt;
