@@ -265,16 +265,16 @@ StepStats Trainer::step() {
     for (uint32_t i = 0; i < frames; ++i) frame_grad_.emplace_back(ctx_, n_pix * 4, "frame_grad");
   }
   // Forward: the image model is the mean of the frames' linear renders (one frame in plain mode).
-  // Each frame keeps its render state for the backward pass.
-  for (uint32_t i = 0; i < frames; ++i) {
-    Rasterizer& r = frame_raster(i);
-    r.forward(*params_, camera_at(i), s);
-    if (blur) {
+  // Each frame keeps its render state (and its image) for the backward pass, so the mean is
+  // summed after all of them, in frame order, in one submit.
+  for (uint32_t i = 0; i < frames; ++i) frame_raster(i).forward(*params_, camera_at(i), s);
+  if (blur) {
+    for (uint32_t i = 0; i < frames; ++i) {
       shaderio::AccumulatePC pc{uint32_t(n_pix), 1.0f / float(frames), i > 0 ? 1u : 0u, 0};
-      cmd_.dispatch("train/accumulate", {r.outputs().rgb, mean_image_}, pc,
+      cmd_.dispatch("train/accumulate", {frame_raster(i).outputs().rgb, mean_image_}, pc,
                     cmd_.linear_groups(gpu::Commands::div_up(n_pix, shaderio::kAccumulateGroupSize)));
-      cmd_.submit();
     }
+    cmd_.submit();
   }
   st.raster_forward_ms = lap();
   // Image terms: every frame's share of d(loss)/d(mean image) is 1/frames of it.
