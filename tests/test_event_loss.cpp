@@ -208,3 +208,65 @@ TEST_CASE("event loss sign: renders that follow the simulator's events score nea
   CHECK(rev > 3.4);
   test::require_no_validation_messages();
 }
+
+TEST_CASE("event loss: the value-only record matches the full one, and counts are reused only for the same view and times",
+          "[events][loss]") {
+  auto& ctx = test::gpu_context();
+  const uint32_t W = 24, H = 16, F = 7;
+  auto ev = random_events(W, H, 6000, 21);
+  const std::vector<EventWindow> windows{{0.0, 0.5}, {0.5, 1.0}};
+  GpuEvents gev(ctx, ev, windows, "test events");
+  auto frames = random_frames(W, H, F, 23, false);
+  const size_t n = frames[0].size();
+  std::vector<gpu::Buffer> rgb, grad;
+  for (uint32_t i = 0; i < F; ++i) {
+    rgb.emplace_back(ctx, n * 4, "frame");
+    rgb.back().write(frames[i]);
+    grad.emplace_back(ctx, n * 4, "frame_grad");
+    grad.back().write(std::vector<float>(n, 0.0f));
+  }
+  auto frames_of = [&](uint32_t view, bool reversed, bool with_grad) {
+    ExposureFrames f;
+    f.view = view;
+    f.width = W, f.height = H;
+    f.t0 = windows[view].t0, f.t1 = windows[view].t1;
+    f.u = ExposureTrajectory::virtual_times(3);
+    f.seed = 31;
+    for (uint32_t i = 0; i < F; ++i) {
+      f.rgb.push_back(&rgb[reversed ? F - 1 - i : i]);
+      if (with_grad) f.grad.push_back(&grad[i]);
+    }
+    return f;
+  };
+  // Each value from a fresh term: nothing cached.
+  auto fresh_value = [&](uint32_t view, bool reversed) {
+    EventLoss fresh(ctx, gev, 0.1f);
+    gpu::Commands cmd(ctx);
+    fresh.record(cmd, frames_of(view, reversed, true));
+    cmd.submit();
+    return fresh.value();
+  };
+  const double forward0 = fresh_value(0, false), reversed0 = fresh_value(0, true), forward1 = fresh_value(1, false);
+  REQUIRE(std::abs(forward0 - reversed0) > 1e-3);  // the two orders score differently
+  for (uint32_t i = 0; i < F; ++i) grad[i].write(std::vector<float>(n, 0.0f));
+
+  EventLoss loss(ctx, gev, 0.1f);
+  gpu::Commands cmd(ctx);
+  loss.record_value(cmd, frames_of(0, true, false));  // as the trainer's direction check does
+  cmd.submit();
+  CHECK(loss.count_passes() == 1);
+  CHECK(loss.value() == Approx(reversed0).epsilon(1e-6));
+  for (uint32_t i = 0; i < F; ++i) {  // no gradient written
+    auto g = grad[i].read<float>(n);
+    REQUIRE(std::all_of(g.begin(), g.end(), [](float v) { return v == 0.0f; }));
+  }
+  loss.record(cmd, frames_of(0, false, true));  // same view and times: the counts are reused
+  cmd.submit();
+  CHECK(loss.count_passes() == 1);
+  CHECK(loss.value() == Approx(forward0).epsilon(1e-6));
+  loss.record(cmd, frames_of(1, false, true));  // another view: counted again
+  cmd.submit();
+  CHECK(loss.count_passes() == 2);
+  CHECK(loss.value() == Approx(forward1).epsilon(1e-6));
+  test::require_no_validation_messages();
+}

@@ -23,10 +23,14 @@ std::vector<std::pair<uint32_t, uint32_t>> EventLoss::sample_pairs(uint32_t fram
   return pairs;
 }
 
-void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
+void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) { record_pairs(cmd, f, weight, true); }
+
+void EventLoss::record_value(gpu::Commands& cmd, const ExposureFrames& f) { record_pairs(cmd, f, 0.0f, false); }
+
+void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float weight, bool gradients) {
   const uint32_t F = uint32_t(f.u.size());
   if (F < 2) throw std::invalid_argument("event loss: needs at least 2 virtual frames, got " + std::to_string(F));
-  if (f.rgb.size() != F || f.grad.size() != F)
+  if (f.rgb.size() != F || (gradients && f.grad.size() != F))
     throw std::invalid_argument("event loss: " + std::to_string(F) + " frame times but " + std::to_string(f.rgb.size()) +
                                 " renders and " + std::to_string(f.grad.size()) + " gradient images");
   if (f.width != events_.width() || f.height != events_.height())
@@ -37,7 +41,7 @@ void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight
     throw std::invalid_argument("event loss: view " + std::to_string(f.view) + " has no event window");
   const uint64_t hw = uint64_t(f.width) * f.height;
   for (uint32_t i = 0; i < F; ++i)
-    if (f.rgb[i]->size() < hw * 12 || f.grad[i]->size() < hw * 12)
+    if (f.rgb[i]->size() < hw * 12 || (gradients && f.grad[i]->size() < hw * 12))
       throw std::invalid_argument("event loss: frame " + std::to_string(i) + " buffers hold less than 3 x H x W floats");
   const uint32_t intervals = F - 1;
   const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
@@ -47,9 +51,16 @@ void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight
   sums_.ensure(uint64_t(intervals) * 16);
   ctx_.check_binding_size(uint64_t(intervals) * 2 * hw * 4, "event loss counts");
 
-  // Every interval's events once, into its own plane.
-  cmd.fill(counts_, 0u);
-  for (uint32_t k = 0; k < intervals; ++k) events_.accumulate(cmd, f.view, f.time_at(k), f.time_at(k + 1), counts_, k);
+  // Every interval's events once, into its own plane (unless counts_ holds them already).
+  std::vector<double> times(F);
+  for (uint32_t i = 0; i < F; ++i) times[i] = f.time_at(i);
+  if (f.view != counted_view_ || times != counted_times_) {
+    cmd.fill(counts_, 0u);
+    for (uint32_t k = 0; k < intervals; ++k) events_.accumulate(cmd, f.view, times[k], times[k + 1], counts_, k);
+    counted_view_ = f.view;
+    counted_times_ = times;
+    ++count_passes_;
+  }
 
   pairs_ = sample_pairs(F, f.seed);
   const gpu::Groups g = cmd.linear_groups(groups);
@@ -78,7 +89,10 @@ void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight
     r.dst = 4 * q;
     r.n_out = 3;
     cmd.dispatch("loss/reduce", {partials_, sums_}, r, gpu::Groups{1, 1, 1});
-    cmd.dispatch("loss/event_pair_bwd", {*f.rgb[s], *f.rgb[j], scratch_, sums_, *f.grad[s], *f.grad[j], value_buffer()}, pc, g);
+    if (gradients)
+      cmd.dispatch("loss/event_pair_bwd", {*f.rgb[s], *f.rgb[j], scratch_, sums_, *f.grad[s], *f.grad[j], value_buffer()}, pc, g);
+    else
+      cmd.dispatch("loss/event_pair_value", {sums_, value_buffer()}, pc, gpu::Groups{1, 1, 1});
   }
 }
 

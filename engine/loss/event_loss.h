@@ -38,6 +38,10 @@ class EventLoss : public ExposureLossTerm {
   EventLoss(gpu::Context& ctx, const GpuEvents& events, float weight, EventLossOptions options = {});
   using ExposureLossTerm::record;
   void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) override;
+  // The value alone, for the same frames and seed (frames.grad is not read and may be empty):
+  // what record() writes into the value slot, at a fraction of the cost. The trainer scores the
+  // time-reversed frame order with it.
+  void record_value(gpu::Commands& cmd, const ExposureFrames& frames);
 
   // The pairs (s, j = i + 1) for F frames and a seed: s uniform in {0..i} (deterministic).
   static std::vector<std::pair<uint32_t, uint32_t>> sample_pairs(uint32_t frames, uint64_t seed);
@@ -45,12 +49,21 @@ class EventLoss : public ExposureLossTerm {
   const EventLossOptions& options() const { return options_; }
   // Per-pixel counts of the last record, 2 * H * W uints per interval plane (for viewers and tests).
   const gpu::Buffer& counts() const { return counts_; }
+  // How many records counted their events (a record for the same view and frame times as the
+  // one before reuses its counts: events never change).
+  uint64_t count_passes() const { return count_passes_; }
 
  private:
+  void record_pairs(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
+
   const GpuEvents& events_;
   EventLossOptions options_;
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
   gpu::Buffer counts_, scratch_, partials_, sums_;
+  // What counts_ holds: the view and frame times of the last counting pass (empty: nothing).
+  uint32_t counted_view_ = 0;
+  std::vector<double> counted_times_;
+  uint64_t count_passes_ = 0;
 };
 
 }  // namespace evflow

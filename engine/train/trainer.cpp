@@ -299,16 +299,13 @@ StepStats Trainer::step() {
     const bool check_flip = events && step_ <= uint32_t(cfg_.event_flip_until * cfg_.iterations);
     double reversed = 0;
     if (check_flip) {
-      // Score the time-reversed frame order first (its gradients are overwritten below).
-      for (uint32_t i = 0; i < frames; ++i) {
-        ef.rgb.push_back(&frame_raster(frames - 1 - i).outputs().rgb);
-        ef.grad.push_back(&frame_grad_[i]);
-      }
+      // Score the time-reversed frame order first (the value alone; the same pairs and counts).
+      for (uint32_t i = 0; i < frames; ++i) ef.rgb.push_back(&frame_raster(frames - 1 - i).outputs().rgb);
       cmd_.submit();  // the image terms' value slots are read after the next submit; keep them
-      events->record(cmd_, ef);
+      events->record_value(cmd_, ef);
       cmd_.submit();
       reversed = events->value();
-      ef.rgb.clear(), ef.grad.clear();
+      ef.rgb.clear();
     }
     for (uint32_t i = 0; i < frames; ++i) {
       cmd_.copy(v_rgb_, frame_grad_[i], n_pix * 4);

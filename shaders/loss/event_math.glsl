@@ -1,4 +1,5 @@
-// Event-loss maths shared by loss/event_pair (forward) and loss/event_pair_bwd (backward).
+// Event-loss maths shared by loss/event_pair (forward), loss/event_pair_bwd (backward) and
+// loss/event_pair_value (the value alone).
 // Luminance weights match the simulator's event model (engine/events/event_model.h).
 const vec3 kEventLuma = vec3(0.2126, 0.7152, 0.0722);
 
@@ -8,4 +9,12 @@ float event_log_luma(vec3 rgb, float eps) { return log(eps + max(0.0, event_luma
 vec3 event_log_luma_grad(vec3 rgb, float eps) {
   float y = event_luma(rgb);
   return y > 0.0 ? kEventLuma / (eps + y) : vec3(0.0);
+}
+
+// A pair's norms from its sums ED, DD, EE (norms below the floor are held at it).
+float event_norm(float sq, float floor2) { return sqrt(max(sq, floor2)); }
+// l = || E/nE - D/nD ||^2 from the sums.
+float event_pair_loss(float ed, float dd, float ee, float floor2) {
+  float nE = event_norm(ee, floor2), nD = event_norm(dd, floor2);
+  return ee / (nE * nE) + dd / (nD * nD) - 2.0 * ed / (nE * nD);
 }

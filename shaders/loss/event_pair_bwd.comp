@@ -21,10 +21,9 @@ void main() {
   uint p = evf_linear_invocation(kLossGroupSize);
   float ed = sums[4u * pc.pair], dd = sums[4u * pc.pair + 1u], ee = sums[4u * pc.pair + 2u];
   bool d_floored = dd < pc.norm_floor2;
-  float nE = sqrt(max(ee, pc.norm_floor2)), nD = sqrt(max(dd, pc.norm_floor2));
+  float nE = event_norm(ee, pc.norm_floor2), nD = event_norm(dd, pc.norm_floor2);
   if (p == 0u) {
-    float l = ee / (nE * nE) + dd / (nD * nD) - 2.0 * ed / (nE * nD);
-    float v = pc.value_scale * l;
+    float v = pc.value_scale * event_pair_loss(ed, dd, ee, pc.norm_floor2);
     values[pc.value_index] = pc.value_accumulate != 0u ? values[pc.value_index] + v : v;
   }
   if (p >= hw) return;

@@ -82,6 +82,7 @@ struct ReducePC {
 // loss/event_pair_bwd: with nE = sqrt(max(EE, norm_floor2)), nD = sqrt(max(DD, norm_floor2)),
 //   l = || E / nE - D / nD ||^2, grad_j (+)= grad_scale * dl/drgb_j, grad_s (+)= grad_scale * dl/drgb_s,
 // and invocation 0 writes (value_accumulate: adds) value_scale * l into values[value_index].
+// loss/event_pair_value: that value alone (one invocation; no gradients).
 struct EventPairPC {
   uint width;
   uint height;
