@@ -174,6 +174,10 @@ TEST_CASE("trainer: config keys, presets and bad values", "[train]") {
   REQUIRE_THROWS_WITH(c.set("iterationz", "1"), Catch::Contains("iterationz"));
   REQUIRE_THROWS_WITH(c.set("iterations", "ten"), Catch::Contains("iterations"));
   REQUIRE(TrainConfig::preset_named("paper").iterations == 40000);
+  // The trajectory's learning rate follows the preset's length.
+  REQUIRE(TrainConfig::preset_named("paper").lr_trajectory_init == 1e-3);
+  REQUIRE(TrainConfig::preset_named("fast").lr_trajectory_init == 6e-3);
+  REQUIRE(TrainConfig::preset_named("fast").lr_trajectory_final == 6e-4);
   c.set("prune_screen_px", "20");
   c.set("prune_world_scale", "0");
   REQUIRE(c.prune_screen_px == 20.0);

@@ -98,6 +98,8 @@ TrainConfig TrainConfig::preset_named(const std::string& name) {
     c.sh_increase_every = 1000;
     c.max_gaussians = 0;
     c.checkpoint_every = 5000;
+    c.lr_trajectory_init = 1e-3;
+    c.lr_trajectory_final = 1e-5;
   } else {
     throw std::invalid_argument("unknown preset '" + name + "' (fast, paper)");
   }
