@@ -12,7 +12,7 @@ namespace evflow {
 
 struct TrainConfig {
   std::string preset = "fast";
-  uint32_t iterations = 1500;        // fast preset: blur+events at 346x260 trains in ~17 min on 2 CPU cores (lavapipe)
+  uint32_t iterations = 1500;        // fast preset: blur+events at 346x260 trains in ~16 min on 2 CPU cores (lavapipe)
   uint32_t init_gaussians = 20000;
   int sh_degree = 3;
   uint32_t sh_increase_every = 500;    // active SH degree +1 every this many steps
