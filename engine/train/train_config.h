@@ -37,7 +37,7 @@ struct TrainConfig {
   double event_flip_until = 0.8, event_flip_margin = 0.05;
   // Fraction of the run after which the event term starts (its gradients swamp a model that
   // does not yet resemble the scene: log-luminance differences of a poor render are noise).
-  // 0.3 against 0.5: +0.1 to +0.5 dB deblur on three scenes and two seeds, 0.2 lower again
+  // 0.3 against 0.5: +0.0 to +0.5 dB deblur on three scenes and two seeds, 0.2 lower again
   // (docs/experiments.md).
   double event_from = 0.3;
   // Plain mode: per-view se(3) pose refinement (c2w' = c2w Exp(delta)), its own learning rate.
