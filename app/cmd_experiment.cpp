@@ -111,7 +111,9 @@ static int run_experiment(const Args& a) {
     if (!sim_seed.empty()) return sim_seed;
     const auto names = sim::builtin_scene_names();
     const auto it = std::find(names.begin(), names.end(), scene);
-    if (it == names.end()) throw std::invalid_argument("experiment: unknown scene '" + scene + "'");
+    if (it == names.end())
+      throw std::invalid_argument("experiment: '" + scene +
+                                  "' is not a built-in scene (default, gallery, workshop); a scene file needs --sim-seed N");
     return std::to_string(it - names.begin() + 1);
   };
   for (auto& s : scenes) seed_of(s);  // reject unknown scenes before any work
