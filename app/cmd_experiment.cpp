@@ -106,24 +106,30 @@ static int run_experiment(const Args& a) {
   std::ostringstream md;
   md << "| scene | blur px | method | deblur PSNR | deblur SSIM | novel PSNR | novel SSIM | novel PSNR (refined) | train s |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
-  // A scene's simulation seed follows the scene, not its place in --scenes.
-  auto seed_of = [&](const std::string& scene) {
-    if (!sim_seed.empty()) return sim_seed;
-    const auto names = sim::builtin_scene_names();
+  // A scene's simulation seed follows the scene, not its place in --scenes; unknown scenes are
+  // refused here, before any work.
+  std::vector<std::string> seeds;
+  const auto names = sim::builtin_scene_names();
+  for (auto& scene : scenes) {
     const auto it = std::find(names.begin(), names.end(), scene);
-    if (it == names.end())
-      throw std::invalid_argument("experiment: '" + scene +
-                                  "' is not a built-in scene (default, gallery, workshop); a scene file needs --sim-seed N");
-    return std::to_string(it - names.begin() + 1);
-  };
-  for (auto& s : scenes) seed_of(s);  // reject unknown scenes before any work
+    if (!sim_seed.empty()) {
+      seeds.push_back(sim_seed);
+    } else if (it != names.end()) {
+      seeds.push_back(std::to_string(it - names.begin() + 1));
+    } else {
+      std::string known;
+      for (auto& n : names) known += (known.empty() ? "" : ", ") + n;
+      throw std::invalid_argument("experiment: '" + scene + "' is not a built-in scene (" + known +
+                                  "); a scene file needs --sim-seed N");
+    }
+  }
   for (size_t si = 0; si < scenes.size(); ++si) {
     const fs::path data = fs::path(out) / scenes[si] / "data";
     if (!fs::exists(data / "dataset.json")) {
       std::printf("[%s] simulate\n", scenes[si].c_str());
       run_command(quote(self) + " simulate --scene " + quote(scenes[si]) + " --out " + quote(data.string()) + " --width " + width +
                       " --height " + height + " --blur-px " + quote(blur[si]) + " --pose-noise-rot " + quote(noise_rot) +
-                      " --pose-noise-trans " + quote(noise_trans) + " --seed " + seed_of(scenes[si]) + dev,
+                      " --pose-noise-trans " + quote(noise_trans) + " --seed " + seeds[si] + dev,
                   log);
     }
     for (auto& m : methods) {
