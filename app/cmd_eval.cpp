@@ -1,12 +1,13 @@
 // evflow eval RUN [--data DIR]: PSNR / SSIM of the trained Gaussians against the dataset's sharp
 // images: the deblur score (each training view's camera vs its mid-exposure ground truth) and
-// the novel-view score. Writes RUN/eval.json and RUN/eval.md.
+// the novel-view score, on 8-bit sRGB images as the peers score them (metrics/srgb_metrics.h).
+// Writes RUN/eval.json, RUN/eval.md and the scored renders as RUN/eval/<set>/<view>.png.
 #include <cstdio>
 #include <sstream>
 
 #include "cli.h"
 #include "io/atomic_file.h"
-#include "loss/image_losses.h"
+#include "metrics/srgb_metrics.h"
 #include "run_files.h"
 #include "splat/rasterizer.h"
 #include "camera/trajectory.h"
@@ -22,7 +23,8 @@ static int run_eval(const Args& a) {
   if (p.flag("--help")) {
     std::printf("usage: evflow eval RUN [--data DIR] [--refine-iters N] [--device N|name]\n"
                 "  Renders every training view (deblur score, vs the sharp mid-exposure image) and every novel view,\n"
-                "  and writes PSNR/SSIM per view and mean to RUN/eval.json and RUN/eval.md.\n"
+                "  and writes PSNR/SSIM per view and mean to RUN/eval.json and RUN/eval.md, scored on 8-bit sRGB\n"
+                "  images as a saved PNG holds them; the scored renders go to RUN/eval/<set>/<view>.png.\n"
                 "  Novel views are scored at the given poses ('novel') and after N Adam steps of test-pose\n"
                 "  refinement with the Gaussians frozen ('novel_refined'; default N = 60, 0 skips it).\n");
     return 0;
@@ -45,7 +47,6 @@ static int run_eval(const Args& a) {
   RenderSettings s;
   s.background = cfg.background;
   s.antialiased = cfg.antialiased;
-  gpu::Commands cmd(ctx);
   nlohmann::json out;
   std::ostringstream md;
   md << "| set | views | PSNR | SSIM |\n|---|---|---|---|\n";
@@ -67,6 +68,7 @@ static int run_eval(const Args& a) {
     return t.camera_at(0.5);
   };
   auto score = [&](const std::vector<io::View>& views, const char* set, bool refine) {
+    fs::create_directories(run.dir / "eval" / set);
     const bool train = &views == &data.train;
     nlohmann::json per = nlohmann::json::array();
     double sp = 0, ss = 0;
@@ -78,7 +80,10 @@ static int run_eval(const Args& a) {
       if (gt.width != v.camera.width || gt.height != v.camera.height)
         throw std::runtime_error("view '" + v.name + "': ground truth is " + std::to_string(gt.width) + "x" + std::to_string(gt.height) +
                                  ", camera " + std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
+      // Renders are sRGB (splat colours are); the ground truth is linear in memory.
       auto planar = io::planar_rgb(gt);
+      const metrics::Image8 gt8 = metrics::encode_linear(planar, gt.width, gt.height, 3);
+      for (float& x : planar) x = io::linear_to_srgb(x);
       gpu::Buffer target(ctx, planar.size() * 4, "gt");
       target.write(planar);
       Camera cam = eval_camera(v, vi, train);
@@ -89,10 +94,10 @@ static int run_eval(const Args& a) {
         cam = refine_pose(ctx, r, params, cam, target, ro).camera;
       }
       r.forward(params, cam, s);
-      ImageMetrics m(ctx, ImageShape{3, gt.height, gt.width});
-      m.record(cmd, r.outputs().rgb, target);
-      cmd.submit();
-      auto val = m.read();
+      const metrics::Image8 render8 =
+          metrics::quantise_srgb(r.outputs().rgb.read<float>(planar.size()), gt.width, gt.height, 3);
+      metrics::write_png(run.dir / "eval" / set / (v.name + ".png"), render8);
+      const metrics::Scores val = metrics::score(render8, gt8);
       per.push_back({{"view", v.name}, {"psnr", val.psnr}, {"ssim", val.ssim}});
       sp += val.psnr;
       ss += val.ssim;
@@ -109,6 +114,7 @@ static int run_eval(const Args& a) {
   score(data.novel, "novel", false);
   if (refine_iters > 0) score(data.novel, "novel_refined", true);
   if (out.empty()) throw std::runtime_error("the dataset has no sharp ground-truth images to evaluate against");
+  out["scored_on"] = "8-bit sRGB; SSIM: 11x11 Gaussian window, sigma 1.5, valid region, channel mean";
   out["step"] = run.checkpoint.step;
   out["gaussians"] = run.checkpoint.cloud.size();
   auto write = [](const fs::path& path, const std::string& text) {

@@ -56,13 +56,16 @@ static int run_experiment(const Args& a) {
         "usage: evflow experiment --out DIR [--scenes default,gallery,workshop] [--blur-px 6,4,9]\n"
         "         [--width 173] [--height 130] [--methods plain,edi,blur-only,blur+events] [--preset fast]\n"
         "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device N|name]\n"
-        "         [key=value ...]\n"
+        "         [--no-baseline-pose-refine] [key=value ...]\n"
         "  Simulates each built-in scene (blur size per scene; recorded poses perturbed like poses estimated\n"
         "  from blurry images), trains every method on it with the preset\n"
         "  and the key=value overrides, evaluates (deblur at mid-exposure; novel views as given and after\n"
         "  test-pose refinement) and writes DIR/experiment.md and DIR/experiment.json.\n"
         "  Each scene is simulated with its own seed (default 1, gallery 2, workshop 3), so a scene's data\n"
-        "  do not depend on which scenes are listed; --sim-seed N uses N for every scene instead.\n");
+        "  do not depend on which scenes are listed; --sim-seed N uses N for every scene instead.\n"
+        "  A scene may be a glTF file (.glb/.gltf; needs --sim-seed): its data and runs go to DIR/<file stem>/.\n"
+        "  plain and edi refine each training view's pose while they train (pose_refine=true), as the blur\n"
+        "  methods do through their trajectories; --no-baseline-pose-refine turns that off.\n");
     return 0;
   }
   auto value_or = [&](const char* key, const char* fallback) {
@@ -79,6 +82,7 @@ static int run_experiment(const Args& a) {
   const std::string noise_rot = value_or("--pose-noise-rot", "0.4"), noise_trans = value_or("--pose-noise-trans", "0.01");
   const std::string device = p.value("--device");
   const std::string sim_seed = p.value("--sim-seed");
+  const bool baseline_pose_refine = !p.flag("--no-baseline-pose-refine");
   p.reject_unknown();
   if (!sim_seed.empty() && sim_seed.find_first_not_of("0123456789") != std::string::npos)
     throw std::invalid_argument("--sim-seed needs a non-negative integer, got '" + sim_seed + "'");
@@ -108,37 +112,45 @@ static int run_experiment(const Args& a) {
      << "|---|---|---|---|---|---|---|---|---|\n";
   // A scene's simulation seed follows the scene, not its place in --scenes; unknown scenes are
   // refused here, before any work.
-  std::vector<std::string> seeds;
+  // A scene's folder: its name, or a scene file's stem.
+  std::vector<std::string> seeds, labels;
   const auto names = sim::builtin_scene_names();
   for (auto& scene : scenes) {
     const auto it = std::find(names.begin(), names.end(), scene);
-    if (!sim_seed.empty()) {
+    const bool file = it == names.end() && fs::is_regular_file(scene);
+    labels.push_back(file ? fs::path(scene).stem().string() : scene);
+    if (labels.back().empty() || labels.back() == "." || labels.back() == "..")
+      throw std::invalid_argument("experiment: scene file '" + scene + "' has no usable file stem for its folder");
+    if (std::count(labels.begin(), labels.end(), labels.back()) > 1)
+      throw std::invalid_argument("experiment: two scenes would share the folder '" + labels.back() + "'");
+    if (!sim_seed.empty() && (it != names.end() || file)) {
       seeds.push_back(sim_seed);
     } else if (it != names.end()) {
       seeds.push_back(std::to_string(it - names.begin() + 1));
     } else {
       std::string known;
       for (auto& n : names) known += (known.empty() ? "" : ", ") + n;
-      throw std::invalid_argument("experiment: '" + scene + "' is not a built-in scene (" + known +
-                                  "); a scene file needs --sim-seed N");
+      throw std::invalid_argument("experiment: '" + scene + "' is not a built-in scene (" + known + ")" +
+                                  (file ? "; a scene file needs --sim-seed N" : " nor a scene file"));
     }
   }
   for (size_t si = 0; si < scenes.size(); ++si) {
-    const fs::path data = fs::path(out) / scenes[si] / "data";
+    const fs::path data = fs::path(out) / labels[si] / "data";
     if (!fs::exists(data / "dataset.json")) {
-      std::printf("[%s] simulate\n", scenes[si].c_str());
+      std::printf("[%s] simulate\n", labels[si].c_str());
       run_command(quote(self) + " simulate --scene " + quote(scenes[si]) + " --out " + quote(data.string()) + " --width " + width +
                       " --height " + height + " --blur-px " + quote(blur[si]) + " --pose-noise-rot " + quote(noise_rot) +
                       " --pose-noise-trans " + quote(noise_trans) + " --seed " + seeds[si] + dev,
                   log);
     }
     for (auto& m : methods) {
-      const fs::path run = fs::path(out) / scenes[si] / m;
+      const fs::path run = fs::path(out) / labels[si] / m;
       double secs = -1;
       if (!fs::exists(run / "eval.json")) {
-        std::printf("[%s] %s\n", scenes[si].c_str(), m.c_str());
+        std::printf("[%s] %s\n", labels[si].c_str(), m.c_str());
         std::string cmd = quote(self) + " train " + quote(data.string()) + " --out " + quote(run.string()) + " --preset " +
                           quote(preset) + " method=" + quote(m);
+        if (baseline_pose_refine && (m == "plain" || m == "edi")) cmd += " pose_refine=true";  // before the overrides
         for (auto& kv : overrides) cmd += " " + quote(kv);
         secs = run_command(cmd + dev, log);
         run_command(quote(self) + " eval " + quote(run.string()) + " --refine-iters " + quote(refine) + dev, log);
@@ -152,13 +164,13 @@ static int run_experiment(const Args& a) {
       auto get = [&](const char* set, const char* key) {
         return e.contains(set) ? e[set][key].get<double>() : std::nan("");
       };
-      nlohmann::json row = {{"scene", scenes[si]}, {"blur_px", std::stod(blur[si])}, {"method", m},
+      nlohmann::json row = {{"scene", labels[si]}, {"blur_px", std::stod(blur[si])}, {"method", m},
                             {"deblur_psnr", get("deblur", "mean_psnr")}, {"deblur_ssim", get("deblur", "mean_ssim")},
                             {"novel_psnr", get("novel", "mean_psnr")}, {"novel_ssim", get("novel", "mean_ssim")},
                             {"novel_refined_psnr", get("novel_refined", "mean_psnr")}, {"train_seconds", secs}};
       table.push_back(row);
       char line[320];
-      std::snprintf(line, sizeof line, "| %s | %s | %s | %.2f | %.4f | %.2f | %.4f | %.2f | %.0f |\n", scenes[si].c_str(),
+      std::snprintf(line, sizeof line, "| %s | %s | %s | %.2f | %.4f | %.2f | %.4f | %.2f | %.0f |\n", labels[si].c_str(),
                     blur[si].c_str(), m.c_str(), row["deblur_psnr"].get<double>(), row["deblur_ssim"].get<double>(),
                     row["novel_psnr"].get<double>(), row["novel_ssim"].get<double>(), row["novel_refined_psnr"].get<double>(), secs);
       md << line;
@@ -166,7 +178,8 @@ static int run_experiment(const Args& a) {
       // Rewritten after every run, so a partial experiment has its table too.
       io::write_file_atomic(fs::path(out) / "experiment.md", [&](const fs::path& tmp) { std::ofstream(tmp) << md.str(); });
       nlohmann::json j = {{"preset", preset}, {"overrides", overrides}, {"width", width}, {"height", height},
-                          {"pose_noise_rot_deg", std::stod(noise_rot)}, {"pose_noise_trans", std::stod(noise_trans)}, {"runs", table}};
+                          {"pose_noise_rot_deg", std::stod(noise_rot)}, {"pose_noise_trans", std::stod(noise_trans)},
+                          {"baseline_pose_refine", baseline_pose_refine}, {"runs", table}};
       io::write_file_atomic(fs::path(out) / "experiment.json", [&](const fs::path& tmp) { std::ofstream(tmp) << j.dump(2) << "\n"; });
     }
   }

@@ -81,9 +81,9 @@ static int run_fit_demo(const Args& a) {
       auto img = r.outputs().rgb.read<float>(3 * hw);
       for (size_t i = 0; i < img.size(); ++i) mse += double(img[i] - targets[v][i]) * (img[i] - targets[v][i]);
       if (save) {
-        io::write_png(std::filesystem::path(out) / (tag + "_view" + std::to_string(v) + ".png"), io::image_from_planar_rgb(img, W, H));
+        io::write_png(std::filesystem::path(out) / (tag + "_view" + std::to_string(v) + ".png"), io::image_from_render(img, W, H));
         if (tag == "before")
-          io::write_png(std::filesystem::path(out) / ("target_view" + std::to_string(v) + ".png"), io::image_from_planar_rgb(targets[v], W, H));
+          io::write_png(std::filesystem::path(out) / ("target_view" + std::to_string(v) + ".png"), io::image_from_render(targets[v], W, H));
       }
     }
     mse /= double(cams.size() * 3 * hw);

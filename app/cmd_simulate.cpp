@@ -121,10 +121,11 @@ static int run_simulate(const Args& a) {
   sim::write_simulation(res, dir);
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("simulate: wrote %s\n  time %.1f s (simulation %.1f s), %zu events, %zu sub-frames, mean blur %.2f px, "
-              "max sub-frame step %.3f px\n  EDI (nominal thresholds, 8-bit blurry): PSNR %.2f dB vs blurry %.2f dB "
-              "(gain %.2f dB)\n",
+              "max sub-frame step %.3f px\n  vs the sharp frames, 8-bit sRGB: EDI (nominal thresholds) PSNR %.2f dB / SSIM %.4f, "
+              "blurry %.2f dB / %.4f (gain %.2f dB)\n",
               out.c_str(), total, res.stats.seconds, res.stats.events, res.stats.subframes, res.stats.mean_blur_px,
-              res.stats.max_step_px, res.stats.psnr_edi, res.stats.psnr_blurry, res.stats.psnr_edi - res.stats.psnr_blurry);
+              res.stats.max_step_px, res.stats.psnr_edi, res.stats.ssim_edi, res.stats.psnr_blurry, res.stats.ssim_blurry,
+              res.stats.psnr_edi - res.stats.psnr_blurry);
   return 0;
 }
 

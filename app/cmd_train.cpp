@@ -131,7 +131,7 @@ static int run_train(const Args& a) {
   std::ofstream log(fs::path(out) / "train.log", resume ? std::ios::app : std::ios::trunc);
   std::ofstream curve(fs::path(out) / "curve.csv", resume ? std::ios::app : std::ios::trunc);
   if (!resume) {  // the weighted total, then every registered term's unweighted value
-    curve << "step,view,loss,ms";
+    curve << "step,view,loss,ms,flipped";
     for (auto& t : trainer->losses()) curve << "," << t->name();
     curve << "\n";
   }
@@ -154,10 +154,13 @@ static int run_train(const Args& a) {
     if (tv) tv->after_step(st);
     ema_ms = ema_ms ? 0.95 * ema_ms + 0.05 * st.ms : st.ms;
     if (!st.skipped) ema_loss = ema_loss ? 0.95 * ema_loss + 0.05 * st.loss : st.loss;
-    curve << st.step << "," << st.view << "," << st.loss << "," << st.ms;
+    curve << st.step << "," << st.view << "," << st.loss << "," << st.ms << "," << (st.flipped ? 1 : 0);
     for (double v : st.term_values) curve << "," << v;
     curve << "\n";
     if (st.skipped) log << "step " << st.step << ": non-finite loss on view " << st.view << ", skipped\n";
+    if (st.flipped)
+      log << "step " << st.step << ": view " << st.view << " (" << data.train[st.view].name
+          << "): trajectory reversed in time (the events scored the reversed order lower)\n";
     const double eta = (cfg.iterations - st.step) * ema_ms / 1000.0;
     if (tty) {
       std::printf("\r[%5.1f%%] step %u/%u  %.1f it/s  ETA %.0fs  loss %.4f  Gaussians %zu ", 100.0 * st.step / cfg.iterations, st.step,
@@ -166,8 +169,8 @@ static int run_train(const Args& a) {
     }
     if (st.step % cfg.log_every == 0 || st.step == cfg.iterations) {
       char line[256];
-      std::snprintf(line, sizeof line, "step %u/%u  %.2f it/s  ETA %.0fs  loss %.5f  Gaussians %zu", st.step, cfg.iterations,
-                    1000.0 / ema_ms, eta, ema_loss, trainer->params().count);
+      std::snprintf(line, sizeof line, "step %u/%u  %.2f it/s  ETA %.0fs  loss %.5f  Gaussians %zu  flips %u", st.step,
+                    cfg.iterations, 1000.0 / ema_ms, eta, ema_loss, trainer->params().count, trainer->trajectory_flips());
       log << line << "\n";
       log.flush();
       if (!tty) std::printf("%s\n", line);

@@ -20,6 +20,10 @@ struct RunFolder {
     std::ifstream f(dir / "config.json");
     if (!f) throw std::runtime_error((dir / "config.json").string() + ": missing (is '" + dir.string() + "' a training run?)");
     try { f >> r.config; } catch (const std::exception& e) { throw std::runtime_error((dir / "config.json").string() + ": " + e.what()); }
+    // Runs from before splat colours became sRGB hold linear colours: they would render too dark.
+    if (!r.config.is_object() || !r.config.contains("loss_space"))
+      throw std::runtime_error((dir / "config.json").string() +
+                               ": a run from before EvFlow's splat colours became sRGB (no loss_space); retrain it");
     r.checkpoint = read_checkpoint(dir / "checkpoint.ckpt");
     return r;
   }

@@ -39,5 +39,10 @@ inline uint8_t encode8(float linear) {
   float v = std::isnan(linear) ? 0.f : std::clamp(linear, 0.f, 1.f);
   return static_cast<uint8_t>(std::lround(io::linear_to_srgb(v) * 255.f));
 }
+// An sRGB-valued float (a render: splat colours are sRGB) as the 8-bit value a PNG or the canvas holds.
+inline uint8_t quantise8(float srgb) {
+  float v = std::isnan(srgb) ? 0.f : std::clamp(srgb, 0.f, 1.f);
+  return static_cast<uint8_t>(std::lround(v * 255.f));
+}
 
 }  // namespace evflow::test

@@ -179,7 +179,7 @@ uint32_t group_of(const Adam& a, const char* name) { return uint32_t(a.group_ind
 
 }  // namespace
 
-TEST_CASE("densify: prune / clone / split decisions follow the rules; every buffer follows", "[densify][gpu]") {
+TEST_CASE("densify: prune / clone / split decisions follow the rules, every buffer follows", "[densify][gpu]") {
   auto& ctx = test::gpu_context();
   const auto specs = cases();
   const uint32_t n = uint32_t(specs.size());

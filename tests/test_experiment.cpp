@@ -7,6 +7,12 @@
 #include <string>
 
 #include "cli_helpers.h"
+#include <nlohmann/json.hpp>
+
+#include "io/dataset.h"
+#include "io/image.h"
+#include "metrics/srgb_metrics.h"
+#include "sim/scene.h"
 
 using namespace evflow;
 using namespace evflow::test;
@@ -26,7 +32,7 @@ int run_evflow(const fs::path& dir, const std::string& args, std::string& out) {
 
 }  // namespace
 
-TEST_CASE("experiment: a scene is simulated with its own seed wherever it is listed; bad seeds and scenes refused",
+TEST_CASE("experiment: a scene is simulated with its own seed wherever it is listed, bad seeds and scenes refused",
           "[experiment][gpu]") {
   REQUIRE(fs::exists(evflow_binary()));
   const fs::path dir = fs::temp_directory_path() / ("evflow_experiment_test_" + std::to_string(::getpid()));
@@ -72,5 +78,58 @@ TEST_CASE("experiment: a scene is simulated with its own seed wherever it is lis
   CHECK(run_evflow(dir, "experiment --out bad --scenes nowhere --blur-px 4", out) != 0);
   CHECK(out.find("nowhere") != std::string::npos);
   CHECK(!fs::exists(dir / "bad" / "nowhere"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("experiment: a scene file runs end to end under DIR/<file stem>, baselines refine their poses unless told not to",
+          "[experiment][gpu]") {
+  REQUIRE(fs::exists(evflow_binary()));
+  const fs::path dir = fs::temp_directory_path() / ("evflow_experiment_file_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "scenes");
+  sim::write_gltf(sim::make_builtin_scene("gallery"), dir / "scenes" / "some.glb");
+  const std::string tiny = " --width 32 --height 24 --blur-px 4 --refine-iters 1 iterations=6 init_gaussians=200 "
+                           "max_gaussians=400 sh_degree=0 event_from=0";
+  std::string out;
+  int rc = run_evflow(dir, "experiment --out exp --scenes scenes/some.glb --sim-seed 5 --methods plain,blur+events" + tiny, out);
+  INFO(out);
+  REQUIRE(rc == 0);
+  const fs::path exp = dir / "exp" / "some";
+  CHECK(fs::exists(exp / "data" / "dataset.json"));
+  CHECK(!fs::exists(dir / "scenes" / "some.glb" / "data"));
+  CHECK(slurp(dir / "exp" / "experiment.md").find("| some | 4 | plain |") != std::string::npos);
+  CHECK(slurp(dir / "exp" / "experiment.md").find("| some | 4 | blur+events |") != std::string::npos);
+  // The data follow --sim-seed: the same as simulating the file with seed 5.
+  auto data_of = [](const fs::path& d) { return slurp(d / "poses_bounds.npy") + slurp(d / "images" / "000.png"); };
+  REQUIRE(run_evflow(dir, "simulate --scene scenes/some.glb --out s5 --seed 5 --width 32 --height 24 --blur-px 4 "
+                          "--pose-noise-rot 0.4 --pose-noise-trans 0.01", out) == 0);
+  CHECK(data_of(exp / "data") == data_of(dir / "s5"));
+  // Every run was evaluated on 8-bit sRGB images, and eval wrote the renders it scored: re-scoring
+  // those PNGs against the sharp frames gives eval.json's figures.
+  const io::Dataset data = io::load_dataset(exp / "data");
+  for (const char* m : {"plain", "blur+events"}) {
+    const nlohmann::json e = nlohmann::json::parse(slurp(exp / m / "eval.json"));
+    REQUIRE(e["deblur"]["views"].size() == data.train.size());
+    for (size_t v = 0; v < data.train.size(); ++v) {
+      const io::View& view = data.train[v];
+      const io::Image png = io::read_image(exp / m / "eval" / "deblur" / (view.name + ".png"));
+      const auto rescored = metrics::score(metrics::encode_linear(io::planar_rgb(png), png.width, png.height, 3),
+                                           metrics::encode_linear(io::planar_rgb(*view.sharp_mid), png.width, png.height, 3));
+      CHECK(e["deblur"]["views"][v]["view"] == view.name);
+      CHECK(e["deblur"]["views"][v]["psnr"].get<double>() == Approx(rescored.psnr).epsilon(1e-12));
+      CHECK(e["deblur"]["views"][v]["ssim"].get<double>() == Approx(rescored.ssim).epsilon(1e-12));
+    }
+  }
+  // plain refines its training poses (its checkpoint holds one 6-vector per view); blur+events
+  // has its trajectories; with --no-baseline-pose-refine plain does not refine.
+  CHECK(slurp(exp / "plain" / "config.json").find("\"pose_refine\": true") != std::string::npos);
+  rc = run_evflow(dir, "experiment --out exp2 --scenes scenes/some.glb --sim-seed 5 --methods plain --no-baseline-pose-refine" + tiny,
+                  out);
+  REQUIRE(rc == 0);
+  CHECK(slurp(dir / "exp2" / "some" / "plain" / "config.json").find("\"pose_refine\": false") != std::string::npos);
+  // A scene file without --sim-seed, and a name that is neither, are refused.
+  CHECK(run_evflow(dir, "experiment --out bad --scenes scenes/some.glb --blur-px 4", out) != 0);
+  CHECK(out.find("--sim-seed") != std::string::npos);
+  CHECK(!fs::exists(dir / "bad" / "some"));
   fs::remove_all(dir);
 }

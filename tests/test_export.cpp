@@ -22,6 +22,9 @@
 
 #include "io/gltf_splats.h"
 #include "io/ply_splats.h"
+#include "cli_helpers.h"
+#include "gpu_fixture.h"
+#include "splat/rasterizer.h"
 
 namespace fs = std::filesystem;
 using namespace evflow;
@@ -733,4 +736,49 @@ TEST_CASE("the Khronos glTF validator accepts our glb", "[export][gltf-validator
     REQUIRE(WEXITSTATUS(status) == 0);
     REQUIRE_THAT(output, Contains(" 0 errors"));
   }
+}
+
+// Splat colours are display-referred sRGB, as in every 3DGS tool: a PLY written by another tool
+// renders the bytes that tool shows (3DGS's image formation: colour = 0.5 + C0 f_dc, alpha
+// capped at 0.99, blended as they are, no transfer function), and the glb EvFlow exports from it
+// says srgb_rec709_display and renders the same.
+TEST_CASE("an Inria PLY from another tool renders its own colours (sRGB splats), through PLY and glTF", "[export][gpu]") {
+  TmpDir dir;
+  const double c0 = 0.28209479177387814;
+  const double colour[3] = {0.2, 0.5, 0.8};
+  std::string ply = "ply\nformat ascii 1.0\nelement vertex 1\n";
+  for (const char* p : {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1",
+                        "rot_2", "rot_3"})
+    ply += std::string("property float ") + p + "\n";
+  char body[256];
+  std::snprintf(body, sizeof body, "end_header\n0 0 5 %.9g %.9g %.9g 10 0 0 0 1 0 0 0\n", (colour[0] - 0.5) / c0,
+                (colour[1] - 0.5) / c0, (colour[2] - 0.5) / c0);
+  ply += body;
+  write_bytes(dir / "other.ply", std::vector<uint8_t>(ply.begin(), ply.end()));
+  const GaussianCloud cloud = read_ply(dir / "other.ply");
+  write_gltf_splats(dir / "other.glb", cloud, GltfExportOptions{});
+  GltfColorSpace space = GltfColorSpace::lin_rec709_display;
+  const GaussianCloud via_glb = read_gltf_splats(dir / "other.glb", &space);
+  CHECK(space == GltfColorSpace::srgb_rec709_display);
+
+  auto& ctx = test::gpu_context();
+  const uint32_t W = 64, H = 48;
+  const Camera cam = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 5}, {0, -1, 0});
+  for (const GaussianCloud* c : {&cloud, &via_glb}) {
+    GaussianBuffers params(ctx, c->size(), c->sh_degree, "other_");
+    params.upload(*c);
+    Rasterizer r(ctx);
+    r.forward(params, cam, RenderSettings{});
+    const std::vector<float> img = r.outputs().rgb.read<float>(size_t(3) * W * H);
+    // The centre pixels: alpha = min(0.99, sigmoid(10) exp(-q/2)) = 0.99 over a black background.
+    for (uint32_t y : {H / 2 - 1, H / 2})
+      for (uint32_t x : {W / 2 - 1, W / 2})
+        for (int ch = 0; ch < 3; ++ch) {
+          const int want = int(std::lround(0.99 * colour[ch] * 255.0));
+          const int got = test::quantise8(img[size_t(ch) * W * H + size_t(y) * W + x]);
+          CAPTURE(x, y, ch);
+          CHECK(std::abs(got - want) <= 1);
+        }
+  }
+  test::require_no_validation_messages();
 }

@@ -156,7 +156,7 @@ TEST_CASE("loss: SSIM and L1 gradients match finite differences of the reference
   test::require_no_validation_messages();
 }
 
-TEST_CASE("loss: blended L1 + SSIM value and gradient; terms accumulate into one gradient", "[gpu][loss]") {
+TEST_CASE("loss: blended L1 + SSIM value and gradient, terms accumulate into one gradient", "[gpu][loss]") {
   auto& ctx = test::gpu_context();
   auto p = make_pair(3, 29, 37, 9);
   GpuImages g(ctx, p);
@@ -217,7 +217,7 @@ TEST_CASE("loss: blended L1 + SSIM value and gradient; terms accumulate into one
   test::require_no_validation_messages();
 }
 
-TEST_CASE("loss: PSNR and SSIM metrics; reductions are deterministic", "[gpu][loss]") {
+TEST_CASE("loss: PSNR and SSIM metrics, reductions are deterministic", "[gpu][loss]") {
   auto& ctx = test::gpu_context();
   auto p = make_pair(3, 64, 80, 77, 0.05);
   GpuImages g(ctx, p);

@@ -116,6 +116,7 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
     for (int k = 0; k <= sub; ++k) {
       r.forward(gt, motion.camera_at(k / double(sub)), RenderSettings{});
       auto img = r.outputs().rgb.read<float>(mean.size());
+      for (float& x : img) x = io::srgb_to_linear(x);  // renders are sRGB; events and blur see linear light
       for (size_t i = 0; i < luma.size(); ++i) luma[i] = 0.2126f * img[i] + 0.7152f * img[luma.size() + i] + 0.0722f * img[2 * luma.size() + i];
       sim.add_frame(luma.data(), t0 + T * k / sub);
       for (size_t i = 0; i < mean.size(); ++i) mean[i] += img[i] / (sub + 1);

@@ -155,7 +155,7 @@ TEST_CASE("sim renderer: a triangle through the near plane and a screen-filling 
   test::require_no_validation_messages();
 }
 
-TEST_CASE("sim glTF: a user glTF with a texture loads and renders; bad files give clear errors", "[sim][gpu]") {
+TEST_CASE("sim glTF: a user glTF with a texture loads and renders, bad files give clear errors", "[sim][gpu]") {
   auto& ctx = test::gpu_context();
   const fs::path dir = temp_dir("gltf");
   // A unit quad (x, y in [-1, 1], z = 0) under a node translated to z = -3, 2x2 texture
@@ -298,7 +298,7 @@ sim::SimParams small_params(double blur) {
 }
 }  // namespace
 
-TEST_CASE("sim blur: zero shake gives blurry == sharp; sub-frame bound; blur scales with the parameter", "[sim][gpu]") {
+TEST_CASE("sim blur: zero shake gives blurry == sharp, sub-frame bound, blur scales with the parameter", "[sim][gpu]") {
   auto& ctx = test::gpu_context();
   const sim::Scene scene = sim::make_default_scene();
   {

@@ -17,6 +17,7 @@
 
 #include "camera/trajectory.h"
 #include "cli_helpers.h"
+#include "metrics/srgb_metrics.h"
 #include "gpu_fixture.h"
 #include "io/dataset.h"
 #include "io/image.h"
@@ -112,6 +113,7 @@ std::string key_args() {
 
 // Compares a screenshot rectangle with a planar linear RGB image resampled the viewer's way.
 // Returns the fraction of pixels whose 8-bit values are within one level on every channel.
+// planar: sRGB values (what the canvas shows: renders as they are, other images encoded).
 double tile_match(const io::Image& shot, const json& tile, const std::vector<float>& planar, int* max_diff) {
   const uint32_t x0 = tile["x"], y0 = tile["y"], w = tile["w"], h = tile["h"], sw = tile["src_w"], sh = tile["src_h"];
   REQUIRE(planar.size() == size_t(3) * sw * sh);
@@ -125,7 +127,7 @@ double tile_match(const io::Image& shot, const json& tile, const std::vector<flo
       const size_t s = size_t(viewer::nearest_source(dy, h, sh)) * sw + viewer::nearest_source(dx, w, sw);
       const size_t p = (size_t(y0 + dy) * shot.width + x0 + dx) * 3;
       int worst = 0;
-      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(int(encode8(shot.data[p + c])) - int(encode8(planar[c * n + s]))));
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(int(encode8(shot.data[p + c])) - int(test::quantise8(planar[c * n + s]))));
       within += worst <= 1;
       *max_diff = std::max(*max_diff, worst);
     }
@@ -179,7 +181,7 @@ TEST_CASE("viewer canvas: text, fill and nearest-neighbour blit match their host
       if (x >= r.x && x < r.x + r.w && y >= r.y && y < r.y + r.h) {
         const size_t s = size_t(viewer::nearest_source(y - r.y, r.h, sh)) * sw + viewer::nearest_source(x - r.x, r.w, sw);
         const size_t n = size_t(sw) * sh;
-        want = bgra(encode8(img[s]), encode8(img[n + s]), encode8(img[2 * n + s]));
+        want = bgra(test::quantise8(img[s]), test::quantise8(img[n + s]), test::quantise8(img[2 * n + s]));
       }
       const uint32_t cw = shaderio::kGlyphCellW * 2, ch = shaderio::kGlyphCellH * 2;
       if (x >= 30 && x < 30 + cw * text.size() && y >= 2 && y < 2 + ch) {
@@ -291,7 +293,9 @@ TEST_CASE("train --view under Xvfb: panels show the blurry input, the renders an
 
   // Blurry input.
   const json& blurry = panel(rep, "blurry")["tiles"][0];
-  double m = tile_match(shot, blurry, io::planar_rgb(data.train[0].blurry), &max_diff);
+  std::vector<float> blurry_srgb = io::planar_rgb(data.train[0].blurry);
+  for (float& x : blurry_srgb) x = io::linear_to_srgb(x);
+  double m = tile_match(shot, blurry, blurry_srgb, &max_diff);
   WARN("blurry panel " << blurry["w"] << "x" << blurry["h"] << ": " << m * 100 << "% within 1 level, max " << max_diff);
   CHECK(m >= 0.999);
 
@@ -308,14 +312,14 @@ TEST_CASE("train --view under Xvfb: panels show the blurry input, the renders an
   std::vector<float> mean(mid.size(), 0.f);
   for (size_t i = 0; i < us.size(); ++i) {
     const std::vector<float> img = t.render(traj.camera_at(us[i]));
-    for (size_t k = 0; k < img.size(); ++k) mean[k] += img[k] / 3.f;
+    for (size_t k = 0; k < img.size(); ++k) mean[k] += io::srgb_to_linear(img[k]) / 3.f;  // blur in linear light
     m = tile_match(shot, vt[i], img, &max_diff);
     CHECK(m >= 0.99);
   }
   const std::vector<float> target = io::planar_rgb(data.train[0].blurry);
-  double mse = 0;
-  for (size_t k = 0; k < mean.size(); ++k) mse += double(mean[k] - target[k]) * (mean[k] - target[k]);
-  const double psnr = -10 * std::log10(mse / double(mean.size()));
+  // The overlay scores as `evflow eval` does: 8-bit sRGB.
+  const uint32_t nv = uint32_t(mean.size());
+  const double psnr = metrics::psnr(metrics::encode_linear(mean, nv, 1, 1), metrics::encode_linear(target, nv, 1, 1));
   CHECK(std::abs(rep["content"]["psnr"].get<double>() - psnr) < 0.01);
 
   // Events: 3 positive at (10, 10) -> red, 3 negative at (40, 30) -> blue, else grey; the

@@ -17,7 +17,7 @@ namespace evflow::viewer {
 struct EventImage {
   uint32_t width = 0, height = 0;
   std::vector<int32_t> sum;   // net polarity per pixel, row-major
-  std::vector<float> rgb;     // planar linear RGB [3][H][W]
+  std::vector<float> rgb;     // planar sRGB [3][H][W] (what the canvas shows)
   size_t positive = 0, negative = 0;  // events counted (EBAD-NeRF counts: sums of the bins)
   bool has_events = false;    // the dataset carries events for this view
 };
@@ -82,9 +82,9 @@ inline EventImage event_image(const io::Dataset& data, size_t v) {
       b = grey + (1.f - grey) * a;
       r = g = grey * (1.f - a);
     }
-    e.rgb[i] = io::srgb_to_linear(r);
-    e.rgb[hw + i] = io::srgb_to_linear(g);
-    e.rgb[2 * hw + i] = io::srgb_to_linear(b);
+    e.rgb[i] = r;
+    e.rgb[hw + i] = g;
+    e.rgb[2 * hw + i] = b;
   }
   return e;
 }

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "metrics/srgb_metrics.h"
 #include "viewer/event_image.h"
 #include "viewer/view_camera.h"
 
@@ -30,14 +31,19 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
-double psnr(const std::vector<float>& a, const std::vector<float>& b) {
-  double mse = 0;
-  for (size_t i = 0; i < a.size(); ++i) mse += double(a[i] - b[i]) * double(a[i] - b[i]);
-  mse /= double(std::max<size_t>(a.size(), 1));
-  return mse > 0 ? -10.0 * std::log10(mse) : 99.0;
+// PSNR on 8-bit sRGB images, as `evflow eval` scores (metrics/srgb_metrics.h): an sRGB render
+// against a linear image.
+double psnr(const std::vector<float>& srgb, const std::vector<float>& linear) {
+  const uint32_t n = uint32_t(srgb.size());
+  return metrics::psnr(metrics::quantise_srgb(srgb, n, 1, 1), metrics::encode_linear(linear, n, 1, 1));
 }
 
-// The panels of issue 6. Flow and LDI panels will be appended the same way.
+std::vector<float> encoded(std::vector<float> linear) {
+  for (float& x : linear) x = io::linear_to_srgb(x);
+  return linear;
+}
+
+// The side panels. Flow and LDI panels will be appended the same way.
 class BlurryPanel : public Panel {
  public:
   BlurryPanel() : Panel("blurry", GLFW_KEY_1) {}
@@ -284,7 +290,7 @@ void TrainView::refresh_content(bool force) {
                                std::to_string(view.blurry.height) + " differs from its camera's " + std::to_string(W) +
                                "x" + std::to_string(H));
     shown_.blurry.ensure(n * 4);
-    shown_.blurry.write(io::planar_rgb(view.blurry));
+    shown_.blurry.write(encoded(io::planar_rgb(view.blurry)));  // the canvas shows sRGB values
     EventImage ev = event_image(data_, view_);
     shown_.events_w = ev.width;
     shown_.events_h = ev.height;
@@ -322,8 +328,9 @@ void TrainView::refresh_content(bool force) {
       cmd_.submit();
       const std::vector<float> img = raster_.outputs().rgb.read<float>(n);
       if (shown_.times[i] == 0.5) mid = img;
-      for (size_t k = 0; k < n; ++k) model[k] += img[k] / float(shown_.times.size());
+      for (size_t k = 0; k < n; ++k) model[k] += io::srgb_to_linear(img[k]) / float(shown_.times.size());  // blur in linear light
     }
+    model = encoded(std::move(model));
     if (!mid_done) {
       raster_.forward(trainer_.params(), trajectories[view_].camera_at(0.5), s);
       cmd_.copy(raster_.outputs().rgb, shown_.mid, n * 4);

@@ -42,11 +42,12 @@ void check_image(const fs::path& path, const Image& im) {
                    std::to_string(size_t(im.width) * im.height * im.channels));
 }
 
-void write_with_oiio(const fs::path& path, const Image& im, OIIO::TypeDesc type, const void* pixels) {
+void write_with_oiio(const fs::path& path, uint32_t width, uint32_t height, uint32_t channels, OIIO::TypeDesc type,
+                     const void* pixels) {
   write_file_atomic(path, [&](const fs::path& tmp) {
     auto out = OIIO::ImageOutput::create(tmp.string());
     if (!out) fail(path, "no image writer for this extension: " + oiio_error(""));
-    OIIO::ImageSpec spec(int(im.width), int(im.height), int(im.channels), type);
+    OIIO::ImageSpec spec(int(width), int(height), int(channels), type);
     if (type == OIIO::TypeDesc::FLOAT) spec.attribute("compression", "zip");
     if (!out->open(tmp.string(), spec)) fail(path, "cannot create image: " + oiio_error(out->geterror()));
     bool ok = out->write_image(type, pixels);
@@ -109,12 +110,22 @@ void write_png(const fs::path& path, const Image& im) {
     float e = alpha ? std::min(v, 1.f) : linear_to_srgb(std::min(v, 1.f));
     px[i] = static_cast<uint8_t>(std::lround(e * 255.f));
   }
-  write_with_oiio(path, im, OIIO::TypeDesc::UINT8, px.data());
+  write_with_oiio(path, im.width, im.height, im.channels, OIIO::TypeDesc::UINT8, px.data());
+}
+
+void write_png8(const fs::path& path, uint32_t width, uint32_t height, uint32_t channels, const std::vector<uint8_t>& interleaved) {
+  if (channels != 1 && channels != 3 && channels != 4)
+    fail(path, "cannot write an image with " + std::to_string(channels) + " channels (1, 3 or 4)");
+  if (width == 0 || height == 0) fail(path, "cannot write an empty image");
+  if (interleaved.size() != size_t(width) * height * channels)
+    fail(path, "image data has " + std::to_string(interleaved.size()) + " bytes, expected " +
+                   std::to_string(size_t(width) * height * channels));
+  write_with_oiio(path, width, height, channels, OIIO::TypeDesc::UINT8, interleaved.data());
 }
 
 void write_exr(const fs::path& path, const Image& im) {
   check_image(path, im);
-  write_with_oiio(path, im, OIIO::TypeDesc::FLOAT, im.data.data());
+  write_with_oiio(path, im.width, im.height, im.channels, OIIO::TypeDesc::FLOAT, im.data.data());
 }
 
 void write_image(const fs::path& path, const Image& im) {
@@ -143,6 +154,12 @@ Image image_from_planar_rgb(const std::vector<float>& planar, uint32_t width, ui
   img.data.resize(3 * hw);
   for (size_t i = 0; i < hw; ++i)
     for (int c = 0; c < 3; ++c) img.data[i * 3 + c] = planar[c * hw + i];
+  return img;
+}
+
+Image image_from_render(const std::vector<float>& planar_srgb, uint32_t width, uint32_t height) {
+  Image img = image_from_planar_rgb(planar_srgb, width, height);
+  for (float& x : img.data) x = srgb_to_linear(x);
   return img;
 }
 

@@ -31,10 +31,16 @@ Image read_image(const std::filesystem::path& path);
 void write_image(const std::filesystem::path& path, const Image& image);
 void write_png(const std::filesystem::path& path, const Image& image);
 void write_exr(const std::filesystem::path& path, const Image& image);
+// Writes 8-bit values as they are (already sRGB-encoded), interleaved HWC. Atomic.
+void write_png8(const std::filesystem::path& path, uint32_t width, uint32_t height, uint32_t channels,
+                const std::vector<uint8_t>& interleaved);
 
 // GPU images are planar (c * H * W + y * W + x). Planar RGB copy of an image (grey replicated),
 // and an interleaved RGB image from planar data (values as they are; write_png clamps).
 std::vector<float> planar_rgb(const Image& image);
 Image image_from_planar_rgb(const std::vector<float>& planar, uint32_t width, uint32_t height);
+// A splat render (planar RGB, sRGB-valued: splat colours are display-referred sRGB) as an image
+// in memory (linear): every value decoded.
+Image image_from_render(const std::vector<float>& planar_srgb, uint32_t width, uint32_t height);
 
 }  // namespace evflow::io

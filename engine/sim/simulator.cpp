@@ -1,5 +1,7 @@
 #include "sim/simulator.h"
 
+#include "metrics/srgb_metrics.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -139,13 +141,17 @@ std::vector<float> warp_by_flow(const std::vector<float>& img, uint32_t W, uint3
 
 double psnr_srgb(const std::vector<float>& a, const std::vector<float>& b) {
   if (a.size() != b.size() || a.empty()) throw std::invalid_argument("psnr_srgb: size mismatch");
-  double se = 0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    const double d = io::linear_to_srgb(std::clamp(a[i], 0.f, 1.f)) - io::linear_to_srgb(std::clamp(b[i], 0.f, 1.f));
-    se += d * d;
-  }
-  const double mse = se / a.size();
-  return mse > 0 ? -10 * std::log10(mse) : 100.0;
+  return metrics::psnr(metrics::encode_linear(a, uint32_t(a.size()), 1, 1), metrics::encode_linear(b, uint32_t(b.size()), 1, 1));
+}
+
+metrics::Scores scores_srgb(const std::vector<float>& a, const std::vector<float>& b, uint32_t width, uint32_t height) {
+  auto planar = [&](const std::vector<float>& hwc) {
+    io::Image im(width, height, 3);
+    if (hwc.size() != im.data.size()) throw std::invalid_argument("scores_srgb: size mismatch");
+    im.data = hwc;
+    return metrics::encode_linear(io::planar_rgb(im), width, height, 3);
+  };
+  return metrics::score(planar(a), planar(b));
 }
 
 nlohmann::json camera_json(const Camera& c) {
@@ -421,8 +427,11 @@ SimResult Simulator::run(const IntervalCallback& cb, bool verbose) {
     std::vector<float> bq(r.blurry.size());
     for (size_t j = 0; j < bq.size(); ++j) bq[j] = float(srgb_byte_roundtrip(r.blurry[j]));
     const auto edi = events::edi_deblur(bq.data(), 3, res.events, r.t0, r.t1, th);
-    res.stats.psnr_blurry += psnr_srgb(bq, r.sharp_mid.rgb) / res.train.size();
-    res.stats.psnr_edi += psnr_srgb(edi, r.sharp_mid.rgb) / res.train.size();
+    const auto sb = scores_srgb(bq, r.sharp_mid.rgb, p_.width, p_.height), se = scores_srgb(edi, r.sharp_mid.rgb, p_.width, p_.height);
+    res.stats.psnr_blurry += sb.psnr / res.train.size();
+    res.stats.psnr_edi += se.psnr / res.train.size();
+    res.stats.ssim_blurry += sb.ssim / res.train.size();
+    res.stats.ssim_edi += se.ssim / res.train.size();
   }
   res.stats.events = res.events.size();
   res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -469,7 +478,9 @@ io::Dataset to_dataset(const SimResult& res) {
                        {"mean_blur_px", res.stats.mean_blur_px},
                        {"max_step_px", res.stats.max_step_px},
                        {"psnr_blurry_db", res.stats.psnr_blurry},
-                       {"psnr_edi_db", res.stats.psnr_edi}};
+                       {"psnr_edi_db", res.stats.psnr_edi},
+                       {"ssim_blurry", res.stats.ssim_blurry},
+                       {"ssim_edi", res.stats.ssim_edi}};
   sim["ground_truth"] = {{"trajectories", "gt/trajectories.json"}, {"depth", "gt/depth/<view>.npy"}, {"flow_mid", "gt/flow/<view>_mid.npy"}};
   d.manifest["simulator"] = sim;
   return d;

@@ -16,6 +16,7 @@
 // the sharp sub-frame at s = 0.5. Events: an EventSimulator per view fed with every sub-frame
 // (linear RGB -> luma), seed = seed + view; the per-view streams are concatenated.
 #pragma once
+#include "metrics/srgb_metrics.h"
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -64,8 +65,10 @@ std::vector<float> ground_truth_flow(const std::vector<float>& depth_a, const Ca
 std::vector<float> warp_by_flow(const std::vector<float>& img, uint32_t width, uint32_t height, uint32_t channels,
                                 const std::vector<float>& flow);
 
-// PSNR (dB) of two linear RGB images after sRGB encoding, values clamped to [0, 1].
+// PSNR (dB) of two linear images as 8-bit sRGB PNGs hold them (metrics/srgb_metrics.h).
 double psnr_srgb(const std::vector<float>& a, const std::vector<float>& b);
+// PSNR and SSIM of two linear H*W*3 interleaved images as 8-bit sRGB PNGs hold them.
+metrics::Scores scores_srgb(const std::vector<float>& a, const std::vector<float>& b, uint32_t width, uint32_t height);
 
 struct Interval {  // passed to the interval callback
   int view, index;  // training view, interval k (frames k -> k + 1)
@@ -105,7 +108,8 @@ struct SimStats {
   size_t events = 0;
   size_t subframes = 0;
   double mean_blur_px = 0, max_step_px = 0;
-  double psnr_blurry = 0, psnr_edi = 0;  // mean over training views vs the mid-exposure frame
+  // Mean over training views vs the mid-exposure frame, on 8-bit sRGB images.
+  double psnr_blurry = 0, psnr_edi = 0, ssim_blurry = 0, ssim_edi = 0;
 };
 
 struct SimResult {

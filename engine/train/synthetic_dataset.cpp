@@ -27,7 +27,7 @@ io::Dataset render_synthetic_dataset(gpu::Context& ctx, uint32_t w, uint32_t h, 
     io::View v;
     v.name = (i < n_train ? "train" : "novel") + std::to_string(i);
     v.camera = cam;
-    io::Image img = io::image_from_planar_rgb(r.outputs().rgb.read<float>(size_t(w) * h * 3), w, h);
+    io::Image img = io::image_from_render(r.outputs().rgb.read<float>(size_t(w) * h * 3), w, h);
     v.sharp_mid = img;
     if (i < n_train) {
       v.blurry = std::move(img);

@@ -42,6 +42,10 @@ const std::map<std::string, Setter>& setters() {
       {"lr_log_scales", [](TrainConfig& c, const std::string& v) { c.lr_log_scales = to_double("lr_log_scales", v); }},
       {"lr_quats", [](TrainConfig& c, const std::string& v) { c.lr_quats = to_double("lr_quats", v); }},
       {"ssim_lambda", [](TrainConfig& c, const std::string& v) { c.ssim_lambda = to_double("ssim_lambda", v); }},
+      {"loss_space", [](TrainConfig& c, const std::string& v) {
+         if (v == "linear") c.loss_space = LossSpace::Linear;
+         else if (v == "srgb") c.loss_space = LossSpace::Srgb;
+         else throw std::invalid_argument("config key 'loss_space' must be linear or srgb, got '" + v + "'"); }},
       {"mode", [](TrainConfig& c, const std::string& v) {
          if (v != "plain" && v != "blur") throw std::invalid_argument("config key 'mode' must be plain or blur, got '" + v + "'");
          c.mode = v; }},
@@ -86,6 +90,8 @@ const std::map<std::string, Setter>& setters() {
 }
 
 }  // namespace
+
+const char* loss_space_name(LossSpace s) { return s == LossSpace::Linear ? "linear" : "srgb"; }
 
 TrainConfig TrainConfig::preset_named(const std::string& name) {
   TrainConfig c;
@@ -141,7 +147,7 @@ nlohmann::json TrainConfig::to_json() const {
   return {{"preset", preset}, {"iterations", iterations}, {"init_gaussians", init_gaussians}, {"sh_degree", sh_degree},
           {"sh_increase_every", sh_increase_every}, {"lr_means_init", lr_means_init}, {"lr_means_final", lr_means_final},
           {"lr_sh_dc", lr_sh_dc}, {"lr_sh_rest", lr_sh_rest}, {"lr_opacity", lr_opacity}, {"lr_log_scales", lr_log_scales},
-          {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"mode", mode}, {"virtual_frames", virtual_frames},
+          {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"loss_space", loss_space_name(loss_space)}, {"mode", mode}, {"virtual_frames", virtual_frames},
           {"lr_trajectory_init", lr_trajectory_init}, {"lr_trajectory_final", lr_trajectory_final}, {"target", target}, {"antialiased", antialiased},
           {"event_weight", event_weight}, {"event_theta_pos", event_theta_pos}, {"event_theta_neg", event_theta_neg},
           {"event_norm_floor", event_norm_floor}, {"event_from", event_from}, {"event_flip_until", event_flip_until}, {"event_flip_margin", event_flip_margin}, {"pose_refine", pose_refine}, {"lr_pose_init", lr_pose_init},

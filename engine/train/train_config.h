@@ -10,6 +10,11 @@
 
 namespace evflow {
 
+// Where the image terms compare the model image with the target (engine/train/image_model.h):
+// both in linear light, or both sRGB-encoded (the space the images are stored and scored in).
+enum class LossSpace { Linear, Srgb };
+const char* loss_space_name(LossSpace s);
+
 struct TrainConfig {
   std::string preset = "fast";
   uint32_t iterations = 1500;        // fast preset: blur+events at 346x260 trains in ~16 min on 2 CPU cores (lavapipe)
@@ -19,6 +24,7 @@ struct TrainConfig {
   double lr_means_init = 1.6e-4, lr_means_final = 1.6e-6;  // x scene extent, exponential decay
   double lr_sh_dc = 2.5e-3, lr_sh_rest = 2.5e-3 / 20, lr_opacity = 0.05, lr_log_scales = 5e-3, lr_quats = 1e-3;
   double ssim_lambda = 0.2;            // loss = (1-l) L1 + l (1 - SSIM)
+  LossSpace loss_space = LossSpace::Srgb;  // docs/experiments.md has the measurement behind the default
   // "plain": each image is one render (3DGS); "blur": each blurry image is the mean of 2N+1
   // renders along the view's learned Bézier exposure trajectory (paper Sec. 4.1, blur-only).
   std::string mode = "plain";

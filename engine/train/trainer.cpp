@@ -10,7 +10,7 @@
 #include "loss/image_losses.h"
 #include "optim/host_adam.h"
 #include "optim/schedule.h"
-#include "train/train_layout.h"
+#include "train/image_model.h"
 
 namespace evflow {
 
@@ -74,7 +74,8 @@ GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg) {
     c.opacity_logits[i] = float(std::log(0.1 / 0.9));
     const uint32_t ix = std::min<uint32_t>(uint32_t(px), img.width - 1), iy = std::min<uint32_t>(uint32_t(py), img.height - 1);
     for (int ch = 0; ch < 3; ++ch) {
-      float col = img.data[(size_t(iy) * img.width + ix) * img.channels + std::min<uint32_t>(ch, img.channels - 1)];
+      // Splat colours are display-referred sRGB (image_model.h); images are linear in memory.
+      const float col = io::linear_to_srgb(img.data[(size_t(iy) * img.width + ix) * img.channels + std::min<uint32_t>(ch, img.channels - 1)]);
       c.sh[(i * K) * 3 + ch] = float((col - 0.5) / 0.28209479177387814);
       for (int k = 1; k < K; ++k) c.sh[(i * K + k) * 3 + ch] = 0;
     }
@@ -86,8 +87,7 @@ Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg)
     : Trainer(ctx, data, cfg, Checkpoint{0, initial_cloud(data, cfg), {}}) {}
 
 Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, const Checkpoint& start)
-    : ctx_(ctx), data_(data), cfg_(std::move(cfg)), raster_(ctx), cmd_(ctx), v_rgb_(ctx, 16, "v_rgb"),
-      v_alpha_(ctx, 16, "v_alpha"), step_(start.step) {
+    : ctx_(ctx), data_(data), cfg_(std::move(cfg)), raster_(ctx), cmd_(ctx), v_alpha_(ctx, 16, "v_alpha"), step_(start.step) {
   setup(start.cloud);
   for (auto& g : start.optimizer) adam_->load_state(adam_->group_index(g.name), g.exp_avg, g.exp_avg_sq, g.step);
   if (!start.trajectories.empty()) {
@@ -150,15 +150,16 @@ void Trainer::setup(const GaussianCloud& start) {
   params_->upload(start);
   for (size_t v = 0; v < data_.train.size(); ++v) {
     auto planar = io::planar_rgb(training_target(data_, v, cfg_));
+    if (cfg_.loss_space == LossSpace::Srgb)
+      for (float& x : planar) x = io::linear_to_srgb(x);
     targets_.emplace_back(ctx_, planar.size() * 4, "target_" + data_.train[v].name);
     targets_.back().write(planar);
   }
   const size_t hw = size_t(c0.width) * c0.height;
-  v_rgb_.ensure(hw * 12);
   v_alpha_ = gpu::Buffer(ctx_, hw * 4, "v_alpha");
   v_alpha_.write(std::vector<float>(hw, 0.0f));
+  image_model_ = std::make_unique<ImageModel>(ctx_, cfg_.mode == "blur" ? 2 * cfg_.virtual_frames + 1 : 1, hw * 3, cfg_.loss_space);
   if (cfg_.mode == "blur") {
-    mean_image_ = gpu::Buffer(ctx_, hw * 12, "blur_mean_image");
     for (size_t v = 0; v < data_.train.size(); ++v) {
       trajectories_.emplace_back(data_.train[v].camera, cfg_.seed * 100003 + v);
       trajectory_state_.push_back({0, {}, std::vector<double>(ExposureTrajectory::kSize, 0.0),
@@ -264,25 +265,22 @@ StepStats Trainer::step() {
     frame_grad_.clear();
     for (uint32_t i = 0; i < frames; ++i) frame_grad_.emplace_back(ctx_, n_pix * 4, "frame_grad");
   }
-  // Forward: the image model is the mean of the frames' linear renders (one frame in plain mode).
-  // Each frame keeps its render state (and its image) for the backward pass, so the mean is
-  // summed after all of them, in frame order, in one submit.
-  for (uint32_t i = 0; i < frames; ++i) frame_raster(i).forward(*params_, camera_at(i), s);
-  if (blur) {
-    for (uint32_t i = 0; i < frames; ++i) {
-      shaderio::AccumulatePC pc{uint32_t(n_pix), 1.0f / float(frames), i > 0 ? 1u : 0u, 0};
-      cmd_.dispatch("train/accumulate", {frame_raster(i).outputs().rgb, mean_image_}, pc,
-                    cmd_.linear_groups(gpu::Commands::div_up(n_pix, shaderio::kAccumulateGroupSize)));
-    }
-    cmd_.submit();
+  // Forward: every frame keeps its render state (and its image) for the backward pass; the
+  // image model (image_model.h) takes them all, in frame order, in one submit.
+  std::vector<const gpu::Buffer*> renders;
+  for (uint32_t i = 0; i < frames; ++i) {
+    frame_raster(i).forward(*params_, camera_at(i), s);
+    renders.push_back(&frame_raster(i).outputs().rgb);
   }
+  image_model_->forward(cmd_, renders);
+  cmd_.submit();
   st.raster_forward_ms = lap();
   // Image terms: every frame's share of d(loss)/d(mean image) is 1/frames of it.
-  const gpu::Buffer& prediction = blur ? mean_image_ : raster_.outputs().rgb;
   bool first = true;
   for (auto& t : terms_)
     if (auto* img = dynamic_cast<ImageLossTerm*>(t.get())) {
-      img->record(cmd_, prediction, targets_[st.view], v_rgb_, t->weight() / float(frames), !first);
+      img->record(cmd_, image_model_->prediction(), targets_[st.view], image_model_->prediction_grad(),
+                  t->weight() / float(frames), !first);
       first = false;
     }
   // Exposure terms add their per-frame gradients on top of that share.
@@ -300,16 +298,17 @@ StepStats Trainer::step() {
     double reversed = 0;
     if (check_flip) {
       // Score the time-reversed frame order first (the value alone; the same pairs and counts).
-      for (uint32_t i = 0; i < frames; ++i) ef.rgb.push_back(&frame_raster(frames - 1 - i).outputs().rgb);
+      for (uint32_t i = 0; i < frames; ++i) ef.rgb.push_back(&image_model_->linear_frame(frames - 1 - i));
       cmd_.submit();  // the image terms' value slots are read after the next submit; keep them
       events->record_value(cmd_, ef);
       cmd_.submit();
       reversed = events->value();
       ef.rgb.clear();
     }
+    const gpu::Buffer& mean_grad = image_model_->mean_grad(cmd_);
     for (uint32_t i = 0; i < frames; ++i) {
-      cmd_.copy(v_rgb_, frame_grad_[i], n_pix * 4);
-      ef.rgb.push_back(&frame_raster(i).outputs().rgb);
+      cmd_.copy(mean_grad, frame_grad_[i], n_pix * 4);
+      ef.rgb.push_back(&image_model_->linear_frame(i));
       ef.grad.push_back(&frame_grad_[i]);
     }
     for (auto& t : terms_)
@@ -343,11 +342,16 @@ StepStats Trainer::step() {
     std::fprintf(stderr, "step %u: non-finite loss on view '%s' (term %s): update skipped\n", st.step, view.name.c_str(),
                  bad_term ? bad_term->name().c_str() : "sum");
   } else {
+    std::vector<const gpu::Buffer*> frame_grads;
+    if (exposure_terms)
+      for (auto& g : frame_grad_) frame_grads.push_back(&g);
+    image_model_->render_grads(cmd_, frame_grads);
+    cmd_.submit();  // the rasterizers' backward passes run on their own command buffers
     std::array<double, ExposureTrajectory::kSize> knot_grad{};
     lie::Vec6 pose_grad{};
     for (uint32_t i = 0; i < frames; ++i) {
       Rasterizer& r = frame_raster(i);
-      r.backward(*params_, exposure_terms ? frame_grad_[i] : v_rgb_, v_alpha_, *grads_, i > 0, &raster_.grad2d_norm());
+      r.backward(*params_, image_model_->render_grad(i), v_alpha_, *grads_, i > 0, &raster_.grad2d_norm());
       if (blur || !pose_deltas_.empty()) {
         auto g = r.pose_gradient();
         const lie::Vec6 g6{g[0], g[1], g[2], g[3], g[4], g[5]};
@@ -360,6 +364,8 @@ StepStats Trainer::step() {
         }
       }
     }
+    if (blur) last_camera_grad_.assign(knot_grad.begin(), knot_grad.end());
+    else if (!pose_deltas_.empty()) last_camera_grad_.assign(pose_grad.begin(), pose_grad.end());
     if (blur) camera_adam(st.view, knot_grad.data(), cfg_.lr_trajectory_init, cfg_.lr_trajectory_final);
     if (!pose_deltas_.empty()) camera_adam(st.view, pose_grad.data(), cfg_.lr_pose_init, cfg_.lr_pose_final);
     st.raster_backward_ms = lap();

@@ -16,6 +16,7 @@
 #include "optim/adam.h"
 #include "splat/rasterizer.h"
 #include "train/checkpoint.h"
+#include "train/image_model.h"
 #include "train/train_config.h"
 
 namespace evflow {
@@ -68,6 +69,11 @@ class Trainer {
   // Image terms compare the image model with the target; exposure terms see every virtual frame.
   void add_loss(std::unique_ptr<LossTerm> term);
   const std::vector<std::unique_ptr<LossTerm>>& losses() const { return terms_; }
+  // What the last step applied, before Adam: the loss gradient of every Gaussian parameter (a
+  // cloud of gradients), and that of its view's camera (54 trajectory knots in blur mode, the
+  // 6-vector pose delta with pose_refine, else empty). For tests and diagnostics.
+  GaussianCloud last_gradients() const { return grads_->download(); }
+  const std::vector<double>& last_camera_gradient() const { return last_camera_grad_; }
 
  private:
   void setup(const GaussianCloud& start);
@@ -83,7 +89,7 @@ class Trainer {
   gpu::Commands cmd_;
   std::unique_ptr<GaussianBuffers> params_, grads_;
   std::vector<gpu::Buffer> targets_;
-  gpu::Buffer v_rgb_, v_alpha_;
+  gpu::Buffer v_alpha_;
   std::vector<std::unique_ptr<LossTerm>> terms_;
   std::unique_ptr<Adam> adam_;
   std::unique_ptr<DensityStats> density_stats_;
@@ -91,14 +97,15 @@ class Trainer {
   std::vector<ExposureTrajectory> trajectories_;
   std::vector<TrajectoryState> trajectory_state_;  // Adam moments per view (knots live in trajectories_)
   std::vector<lie::Vec6> pose_deltas_;              // plain mode with pose_refine: c2w' = c2w Exp(delta)
-  gpu::Buffer mean_image_;
+  std::unique_ptr<ImageModel> image_model_;
   std::unique_ptr<GpuEvents> events_;               // training views' events (when a term needs them)
   std::vector<std::unique_ptr<Rasterizer>> frame_raster_;  // virtual frames 1..2N (blur mode)
-  std::vector<gpu::Buffer> frame_grad_;             // per virtual frame (exposure terms only)
+  std::vector<gpu::Buffer> frame_grad_;             // per virtual frame, linear light (exposure terms only)
   size_t means_group_ = 0;
   double extent_ = 1.0;
   uint32_t step_ = 0;
   uint32_t flips_ = 0;
+  std::vector<double> last_camera_grad_;
  public:
   uint32_t trajectory_flips() const { return flips_; }
 };

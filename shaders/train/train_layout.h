@@ -10,5 +10,19 @@ struct AccumulatePC {
   uint accumulate;  // 0: y = scale * x; 1: y += scale * x
   uint pad;
 };
+// Colour conversions of the image model (train/colour.comp): bindings, ops.
+EVF_CONST(uint, kColourGroupSize, 256u)
+EVF_CONST(uint, kColourBindingX, 0u)
+EVF_CONST(uint, kColourBindingG, 1u)
+EVF_CONST(uint, kColourBindingY, 2u)
+EVF_CONST(uint, kColourDecode, 0u)
+EVF_CONST(uint, kColourEncode, 1u)
+EVF_CONST(uint, kColourDecodeBwd, 2u)
+EVF_CONST(uint, kColourEncodeBwd, 3u)
+struct ColourPC {
+  uint n;
+  uint op;
+  uint pad0, pad1;
+};
 EVF_NAMESPACE_END
 #endif

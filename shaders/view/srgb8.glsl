@@ -1,10 +1,10 @@
-// Linear float -> 8-bit sRGB byte (clamp to [0, 1], NaN -> 0, IEC 61966-2-1 encode, round), and
-// the packing of one canvas pixel (alpha 255; R and B swapped when bgr != 0).
-float evf_encode_srgb(float v) {
+// sRGB-valued float (renders: splat colours are sRGB; the viewer's other images are encoded on
+// the host) -> 8-bit byte (clamp to [0, 1], NaN -> 0, round), and the packing of one canvas
+// pixel (alpha 255; R and B swapped when bgr != 0).
+uint evf_to_byte(float v) {
   v = isnan(v) ? 0.0 : clamp(v, 0.0, 1.0);
-  return v <= 0.0031308 ? v * 12.92 : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
+  return uint(clamp(floor(v * 255.0 + 0.5), 0.0, 255.0));
 }
-uint evf_to_byte(float v) { return uint(clamp(floor(evf_encode_srgb(v) * 255.0 + 0.5), 0.0, 255.0)); }
 uint evf_pack_rgb(float r, float g, float b, uint bgr) {
   uint R = evf_to_byte(r), G = evf_to_byte(g), B = evf_to_byte(b);
   if (bgr != 0u) { uint t = R; R = B; B = t; }
