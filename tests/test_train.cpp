@@ -190,19 +190,54 @@ TEST_CASE("trainer: config keys, presets and bad values", "[train]") {
   REQUIRE(d.to_json() == c.to_json());
 }
 
-TEST_CASE("blur mode: mid-exposure render of a zero-motion trajectory equals the plain render", "[gpu][train][camera]") {
+// The virtual cameras move as the trajectory says: c2w(u) = c2w_view * T(u), T in the view's
+// camera frame. Knots j = a (j - 4) / 4 along one axis commute, and sum_j B_j(u) j = 8u, so the
+// camera is offset by a (2u - 1) along that axis of its own frame: a sideways drift by d moves a
+// point at depth z by -f d / z pixels, a yaw (about the camera's y axis) by an angle w moves a
+// point on the optical axis by -f tan(w) pixels. Measured on the centroid of one splat seen by a
+// camera that is not aligned with the world axes, relative to the plain render of the view.
+TEST_CASE("blur mode: virtual cameras along a drift and a yaw shift the image by the expected pixels", "[gpu][train][camera]") {
   auto& ctx = test::gpu_context();
-  Camera cam = Camera::look_at(80, 60, 60.0, {0.3, -0.2, 0}, {0, 0, 6}, {0, -1, 0});
-  GaussianCloud cloud = synthetic_cloud(9, 500, 1, cam);
-  GaussianBuffers p(ctx, cloud.size(), 1, "p_");
-  p.upload(cloud);
+  const std::array<double, 3> eye{1.0, -0.6, -3.0}, target{0.1, -0.05, 1.0};
+  const Camera cam = Camera::look_at(80, 60, 60.0, eye, target, {0, -1, 0});
+  const double z = std::sqrt(std::pow(target[0] - eye[0], 2) + std::pow(target[1] - eye[1], 2) + std::pow(target[2] - eye[2], 2));
+  GaussianCloud one;
+  one.resize(1, 0);
+  one.means = {float(target[0]), float(target[1]), float(target[2])};  // on the optical axis
+  one.log_scales.assign(3, float(std::log(1.5 * z / cam.fx)));        // 1.5 px
+  one.quats = {1, 0, 0, 0};
+  one.opacity_logits = {4.0f};
+  one.sh = {1.5f, 1.5f, 1.5f};
+  GaussianBuffers p(ctx, 1, 0, "one_");
+  p.upload(one);
   Rasterizer r(ctx);
-  r.forward(p, cam, RenderSettings{});
-  auto plain = r.outputs().rgb.read<float>(80 * 60 * 3);
-  ExposureTrajectory still(cam, 0, 0.0);
-  r.forward(p, still.camera_at(0.5), RenderSettings{});
-  auto mid = r.outputs().rgb.read<float>(80 * 60 * 3);
-  REQUIRE(mid == plain);
+  auto centroid = [&](const Camera& c) {
+    r.forward(p, c, RenderSettings{});
+    auto img = r.outputs().rgb.read<float>(80 * 60 * 3);
+    double sx = 0, sy = 0, sw = 0;
+    for (uint32_t y = 0; y < 60; ++y)
+      for (uint32_t x = 0; x < 80; ++x) {
+        const double w = img[size_t(y) * 80 + x];  // red channel
+        sx += w * x, sy += w * y, sw += w;
+      }
+    REQUIRE(sw > 1.0);
+    return std::array<double, 2>{sx / sw, sy / sw};
+  };
+  const auto plain = centroid(cam);
+  const double d = 0.3, w = 0.08;  // drift (world units) and yaw (rad) at the ends of the exposure
+  for (int axis : {0, 4}) {
+    ExposureTrajectory traj(cam, 0, 0.0);
+    for (int j = 0; j < ExposureTrajectory::kKnots; ++j) traj.data()[j * 6 + axis] = (axis == 0 ? d : w) * (j - 4) / 4.0;
+    for (double u : {0.0, 0.25, 0.5, 5.0 / 6.0, 1.0}) {
+      const auto c = centroid(traj.camera_at(u));
+      const double off = 2 * u - 1;
+      const double want = axis == 0 ? -cam.fx * d * off / z : -cam.fx * std::tan(w * off);
+      std::printf("virtual camera, %s, u = %.3f: image shift %+.4f px (expected %+.4f), vertical %+.4f\n",
+                  axis == 0 ? "drift" : "yaw", u, c[0] - plain[0], want, c[1] - plain[1]);
+      CHECK(c[0] - plain[0] == Approx(want).margin(0.02));
+      CHECK(std::abs(c[1] - plain[1]) < 0.02);
+    }
+  }
   test::require_no_validation_messages();
 }
 
