@@ -144,12 +144,31 @@ TEST_CASE("EDI: recovers the mid-exposure frame of simulated events", "[events]"
   std::printf("[EDI] default noise (sigma 0.03, refractory 0.5 ms), %zu events: blurry %.2f dB, EDI %.2f dB "
               "(with the true per-pixel thresholds %.2f dB)\n",
               d.events.size(), psnr(d.blurry, sharp_mid), p_def, p_oracle);
-  CHECK(p_def > psnr(d.blurry, sharp_mid));  // sanity only
+  // The mismatch and the dead time cost EDI little here; the sensor's own thresholds do better
+  // than the nominal ones.
+  CHECK(p_def >= psnr(d.blurry, sharp_mid) + 6.0);
+  CHECK(p_oracle > p_def);
 
+  // The noisy preset: wider mismatch, 5 Hz shot noise (about 150 events on 768 pixels in 40 ms)
+  // and 0.1 Hz leak. Shot events are additive, so the same capture without them differs by
+  // exactly those events.
   const auto noisy = EventModelParams::noisy();
   Capture n = capture(sc, noisy, steps, 3);
+  auto quiet_params = noisy;
+  quiet_params.shot_rate_hz = 0;
+  const size_t quiet = capture(sc, quiet_params, steps, 3).events.size();
+  const double shot_expected = noisy.shot_rate_hz * sc.w * sc.h * sc.T;
   auto In = edi_deblur(n.blurry.data(), 1, n.events, 0.0, sc.T, EdiThresholds{noisy.theta_pos, noisy.theta_neg, {}, {}});
-  std::printf("[EDI] noisy preset (sigma 0.05, 5 Hz shot, 0.1 Hz leak), %zu events: blurry %.2f dB, EDI %.2f dB\n",
-              n.events.size(), psnr(n.blurry, sharp_mid), psnr(In, sharp_mid));
-  CHECK(std::isfinite(psnr(In, sharp_mid)));
+  const double p_noisy = psnr(In, sharp_mid);
+  // Pixels EDI brings closer to the sharp frame than the blurry image is.
+  size_t closer = 0;
+  for (size_t i = 0; i < In.size(); ++i) closer += std::abs(In[i] - sharp_mid[i]) < std::abs(n.blurry[i] - sharp_mid[i]);
+  std::printf("[EDI] noisy preset (sigma 0.05, 5 Hz shot, 0.1 Hz leak), %zu events (%.0f shot noise, %.0f expected): "
+              "blurry %.2f dB, EDI %.2f dB, %.0f%% of the pixels closer to the sharp frame\n",
+              n.events.size(), double(n.events.size()) - double(quiet), shot_expected, psnr(n.blurry, sharp_mid), p_noisy,
+              100.0 * closer / In.size());
+  CHECK(double(n.events.size()) - double(quiet) == Approx(shot_expected).margin(4 * std::sqrt(shot_expected)));  // Poisson, 4 sigma
+  CHECK(p_noisy >= psnr(n.blurry, sharp_mid) + 5.0);
+  CHECK(p_noisy >= p_edi - 4.0);  // within 4 dB of EDI on exact events
+  CHECK(closer >= 0.8 * In.size());
 }
