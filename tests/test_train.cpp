@@ -361,7 +361,7 @@ TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from
     for (double u : us) {
       r.forward(gt, truth_traj[v].camera_at(u), RenderSettings{});
       auto img = r.outputs().rgb.read<float>(n);
-      for (size_t i = 0; i < n; ++i) mean[i] += img[i] / float(us.size());
+      for (size_t i = 0; i < n; ++i) mean[i] += io::srgb_to_linear(img[i]) / float(us.size());  // the blur averages linear light
     }
     data.train[v].blurry = io::image_from_planar_rgb(mean, W, H);
     data.train[v].camera = data.train[v].camera.perturbed(pose_noise[v]);
