@@ -65,7 +65,7 @@ TEST_CASE("plain mode pose_refine: noisy training poses move towards the true on
     data.train[v].camera = data.train[v].camera.perturbed(noise[v]);
   }
   TrainConfig cfg;
-  cfg.target = "sharp";
+  cfg.target = TrainTarget::Sharp;
   cfg.sh_degree = 0;
   cfg.densify = false;
   cfg.pose_refine = true;

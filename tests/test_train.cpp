@@ -44,7 +44,7 @@ TEST_CASE("trainer: fits held-out views of a scene of random Gaussians", "[gpu][
   cfg.iterations = 3000;
   cfg.init_gaussians = 3000;
   cfg.sh_degree = 0;
-  cfg.target = "sharp";
+  cfg.target = TrainTarget::Sharp;
   cfg.densify_from = 200;
   cfg.densify_every = 100;
   cfg.densify_until = 1500;
@@ -111,7 +111,7 @@ TEST_CASE("trainer: density control grows and prunes during training, state stay
   TrainConfig cfg;
   cfg.init_gaussians = 1500;
   cfg.sh_degree = 1;
-  cfg.target = "sharp";
+  cfg.target = TrainTarget::Sharp;
   cfg.iterations = 120;
   cfg.densify_from = 30;
   cfg.densify_every = 30;
@@ -267,7 +267,7 @@ TEST_CASE("blur mode: the mean of virtual renders is fitted, knots learn, trajec
     }
   }
   TrainConfig cfg;
-  cfg.mode = "blur";
+  cfg.mode = TrainMode::Blur;
   cfg.init_gaussians = 1500;
   cfg.sh_degree = 0;
   cfg.iterations = 40;

@@ -137,7 +137,7 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
   paused_ = opt_.start_paused;
   script_ = parse_script(opt_.script);
 
-  const bool blur = trainer_.config().mode == "blur";
+  const bool blur = trainer_.config().mode == TrainMode::Blur;
   panels_.push_back(std::make_unique<BlurryPanel>());
   panels_.push_back(std::make_unique<MidPanel>(blur));
   panels_.push_back(std::make_unique<VirtualFramesPanel>());
@@ -306,9 +306,9 @@ void TrainView::refresh_content(bool force) {
   s.background = trainer_.config().background;
   s.antialiased = trainer_.config().antialiased;
   const auto& trajectories = trainer_.trajectories();
-  const bool blur = trainer_.config().mode == "blur" && view_ < trajectories.size();
+  const bool blur = trainer_.config().mode == TrainMode::Blur && view_ < trajectories.size();
   const std::vector<float> target =
-      io::planar_rgb(trainer_.config().target == "sharp" && view.sharp_mid ? *view.sharp_mid : view.blurry);
+      io::planar_rgb(trainer_.config().target == TrainTarget::Sharp && view.sharp_mid ? *view.sharp_mid : view.blurry);
   std::vector<float> model(n, 0.f), mid;
   shown_.mid.ensure(n * 4);
   if (blur) {

@@ -1,6 +1,7 @@
 #include "train/train_config.h"
 
 #include <functional>
+#include <initializer_list>
 #include <map>
 #include <stdexcept>
 
@@ -24,6 +25,18 @@ bool to_bool(const std::string& k, const std::string& v) {
   throw std::invalid_argument("config key '" + k + "' expects true/false, got '" + v + "'");
 }
 
+// The value of `names` whose name is v; the error lists the names.
+template <typename E>
+E to_enum(const std::string& k, const std::string& v, std::initializer_list<E> values, const char* (*name)(E)) {
+  std::string all;
+  for (E e : values) {
+    if (v == name(e)) return e;
+    if (!all.empty()) all += ", ";
+    all += name(e);
+  }
+  throw std::invalid_argument("config key '" + k + "' must be one of " + all + ", got '" + v + "'");
+}
+
 const std::map<std::string, Setter>& setters() {
   static const std::map<std::string, Setter> m = {
       {"preset", [](TrainConfig& c, const std::string& v) { c = TrainConfig::preset_named(v); }},
@@ -43,19 +56,14 @@ const std::map<std::string, Setter>& setters() {
       {"lr_quats", [](TrainConfig& c, const std::string& v) { c.lr_quats = to_double("lr_quats", v); }},
       {"ssim_lambda", [](TrainConfig& c, const std::string& v) { c.ssim_lambda = to_double("ssim_lambda", v); }},
       {"loss_space", [](TrainConfig& c, const std::string& v) {
-         if (v == "linear") c.loss_space = LossSpace::Linear;
-         else if (v == "srgb") c.loss_space = LossSpace::Srgb;
-         else throw std::invalid_argument("config key 'loss_space' must be linear or srgb, got '" + v + "'"); }},
+         c.loss_space = to_enum("loss_space", v, {LossSpace::Linear, LossSpace::Srgb}, loss_space_name); }},
       {"mode", [](TrainConfig& c, const std::string& v) {
-         if (v != "plain" && v != "blur") throw std::invalid_argument("config key 'mode' must be plain or blur, got '" + v + "'");
-         c.mode = v; }},
+         c.mode = to_enum("mode", v, {TrainMode::Plain, TrainMode::Blur}, mode_name); }},
       {"virtual_frames", [](TrainConfig& c, const std::string& v) { c.virtual_frames = uint32_t(to_uint("virtual_frames", v)); }},
       {"lr_trajectory_init", [](TrainConfig& c, const std::string& v) { c.lr_trajectory_init = to_double("lr_trajectory_init", v); }},
       {"lr_trajectory_final", [](TrainConfig& c, const std::string& v) { c.lr_trajectory_final = to_double("lr_trajectory_final", v); }},
       {"target", [](TrainConfig& c, const std::string& v) {
-         if (v != "blurry" && v != "sharp" && v != "edi")
-           throw std::invalid_argument("config key 'target' must be blurry, sharp or edi, got '" + v + "'");
-         c.target = v; }},
+         c.target = to_enum("target", v, {TrainTarget::Blurry, TrainTarget::Sharp, TrainTarget::Edi}, target_name); }},
       {"method", [](TrainConfig& c, const std::string& v) { c.apply_method(v); }},
       {"event_weight", [](TrainConfig& c, const std::string& v) { c.event_weight = to_double("event_weight", v); }},
       {"event_theta_pos", [](TrainConfig& c, const std::string& v) { c.event_theta_pos = to_double("event_theta_pos", v); }},
@@ -92,6 +100,15 @@ const std::map<std::string, Setter>& setters() {
 }  // namespace
 
 const char* loss_space_name(LossSpace s) { return s == LossSpace::Linear ? "linear" : "srgb"; }
+const char* mode_name(TrainMode m) { return m == TrainMode::Plain ? "plain" : "blur"; }
+const char* target_name(TrainTarget t) {
+  switch (t) {
+    case TrainTarget::Blurry: return "blurry";
+    case TrainTarget::Sharp: return "sharp";
+    case TrainTarget::Edi: return "edi";
+  }
+  return "?";
+}
 
 TrainConfig TrainConfig::preset_named(const std::string& name) {
   TrainConfig c;
@@ -113,10 +130,10 @@ TrainConfig TrainConfig::preset_named(const std::string& name) {
 }
 
 void TrainConfig::apply_method(const std::string& name) {
-  if (name == "plain") { mode = "plain"; target = "blurry"; event_weight = 0; }
-  else if (name == "edi") { mode = "plain"; target = "edi"; event_weight = 0; }
-  else if (name == "blur-only") { mode = "blur"; target = "blurry"; event_weight = 0; }
-  else if (name == "blur+events") { mode = "blur"; target = "blurry"; event_weight = 0.1; }
+  if (name == "plain") { mode = TrainMode::Plain; target = TrainTarget::Blurry; event_weight = 0; }
+  else if (name == "edi") { mode = TrainMode::Plain; target = TrainTarget::Edi; event_weight = 0; }
+  else if (name == "blur-only") { mode = TrainMode::Blur; target = TrainTarget::Blurry; event_weight = 0; }
+  else if (name == "blur+events") { mode = TrainMode::Blur; target = TrainTarget::Blurry; event_weight = 0.1; }
   else throw std::invalid_argument("unknown method '" + name + "' (plain, edi, blur-only, blur+events)");
 }
 
@@ -147,8 +164,8 @@ nlohmann::json TrainConfig::to_json() const {
   return {{"preset", preset}, {"iterations", iterations}, {"init_gaussians", init_gaussians}, {"sh_degree", sh_degree},
           {"sh_increase_every", sh_increase_every}, {"lr_means_init", lr_means_init}, {"lr_means_final", lr_means_final},
           {"lr_sh_dc", lr_sh_dc}, {"lr_sh_rest", lr_sh_rest}, {"lr_opacity", lr_opacity}, {"lr_log_scales", lr_log_scales},
-          {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"loss_space", loss_space_name(loss_space)}, {"mode", mode}, {"virtual_frames", virtual_frames},
-          {"lr_trajectory_init", lr_trajectory_init}, {"lr_trajectory_final", lr_trajectory_final}, {"target", target}, {"antialiased", antialiased},
+          {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"loss_space", loss_space_name(loss_space)}, {"mode", mode_name(mode)}, {"virtual_frames", virtual_frames},
+          {"lr_trajectory_init", lr_trajectory_init}, {"lr_trajectory_final", lr_trajectory_final}, {"target", target_name(target)}, {"antialiased", antialiased},
           {"event_weight", event_weight}, {"event_theta_pos", event_theta_pos}, {"event_theta_neg", event_theta_neg},
           {"event_norm_floor", event_norm_floor}, {"event_from", event_from}, {"event_flip_until", event_flip_until}, {"event_flip_margin", event_flip_margin}, {"pose_refine", pose_refine}, {"lr_pose_init", lr_pose_init},
           {"lr_pose_final", lr_pose_final},

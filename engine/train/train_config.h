@@ -14,6 +14,14 @@ namespace evflow {
 // both in linear light, or both sRGB-encoded (the space the images are stored and scored in).
 enum class LossSpace { Linear, Srgb };
 const char* loss_space_name(LossSpace s);
+// "plain": each image is one render (3DGS); "blur": each blurry image is the mean of 2N+1
+// renders along the view's learned Bézier exposure trajectory (paper Sec. 4.1).
+enum class TrainMode { Plain, Blur };
+const char* mode_name(TrainMode m);
+// What a training view is fitted to: its blurry input, its sharp ground truth, or the EDI
+// deblurring of the blurry input with the events at mid-exposure (the 3DGS+EDI baseline).
+enum class TrainTarget { Blurry, Sharp, Edi };
+const char* target_name(TrainTarget t);
 
 struct TrainConfig {
   std::string preset = "fast";
@@ -25,9 +33,7 @@ struct TrainConfig {
   double lr_sh_dc = 2.5e-3, lr_sh_rest = 2.5e-3 / 20, lr_opacity = 0.05, lr_log_scales = 5e-3, lr_quats = 1e-3;
   double ssim_lambda = 0.2;            // loss = (1-l) L1 + l (1 - SSIM)
   LossSpace loss_space = LossSpace::Srgb;  // docs/experiments.md has the measurement behind the default
-  // "plain": each image is one render (3DGS); "blur": each blurry image is the mean of 2N+1
-  // renders along the view's learned Bézier exposure trajectory (paper Sec. 4.1, blur-only).
-  std::string mode = "plain";
+  TrainMode mode = TrainMode::Plain;
   uint32_t virtual_frames = 3;         // N: 2N+1 virtual poses per exposure
   // Fast preset: 1500 steps leave 1e-3 -> 1e-5 too little room to learn the exposure motion;
   // the paper preset (40k steps) uses 1e-3 -> 1e-5.
@@ -49,9 +55,7 @@ struct TrainConfig {
   // Plain mode: per-view se(3) pose refinement (c2w' = c2w Exp(delta)), its own learning rate.
   bool pose_refine = false;
   double lr_pose_init = 1e-3, lr_pose_final = 1e-5;
-  // Train on "blurry" images, "sharp" (ground truth, when the data has it) or "edi" (the blurry
-  // images deblurred by EDI with the events at mid-exposure: the 3DGS+EDI baseline).
-  std::string target = "blurry";
+  TrainTarget target = TrainTarget::Blurry;
   bool antialiased = false;
   std::array<float, 3> background{0, 0, 0};
   uint64_t seed = 0;

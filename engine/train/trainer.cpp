@@ -16,7 +16,7 @@ namespace evflow {
 
 // Colours for the initial Gaussians: the sharp image when training on it, else the blurry one.
 static const io::Image& target_image(const io::View& v, const TrainConfig& cfg) {
-  if (cfg.target == "sharp") {
+  if (cfg.target == TrainTarget::Sharp) {
     if (!v.sharp_mid) throw std::invalid_argument("target=sharp, but view '" + v.name + "' has no sharp image");
     return *v.sharp_mid;
   }
@@ -38,7 +38,7 @@ std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainC
 
 io::Image training_target(const io::Dataset& data, size_t view, const TrainConfig& cfg) {
   const io::View& v = data.train.at(view);
-  if (cfg.target != "edi") return target_image(v, cfg);
+  if (cfg.target != TrainTarget::Edi) return target_image(v, cfg);
   if (data.events.size() == 0)
     throw std::invalid_argument("target=edi needs events, and the dataset in '" + data.root + "' has none");
   if (!(v.exposure_end > v.exposure_start))
@@ -94,7 +94,7 @@ Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, co
     const size_t want = trajectory_state_.size(), dof = trajectories_.empty() ? 6 : ExposureTrajectory::kSize;
     if (start.trajectories.size() != want || start.trajectories[0].knots.size() != dof)
       throw std::invalid_argument("checkpoint has " + std::to_string(start.trajectories.size()) + " camera states of " +
-                                  std::to_string(start.trajectories[0].knots.size()) + " values; this run (mode " + cfg_.mode +
+                                  std::to_string(start.trajectories[0].knots.size()) + " values; this run (mode " + std::string(mode_name(cfg_.mode)) +
                                   (cfg_.pose_refine ? ", pose_refine" : "") + ") has " + std::to_string(want) + " of " +
                                   std::to_string(dof));
     for (size_t v = 0; v < want; ++v) {
@@ -133,7 +133,7 @@ Camera Trainer::training_camera(uint32_t v) const {
 void Trainer::add_loss(std::unique_ptr<LossTerm> term) {
   if (!dynamic_cast<ImageLossTerm*>(term.get()) && !dynamic_cast<ExposureLossTerm*>(term.get()))
     throw std::invalid_argument("loss term '" + term->name() + "' is neither an image nor an exposure term");
-  if (dynamic_cast<ExposureLossTerm*>(term.get()) && cfg_.mode != "blur")
+  if (dynamic_cast<ExposureLossTerm*>(term.get()) && cfg_.mode != TrainMode::Blur)
     throw std::invalid_argument("loss term '" + term->name() + "' needs the virtual frames of mode=blur");
   terms_.push_back(std::move(term));
 }
@@ -158,8 +158,8 @@ void Trainer::setup(const GaussianCloud& start) {
   const size_t hw = size_t(c0.width) * c0.height;
   v_alpha_ = gpu::Buffer(ctx_, hw * 4, "v_alpha");
   v_alpha_.write(std::vector<float>(hw, 0.0f));
-  image_model_ = std::make_unique<ImageModel>(ctx_, cfg_.mode == "blur" ? 2 * cfg_.virtual_frames + 1 : 1, hw * 3, cfg_.loss_space);
-  if (cfg_.mode == "blur") {
+  image_model_ = std::make_unique<ImageModel>(ctx_, cfg_.mode == TrainMode::Blur ? 2 * cfg_.virtual_frames + 1 : 1, hw * 3, cfg_.loss_space);
+  if (cfg_.mode == TrainMode::Blur) {
     for (size_t v = 0; v < data_.train.size(); ++v) {
       trajectories_.emplace_back(data_.train[v].camera, cfg_.seed * 100003 + v);
       trajectory_state_.push_back({0, {}, std::vector<double>(ExposureTrajectory::kSize, 0.0),
@@ -172,7 +172,7 @@ void Trainer::setup(const GaussianCloud& start) {
   terms_.clear();
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
   if (cfg_.event_weight > 0) {
-    if (cfg_.mode != "blur") throw std::invalid_argument("event_weight > 0 needs mode=blur (the event loss compares virtual frames)");
+    if (cfg_.mode != TrainMode::Blur) throw std::invalid_argument("event_weight > 0 needs mode=blur (the event loss compares virtual frames)");
     if (data_.events.size() == 0) throw std::invalid_argument("event_weight > 0, but the dataset in '" + data_.root + "' has no events");
     if (data_.events.width != c0.width || data_.events.height != c0.height)
       throw std::invalid_argument("the events' sensor (" + std::to_string(data_.events.width) + "x" +
@@ -253,7 +253,7 @@ StepStats Trainer::step() {
     t = now;
     return ms;
   };
-  const bool blur = cfg_.mode == "blur";
+  const bool blur = cfg_.mode == TrainMode::Blur;
   const uint32_t frames = blur ? 2 * cfg_.virtual_frames + 1 : 1;
   const std::vector<double> us = blur ? ExposureTrajectory::virtual_times(int(cfg_.virtual_frames)) : std::vector<double>{0.5};
   auto camera_at = [&](uint32_t i) { return blur ? trajectories_[st.view].camera_at(us[i]) : training_camera(st.view); };
