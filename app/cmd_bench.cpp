@@ -44,13 +44,14 @@ static int bench_raster(ArgParser& p) {
   RenderSettings s;
   s.antialiased = aa;
   Rasterizer r(ctx);
+  RenderState rs(ctx);
   std::map<std::string, std::vector<double>> stages;
   std::vector<std::string> order;
   std::vector<double> totals, walls;
   for (int it = 0; it < warmup + repeats; ++it) {
     auto t0 = std::chrono::steady_clock::now();
-    r.forward(params, cam, s);
-    r.backward(params, v_rgb, v_alpha, grads);
+    r.forward(params, cam, s, rs);
+    r.backward(rs, params, v_rgb, v_alpha, grads);
     double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (it < warmup) continue;
     double total = 0;
@@ -65,7 +66,7 @@ static int bench_raster(ArgParser& p) {
   if (json) {
     std::printf("{\"bench\": \"raster\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": %zu, "
                 "\"sh_degree\": %d, \"intersections\": %u, \"repeats\": %d, \"stages_ms\": {",
-                ctx.caps().name.c_str(), W, H, N, degree, r.num_intersections(), repeats);
+                ctx.caps().name.c_str(), W, H, N, degree, rs.num_intersections(), repeats);
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
     // Minima too: on a machine shared with other work the fastest repeat is the least disturbed.
@@ -76,7 +77,7 @@ static int bench_raster(ArgParser& p) {
                 *std::min_element(totals.begin(), totals.end()), median(walls));
   } else {
     std::printf("raster bench on %s: %ux%u, %zu Gaussians (SH %d), %u intersections, median of %d\n",
-                ctx.caps().name.c_str(), W, H, N, degree, r.num_intersections(), repeats);
+                ctx.caps().name.c_str(), W, H, N, degree, rs.num_intersections(), repeats);
     for (auto& name : order) std::printf("  %-20s %9.2f ms\n", name.c_str(), median(stages[name]));
     std::printf("  %-20s %9.2f ms\n  %-20s %9.2f ms\n", "total (GPU)", median(totals), "wall (with host)", median(walls));
   }

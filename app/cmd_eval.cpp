@@ -44,6 +44,7 @@ static int run_eval(const Args& a) {
   GaussianBuffers params(ctx, run.checkpoint.cloud.size(), run.checkpoint.cloud.sh_degree, "p_");
   params.upload(run.checkpoint.cloud);
   Rasterizer r(ctx);
+  RenderState rs(ctx);
   RenderSettings s;
   s.background = cfg.background;
   s.antialiased = cfg.antialiased;
@@ -93,9 +94,9 @@ static int run_eval(const Args& a) {
         ro.settings = s;
         cam = refine_pose(ctx, r, params, cam, target, ro).camera;
       }
-      r.forward(params, cam, s);
+      r.forward(params, cam, s, rs);
       const metrics::Image8 render8 =
-          metrics::quantise_srgb(r.outputs().rgb.read<float>(planar.size()), gt.width, gt.height, 3);
+          metrics::quantise_srgb(rs.outputs().rgb.read<float>(planar.size()), gt.width, gt.height, 3);
       metrics::write_png(run.dir / "eval" / set / (v.name + ".png"), render8);
       const metrics::Scores val = metrics::score(render8, gt8);
       per.push_back({{"view", v.name}, {"psnr", val.psnr}, {"ssim", val.ssim}});

@@ -60,13 +60,14 @@ static int run_fit_demo(const Args& a) {
   const size_t hw = size_t(W) * H;
   RenderSettings s;
   Rasterizer r(ctx);
+  RenderState rs(ctx);
   std::vector<std::vector<float>> targets;
   {
     GaussianBuffers tb(ctx, N, 1, "truth_");
     tb.upload(truth);
     for (auto& c : cams) {
-      r.forward(tb, c, s);
-      targets.push_back(r.outputs().rgb.read<float>(3 * hw));
+      r.forward(tb, c, s, rs);
+      targets.push_back(rs.outputs().rgb.read<float>(3 * hw));
     }
   }
   GaussianBuffers params(ctx, N, 1, "p_"), grads(ctx, N, 1, "v_");
@@ -77,8 +78,8 @@ static int run_fit_demo(const Args& a) {
     params.upload(c);
     double mse = 0;
     for (size_t v = 0; v < cams.size(); ++v) {
-      r.forward(params, cams[v], s);
-      auto img = r.outputs().rgb.read<float>(3 * hw);
+      r.forward(params, cams[v], s, rs);
+      auto img = rs.outputs().rgb.read<float>(3 * hw);
       for (size_t i = 0; i < img.size(); ++i) mse += double(img[i] - targets[v][i]) * (img[i] - targets[v][i]);
       if (save) {
         io::write_png(std::filesystem::path(out) / (tag + "_view" + std::to_string(v) + ".png"), io::image_from_render(img, W, H));
@@ -95,8 +96,8 @@ static int run_fit_demo(const Args& a) {
   for (int it = 1; it <= steps; ++it) {
     const size_t v = size_t(it) % cams.size();
     params.upload(fit);
-    r.forward(params, cams[v], s);
-    auto img = r.outputs().rgb.read<float>(3 * hw);
+    r.forward(params, cams[v], s, rs);
+    auto img = rs.outputs().rgb.read<float>(3 * hw);
     std::vector<float> g(img.size());
     double loss = 0;
     for (size_t i = 0; i < img.size(); ++i) {
@@ -105,7 +106,7 @@ static int run_fit_demo(const Args& a) {
       g[i] = 2.f * d / float(img.size());
     }
     v_rgb.write(g);
-    r.backward(params, v_rgb, v_alpha, grads);
+    r.backward(rs, params, v_rgb, v_alpha, grads);
     GaussianCloud gc = grads.download();
     am.step(fit.means, gc.means, 2e-3f, it);
     al.step(fit.log_scales, gc.log_scales, 5e-3f, it);

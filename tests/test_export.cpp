@@ -768,8 +768,9 @@ TEST_CASE("an Inria PLY from another tool renders its own colours (sRGB splats),
     GaussianBuffers params(ctx, c->size(), c->sh_degree, "other_");
     params.upload(*c);
     Rasterizer r(ctx);
-    r.forward(params, cam, RenderSettings{});
-    const std::vector<float> img = r.outputs().rgb.read<float>(size_t(3) * W * H);
+    RenderState rs(ctx);
+    r.forward(params, cam, RenderSettings{}, rs);
+    const std::vector<float> img = rs.outputs().rgb.read<float>(size_t(3) * W * H);
     // The centre pixels: alpha = min(0.99, sigmoid(10) exp(-q/2)) = 0.99 over a black background.
     for (uint32_t y : {H / 2 - 1, H / 2})
       for (uint32_t x : {W / 2 - 1, W / 2})

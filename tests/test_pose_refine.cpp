@@ -38,9 +38,10 @@ TEST_CASE("refine_pose recovers a perturbed camera with the Gaussians frozen", "
   GaussianBuffers p(ctx, truth.size(), 0, "p_");
   p.upload(truth);
   Rasterizer r(ctx);
-  r.forward(p, kCam0, RenderSettings{});
+  RenderState rs(ctx);
+  r.forward(p, kCam0, RenderSettings{}, rs);
   gpu::Buffer target(ctx, 96 * 72 * 12, "target");
-  target.write(r.outputs().rgb.read<float>(96 * 72 * 3));
+  target.write(rs.outputs().rgb.read<float>(96 * 72 * 3));
   const Camera start = kCam0.perturbed({0.03, -0.02, 0.02, 0.01, -0.015, 0.008});
   PoseRefineOptions o;
   o.iterations = 80;
@@ -101,6 +102,7 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
   GaussianBuffers gt(ctx, truth.size(), 0, "gt_");
   gt.upload(truth);
   Rasterizer r(ctx);
+  RenderState rs(ctx);
   data.events.width = 96, data.events.height = 72;
   for (size_t v = 0; v < data.train.size(); ++v) {
     ExposureTrajectory motion(data.train[v].camera, 100 + v, 0.0);
@@ -114,8 +116,8 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
     std::vector<float> mean(96 * 72 * 3, 0.f), luma(96 * 72);
     const int sub = 48;
     for (int k = 0; k <= sub; ++k) {
-      r.forward(gt, motion.camera_at(k / double(sub)), RenderSettings{});
-      auto img = r.outputs().rgb.read<float>(mean.size());
+      r.forward(gt, motion.camera_at(k / double(sub)), RenderSettings{}, rs);
+      auto img = rs.outputs().rgb.read<float>(mean.size());
       for (float& x : img) x = io::srgb_to_linear(x);  // renders are sRGB; events and blur see linear light
       for (size_t i = 0; i < luma.size(); ++i) luma[i] = 0.2126f * img[i] + 0.7152f * img[luma.size() + i] + 0.0722f * img[2 * luma.size() + i];
       sim.add_frame(luma.data(), t0 + T * k / sub);
@@ -146,8 +148,8 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
       f.view = 0, f.width = 96, f.height = 72, f.t0 = data.train[0].exposure_start, f.t1 = data.train[0].exposure_end;
       f.u = us, f.seed = 3;
       for (size_t i = 0; i < us.size(); ++i) {
-        r.forward(gt, tr.camera_at(us[i]), RenderSettings{});
-        rgb[i].write(r.outputs().rgb.read<float>(n));
+        r.forward(gt, tr.camera_at(us[i]), RenderSettings{}, rs);
+        rgb[i].write(rs.outputs().rgb.read<float>(n));
         grad[i].write(std::vector<float>(n, 0.f));
         f.rgb.push_back(&rgb[i]), f.grad.push_back(&grad[i]);
       }
@@ -157,8 +159,8 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
       if (kg) {
         kg->fill(0.0);
         for (size_t i = 0; i < us.size(); ++i) {
-          r.forward(gt, tr.camera_at(us[i]), RenderSettings{});
-          r.backward(gt, grad[i], v_alpha, grads, false);
+          r.forward(gt, tr.camera_at(us[i]), RenderSettings{}, rs);
+          r.backward(rs, gt, grad[i], v_alpha, grads, false);
           auto g = r.pose_gradient();
           auto k = tr.backward(us[i], lie::Vec6{g[0], g[1], g[2], g[3], g[4], g[5]});
           for (size_t j = 0; j < k.size(); ++j) (*kg)[j] += k[j];

@@ -73,17 +73,18 @@ TEST_CASE("splat forward matches the double-precision reference", "[gpu][splat]"
     GaussianBuffers params(ctx, s.cloud.size(), s.cloud.sh_degree, "p_");
     params.upload(s.cloud);
     Rasterizer r(ctx);
-    r.forward(params, s.cam, s.settings);
+    RenderState rs(ctx);
+    r.forward(params, s.cam, s.settings, rs);
     auto ref = reference::render(s.cloud, s.cam, s.settings);
     const size_t hw = size_t(s.cam.width) * s.cam.height;
-    auto rgb = r.outputs().rgb.read<float>(3 * hw);
-    auto alpha = r.outputs().alpha.read<float>(hw);
+    auto rgb = rs.outputs().rgb.read<float>(3 * hw);
+    auto alpha = rs.outputs().alpha.read<float>(hw);
     double max_rgb = 0, max_alpha = 0;
     for (size_t i = 0; i < 3 * hw; ++i) max_rgb = std::max(max_rgb, std::abs(rgb[i] - ref.rgb[i]));
     for (size_t i = 0; i < hw; ++i) max_alpha = std::max(max_alpha, std::abs(alpha[i] - ref.alpha[i]));
     std::printf("forward (antialiased %d): %u intersections, max |rgb - ref| %.3g, max |alpha - ref| %.3g\n", aa,
-                r.num_intersections(), max_rgb, max_alpha);
-    REQUIRE(r.num_intersections() > 2000);
+                rs.num_intersections(), max_rgb, max_alpha);
+    REQUIRE(rs.num_intersections() > 2000);
     REQUIRE(max_rgb <= 1e-4);
     REQUIRE(max_alpha <= 1e-4);
   }
@@ -101,8 +102,9 @@ static void check_gradients(gpu::Context& ctx, const Scene& s, size_t sampled_ga
   b_vrgb.write(v_rgb);
   b_valpha.write(v_alpha);
   Rasterizer r(ctx);
-  r.forward(params, s.cam, s.settings);
-  r.backward(params, b_vrgb, b_valpha, grads);
+  RenderState rs(ctx);
+  r.forward(params, s.cam, s.settings, rs);
+  r.backward(rs, params, b_vrgb, b_valpha, grads);
   GaussianCloud g = grads.download();
   auto pose = r.pose_gradient();
   reference::FiniteDifferences fd(s.cloud, s.cam, s.settings, v_rgb, v_alpha);
@@ -183,9 +185,10 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
     vr.write(reference::random_weights(1, 3 * hw));
     va.write(reference::random_weights(2, hw));
     Rasterizer r(ctx);
-    r.forward(params, s.cam, s.settings);
-    r.backward(params, vr, va, grads);
-    return Result{grads.download(), r.outputs().rgb.read<float>(3 * hw), r.outputs().alpha.read<float>(hw)};
+    RenderState rs(ctx);
+    r.forward(params, s.cam, s.settings, rs);
+    r.backward(rs, params, vr, va, grads);
+    return Result{grads.download(), rs.outputs().rgb.read<float>(3 * hw), rs.outputs().alpha.read<float>(hw)};
   };
   auto same = [](const Result& a, const Result& b) {
     for (size_t i = 0; i < a.rgb.size(); ++i) REQUIRE(a.rgb[i] == Approx(b.rgb[i]).margin(1e-6));
@@ -232,11 +235,12 @@ TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][
   GaussianBuffers &params = setup.params, &grads = setup.grads;
   gpu::Buffer &vr = setup.vr, &va = setup.va;
   Rasterizer r(ctx);
-  r.forward(params, s.cam, s.settings);
-  r.backward(params, vr, va, grads);
+  RenderState rs(ctx);
+  r.forward(params, s.cam, s.settings, rs);
+  r.backward(rs, params, vr, va, grads);
   GaussianCloud once = grads.download();
   auto norm_once = r.grad2d_norm().read<float>(s.cloud.size());
-  r.backward(params, vr, va, grads, true);
+  r.backward(rs, params, vr, va, grads, true);
   GaussianCloud twice = grads.download();
   auto norm_twice = r.grad2d_norm().read<float>(s.cloud.size());
   for (size_t i = 0; i < once.means.size(); ++i) REQUIRE(twice.means[i] == 2.0f * once.means[i]);
@@ -245,7 +249,7 @@ TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][
   test::require_no_validation_messages();
 }
 
-TEST_CASE("splat renders kept side by side: each backward equals a fresh render's, scratch shared, norms added",
+TEST_CASE("splat render states kept side by side: each backward equals a fresh render's, norms added",
           "[gpu][splat]") {
   auto& ctx = test::gpu_context();
   BackwardSetup setup(ctx, 43);
@@ -254,38 +258,38 @@ TEST_CASE("splat renders kept side by side: each backward equals a fresh render'
   gpu::Buffer &vr = setup.vr, &va = setup.va;
   Camera moved = s.cam;
   moved.t[0] += 0.05;  // a second pose, as a virtual frame along an exposure
-  // One rasterizer, rendering each pose right before its backward (the reference order).
+  // Reference: each pose rendered right before its backward, one state.
   Rasterizer one(ctx);
+  RenderState only(ctx);
   std::vector<GaussianCloud> ref;
   std::vector<std::array<float, 6>> ref_pose;
   for (const Camera& c : {s.cam, moved}) {
-    one.forward(params, c, s.settings);
-    one.backward(params, vr, va, grads);
+    one.forward(params, c, s.settings, only);
+    one.backward(only, params, vr, va, grads);
     ref.push_back(grads.download());
     ref_pose.push_back(one.pose_gradient());
   }
-  one.forward(params, s.cam, s.settings);
-  one.backward(params, vr, va, grads);
-  one.forward(params, moved, s.settings);
-  one.backward(params, vr, va, grads, true);
+  one.forward(params, s.cam, s.settings, only);
+  one.backward(only, params, vr, va, grads);
+  one.forward(params, moved, s.settings, only);
+  one.backward(only, params, vr, va, grads, true);
   auto ref_norm_sum = one.grad2d_norm().read<float>(s.cloud.size());
-  // Two rasterizers: both forwards first, then both backwards; the second borrows the first's
-  // scratch and adds its screen-gradient norms into the first's buffer.
-  Rasterizer a(ctx), b(ctx);
-  b.borrow_backward_scratch(a);
-  a.forward(params, s.cam, s.settings);
-  b.forward(params, moved, s.settings);
-  b.backward(params, vr, va, grads);
+  // Both forwards first into their own states, then the backwards in reverse order through one
+  // rasterizer (its scratch shared); the second adds its screen-gradient norms.
+  Rasterizer r(ctx);
+  RenderState a = r.forward(params, s.cam, s.settings);
+  RenderState b = r.forward(params, moved, s.settings);
+  r.backward(b, params, vr, va, grads);
   REQUIRE(grads.download().means == ref[1].means);
   REQUIRE(grads.download().sh == ref[1].sh);
-  REQUIRE(b.pose_gradient() == ref_pose[1]);
-  a.backward(params, vr, va, grads);
+  REQUIRE(r.pose_gradient() == ref_pose[1]);
+  r.backward(a, params, vr, va, grads);
   const GaussianCloud ga = grads.download();
   REQUIRE(ga.means == ref[0].means);
   REQUIRE(ga.log_scales == ref[0].log_scales);
   REQUIRE(ga.opacity_logits == ref[0].opacity_logits);
-  REQUIRE(a.pose_gradient() == ref_pose[0]);
-  b.backward(params, vr, va, grads, true, &a.grad2d_norm());
-  REQUIRE(a.grad2d_norm().read<float>(s.cloud.size()) == ref_norm_sum);
+  REQUIRE(r.pose_gradient() == ref_pose[0]);
+  r.backward(b, params, vr, va, grads, true);
+  REQUIRE(r.grad2d_norm().read<float>(s.cloud.size()) == ref_norm_sum);
   test::require_no_validation_messages();
 }

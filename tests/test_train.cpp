@@ -211,9 +211,10 @@ TEST_CASE("blur mode: virtual cameras along a drift and a yaw shift the image by
   GaussianBuffers p(ctx, 1, 0, "one_");
   p.upload(one);
   Rasterizer r(ctx);
+  RenderState rs(ctx);
   auto centroid = [&](const Camera& c) {
-    r.forward(p, c, RenderSettings{});
-    auto img = r.outputs().rgb.read<float>(80 * 60 * 3);
+    r.forward(p, c, RenderSettings{}, rs);
+    auto img = rs.outputs().rgb.read<float>(80 * 60 * 3);
     double sx = 0, sy = 0, sw = 0;
     for (uint32_t y = 0; y < 60; ++y)
       for (uint32_t x = 0; x < 80; ++x) {
@@ -251,6 +252,7 @@ TEST_CASE("blur mode: the mean of virtual renders is fitted, knots learn, trajec
     GaussianBuffers gt(ctx, truth.size(), 0, "gt_");
     gt.upload(truth);
     Rasterizer r(ctx);
+    RenderState rs(ctx);
     for (size_t v = 0; v < data.train.size(); ++v) {
       ExposureTrajectory motion(data.train[v].camera, 100 + v, 0.0);
       for (int j = 0; j < ExposureTrajectory::kKnots; ++j) {
@@ -259,8 +261,8 @@ TEST_CASE("blur mode: the mean of virtual renders is fitted, knots learn, trajec
       }
       std::vector<float> mean(96 * 72 * 3, 0.f);
       for (double u : ExposureTrajectory::virtual_times(3)) {
-        r.forward(gt, motion.camera_at(u), RenderSettings{});
-        auto img = r.outputs().rgb.read<float>(mean.size());  // sRGB values: the blur averages linear light
+        r.forward(gt, motion.camera_at(u), RenderSettings{}, rs);
+        auto img = rs.outputs().rgb.read<float>(mean.size());  // sRGB values: the blur averages linear light
         for (size_t i = 0; i < mean.size(); ++i) mean[i] += io::srgb_to_linear(img[i]) / 7.0f;
       }
       data.train[v].blurry = io::image_from_planar_rgb(mean, 96, 72);
@@ -340,6 +342,7 @@ TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from
   GaussianBuffers gt(ctx, truth.size(), 0, "gt_");
   gt.upload(truth);
   Rasterizer r(ctx);
+  RenderState rs(ctx);
   // Per view: the exposure motion (a drift with a turn: about 2 to 5 px of blur at 80x60) and the
   // error of the recorded pose (about 1 px).
   const std::array<lie::Vec6, 3> motion = {{{0, 0, 0, 0, 0, 0},
@@ -359,8 +362,8 @@ TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from
     // The blurry image as blur mode models it: the mean of the 2N + 1 renders.
     std::vector<float> mean(n, 0.f);
     for (double u : us) {
-      r.forward(gt, truth_traj[v].camera_at(u), RenderSettings{});
-      auto img = r.outputs().rgb.read<float>(n);
+      r.forward(gt, truth_traj[v].camera_at(u), RenderSettings{}, rs);
+      auto img = rs.outputs().rgb.read<float>(n);
       for (size_t i = 0; i < n; ++i) mean[i] += io::srgb_to_linear(img[i]) / float(us.size());  // the blur averages linear light
     }
     data.train[v].blurry = io::image_from_planar_rgb(mean, W, H);

@@ -39,6 +39,7 @@ io::Dataset blur_event_dataset(gpu::Context& ctx, const GaussianCloud& truth) {
   GaussianBuffers gt(ctx, truth.size(), truth.sh_degree, "gt_");
   gt.upload(truth);
   Rasterizer r(ctx);
+  RenderState state(ctx);
   data.events.width = W, data.events.height = H;
   for (size_t v = 0; v < data.train.size(); ++v) {
     ExposureTrajectory motion(data.train[v].camera, 0, 0.0);
@@ -52,8 +53,8 @@ io::Dataset blur_event_dataset(gpu::Context& ctx, const GaussianCloud& truth) {
     for (int s = 0; s <= sub; ++s) {
       RenderSettings rs;
       rs.background = {kGrey, kGrey, kGrey};
-      r.forward(gt, motion.camera_at(s / double(sub)), rs);
-      auto img = r.outputs().rgb.read<float>(mean.size());
+      r.forward(gt, motion.camera_at(s / double(sub)), rs, state);
+      auto img = state.outputs().rgb.read<float>(mean.size());
       for (float& x : img) x = io::srgb_to_linear(x);
       for (size_t i = 0; i < luma.size(); ++i) luma[i] = 0.2126f * img[i] + 0.7152f * img[luma.size() + i] + 0.0722f * img[2 * luma.size() + i];
       sim.add_frame(luma.data(), t0 + T * s / sub);

@@ -76,8 +76,9 @@ void view_and_compare(const std::string& tag, uint32_t W, uint32_t H, const std:
   GaussianBuffers params(ctx, loaded.size(), loaded.sh_degree, "vt_");
   params.upload(loaded);
   Rasterizer raster(ctx);
-  raster.forward(params, cam, RenderSettings{});
-  const std::vector<float> ref = raster.outputs().rgb.read<float>(size_t(3) * OW * OH);
+  RenderState raster_state(ctx);
+  raster.forward(params, cam, RenderSettings{}, raster_state);
+  const std::vector<float> ref = raster_state.outputs().rgb.read<float>(size_t(3) * OW * OH);
   test::require_no_validation_messages();
 
   const io::Image shot = io::read_image(png);

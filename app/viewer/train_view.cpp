@@ -31,11 +31,10 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
-// PSNR on 8-bit sRGB images, as `evflow eval` scores (metrics/srgb_metrics.h): an sRGB render
-// against a linear image.
-double psnr(const std::vector<float>& srgb, const std::vector<float>& linear) {
-  const uint32_t n = uint32_t(srgb.size());
-  return metrics::psnr(metrics::quantise_srgb(srgb, n, 1, 1), metrics::encode_linear(linear, n, 1, 1));
+// PSNR on 8-bit sRGB images, as `evflow eval` scores (metrics/srgb_metrics.h).
+double psnr(const std::vector<float>& a, const std::vector<float>& b) {
+  const uint32_t n = uint32_t(a.size());
+  return metrics::psnr(metrics::quantise_srgb(a, n, 1, 1), metrics::quantise_srgb(b, n, 1, 1));
 }
 
 std::vector<float> encoded(std::vector<float> linear) {
@@ -123,7 +122,7 @@ std::map<int, std::vector<int>> TrainView::parse_script(const std::string& scrip
 TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data, const TrainViewOptions& options,
                      const volatile std::sig_atomic_t* interrupted)
     : display_(display), trainer_(trainer), data_(data), opt_(options), interrupted_(interrupted), ctx_(display.context()),
-      cmd_(ctx_), raster_(ctx_), canvas_(ctx_, cmd_) {
+      cmd_(ctx_), raster_(ctx_), free_view_(ctx_), canvas_(ctx_, cmd_) {
   if (data_.train.empty()) throw std::invalid_argument("train --view: the dataset has no training views");
   if (opt_.view < 0 || size_t(opt_.view) >= data_.train.size())
     throw std::invalid_argument("--view-index " + std::to_string(opt_.view) + ": the dataset has " +
@@ -301,53 +300,30 @@ void TrainView::refresh_content(bool force) {
     shown_.events.write(ev.rgb);
     shown_.inputs_ready = true;
   }
-  // Renders, with the settings of Trainer::render.
-  RenderSettings s;
-  s.background = trainer_.config().background;
-  s.antialiased = trainer_.config().antialiased;
-  const auto& trajectories = trainer_.trajectories();
-  const bool blur = trainer_.config().mode == TrainMode::Blur && view_ < trajectories.size();
-  const std::vector<float> target =
-      io::planar_rgb(trainer_.config().target == TrainTarget::Sharp && view.sharp_mid ? *view.sharp_mid : view.blurry);
-  std::vector<float> model(n, 0.f), mid;
-  shown_.mid.ensure(n * 4);
-  if (blur) {
-    shown_.times = ExposureTrajectory::virtual_times(int(trainer_.config().virtual_frames));
-    while (shown_.frames.size() < shown_.times.size())
-      shown_.frames.emplace_back(ctx_, n * 4, "view_frame" + std::to_string(shown_.frames.size()));
-    shown_.frames.resize(shown_.times.size());
-    bool mid_done = false;
-    for (size_t i = 0; i < shown_.times.size(); ++i) {
-      raster_.forward(trainer_.params(), trajectories[view_].camera_at(shown_.times[i]), s);
-      shown_.frames[i].ensure(n * 4);
-      cmd_.copy(raster_.outputs().rgb, shown_.frames[i], n * 4);
-      if (shown_.times[i] == 0.5) {
-        cmd_.copy(raster_.outputs().rgb, shown_.mid, n * 4);
-        mid_done = true;
-      }
-      cmd_.submit();
-      const std::vector<float> img = raster_.outputs().rgb.read<float>(n);
-      if (shown_.times[i] == 0.5) mid = img;
-      for (size_t k = 0; k < n; ++k) model[k] += io::srgb_to_linear(img[k]) / float(shown_.times.size());  // blur in linear light
-    }
-    model = encoded(std::move(model));
-    if (!mid_done) {
-      raster_.forward(trainer_.params(), trajectories[view_].camera_at(0.5), s);
-      cmd_.copy(raster_.outputs().rgb, shown_.mid, n * 4);
-      cmd_.submit();
-      mid = raster_.outputs().rgb.read<float>(n);
-    }
-  } else {
-    shown_.times.clear();
-    shown_.frames.clear();
-    raster_.forward(trainer_.params(), view.camera, s);
-    cmd_.copy(raster_.outputs().rgb, shown_.mid, n * 4);
-    cmd_.submit();
-    mid = raster_.outputs().rgb.read<float>(n);
-    model = mid;
+  // The exposure as training sees it, from the trainer: its frames, its image model, its target.
+  const ViewSnapshot snap = trainer_.snapshot(view_);
+  const bool blur = snap.frames.size() > 1;
+  shown_.times = blur ? snap.times : std::vector<double>{};
+  while (shown_.frames.size() < shown_.times.size())
+    shown_.frames.emplace_back(ctx_, n * 4, "view_frame" + std::to_string(shown_.frames.size()));
+  shown_.frames.resize(shown_.times.size());
+  for (size_t i = 0; i < shown_.frames.size(); ++i) {
+    shown_.frames[i].ensure(n * 4);
+    cmd_.copy(*snap.frames[i], shown_.frames[i], n * 4);
   }
-  shown_.psnr = psnr(model, target);
-  shown_.psnr_mid_sharp = view.sharp_mid ? psnr(mid, io::planar_rgb(*view.sharp_mid)) : -1;
+  const auto mid_at = std::find(snap.times.begin(), snap.times.end(), 0.5);
+  std::vector<float> mid;
+  if (mid_at != snap.times.end()) {
+    const gpu::Buffer& m = *snap.frames[size_t(mid_at - snap.times.begin())];
+    mid = m.read<float>(n);
+  } else {
+    mid = trainer_.render(trainer_.training_camera(view_));
+  }
+  shown_.mid.ensure(n * 4);
+  shown_.mid.write(mid);
+  cmd_.submit();
+  shown_.psnr = psnr(snap.model, snap.target);
+  shown_.psnr_mid_sharp = view.sharp_mid ? psnr(mid, encoded(io::planar_rgb(*view.sharp_mid))) : -1;
   shown_.step = step;
   last_refresh_ = now_s();
   for (auto& p : panels_) p->refresh(shown_);
@@ -377,10 +353,10 @@ void TrainView::draw_frame() {
   s.background = trainer_.config().background;
   s.antialiased = trainer_.config().antialiased;
   const Rect& m = layout.main;
-  if (!m.empty()) raster_.forward(trainer_.params(), orbit_camera(display_.input().orbit, m.w, m.h), s);
+  if (!m.empty()) raster_.forward(trainer_.params(), orbit_camera(display_.input().orbit, m.w, m.h), s, free_view_);
 
   canvas_.fill({0, 0, W, H}, kBackground);
-  if (!m.empty()) canvas_.blit(raster_.outputs().rgb, m.w, m.h, m);
+  if (!m.empty()) canvas_.blit(free_view_.outputs().rgb, m.w, m.h, m);
   last_tiles_.clear();
   for (size_t i = 0; i < shown.size(); ++i) {
     const Rect& lab = layout.labels[i];

@@ -119,6 +119,7 @@ class TrainView {
   gpu::Context& ctx_;
   gpu::Commands cmd_;
   Rasterizer raster_;
+  RenderState free_view_;  // the free camera's render
   Canvas canvas_;
   ShownView shown_;
   std::vector<std::unique_ptr<Panel>> panels_;

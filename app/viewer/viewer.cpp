@@ -31,6 +31,7 @@ int run_viewer(const GaussianCloud& cloud, const ViewerOptions& opt) {
     GaussianBuffers params(ctx, cloud.size(), cloud.sh_degree, "view");
     params.upload(cloud);
     Rasterizer raster(ctx);
+    RenderState raster_state(ctx);
     gpu::Commands cmd(ctx);
     gpu::Buffer packed(ctx, uint64_t(std::max(sc.width(), 1u)) * std::max(sc.height(), 1u) * 4, "view_rgba8");
     RenderSettings settings;
@@ -60,9 +61,9 @@ int run_viewer(const GaussianCloud& cloud, const ViewerOptions& opt) {
 
       const auto t0 = Clock::now();
       const Camera cam = orbit_camera(display.input().orbit, w, h);
-      raster.forward(params, cam, settings);
+      raster.forward(params, cam, settings, raster_state);
       shaderio::PackPC pc{w, h, sc.bgr() ? 1u : 0u};
-      cmd.dispatch("view/pack_rgba8", {raster.outputs().rgb, packed}, pc,
+      cmd.dispatch("view/pack_rgba8", {raster_state.outputs().rgb, packed}, pc,
                    cmd.linear_groups(gpu::Commands::div_up(uint64_t(w) * h, shaderio::kViewGroupSize)));
       cmd.submit();
       const bool ok = sc.present(packed);

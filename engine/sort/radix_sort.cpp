@@ -15,9 +15,15 @@ RadixSort::RadixSort(gpu::Context& ctx)
 
 std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Commands& cmd, const gpu::Buffer& keys,
                                                                      const gpu::Buffer& values, uint32_t n, uint32_t bits) {
+  return record(cmd, keys, values, keys_tmp_, values_tmp_, n, bits);
+}
+
+std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Commands& cmd, const gpu::Buffer& keys,
+                                                                     const gpu::Buffer& values, gpu::Buffer& keys_alt,
+                                                                     gpu::Buffer& values_alt, uint32_t n, uint32_t bits) {
   if (n <= 1 || bits == 0) return {&keys, &values};
-  keys_tmp_.ensure(uint64_t(n) * 4);
-  values_tmp_.ensure(uint64_t(n) * 4);
+  keys_alt.ensure(uint64_t(n) * 4);
+  values_alt.ensure(uint64_t(n) * 4);
   uint32_t items = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? kSortItemsCpu : kSortItemsGpu;
   // Short inputs: smaller blocks so that at least two workgroups share the work (a single block
   // runs on one CPU thread). More than two made medium sizes slower (bench train's sort).
@@ -28,8 +34,8 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Command
   counts_.ensure(uint64_t(n_counts + 1) * 4);
   const gpu::Buffer* kin = &keys;
   const gpu::Buffer* vin = &values;
-  const gpu::Buffer* kout = &keys_tmp_;
-  const gpu::Buffer* vout = &values_tmp_;
+  const gpu::Buffer* kout = &keys_alt;
+  const gpu::Buffer* vout = &values_alt;
   for (uint32_t shift = 0; shift < bits; shift += 4) {
     SortPC pc{n, shift, blocks, items};
     cmd.dispatch("sort/radix_count", {*kin, counts_}, pc, cmd.linear_groups(blocks));

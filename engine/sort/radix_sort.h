@@ -16,6 +16,11 @@ class RadixSort {
   // inputs or the internal scratch buffers, depending on the pass count).
   std::pair<const gpu::Buffer*, const gpu::Buffer*> record(gpu::Commands& cmd, const gpu::Buffer& keys,
                                                             const gpu::Buffer& values, uint32_t n, uint32_t bits);
+  // The same, ping-ponging with the caller's buffers keys_alt / values_alt (grown to n values)
+  // instead of internal ones: the result then lives in buffers the caller owns.
+  std::pair<const gpu::Buffer*, const gpu::Buffer*> record(gpu::Commands& cmd, const gpu::Buffer& keys,
+                                                            const gpu::Buffer& values, gpu::Buffer& keys_alt,
+                                                            gpu::Buffer& values_alt, uint32_t n, uint32_t bits);
 
  private:
   gpu::Context& ctx_;

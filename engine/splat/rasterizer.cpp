@@ -77,12 +77,8 @@ GaussianCloud GaussianBuffers::download() const {
   return c;
 }
 
-Rasterizer::Rasterizer(gpu::Context& ctx)
-    : ctx_(ctx),
-      cmd_(ctx),
-      scan_(ctx),
-      sort_(ctx),
-      proj_mean_conic_(ctx, 16, "proj_mean_conic"),
+RenderState::RenderState(gpu::Context& ctx)
+    : proj_mean_conic_(ctx, 16, "proj_mean_conic"),
       proj_misc_(ctx, 16, "proj_misc"),
       proj_color_(ctx, 16, "proj_color"),
       proj_dcolor_(ctx, 16, "proj_dcolor"),
@@ -91,15 +87,37 @@ Rasterizer::Rasterizer(gpu::Context& ctx)
       isect_offset_(ctx, 16, "isect_offset"),
       keys_(ctx, 16, "keys"),
       slot_from_isect_(ctx, 16, "slot_from_isect"),
+      keys_alt_(ctx, 16, "keys_alt"),
+      slots_alt_(ctx, 16, "slots_alt"),
       gaussian_id_from_slot_(ctx, 16, "gaussian_id_from_slot"),
-      isect_grad_(ctx, 16, "isect_grad"),
       tile_range_(ctx, 16, "tile_range"),
       final_T_(ctx, 16, "final_T"),
       last_isect_(ctx, 16, "last_isect"),
-      out_{gpu::Buffer(ctx, 16, "out_rgb"), gpu::Buffer(ctx, 16, "out_alpha"), gpu::Buffer(ctx, 16, "out_depth")},
+      out_{gpu::Buffer(ctx, 16, "out_rgb"), gpu::Buffer(ctx, 16, "out_alpha"), gpu::Buffer(ctx, 16, "out_depth")} {}
+
+Rasterizer::Rasterizer(gpu::Context& ctx)
+    : ctx_(ctx),
+      cmd_(ctx),
+      scan_(ctx),
+      sort_(ctx),
+      isect_grad_(ctx, 16, "isect_grad"),
       grad2d_norm_(ctx, 16, "grad2d_norm"),
       pose_partial_(ctx, 16, "pose_partial"),
-      pose_(ctx, 32, "pose_gradient") {}
+      pose_(ctx, 32, "pose_gradient") {
+  const bool cpu = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  // Cross-lane operations are emulated on CPU drivers; measured 3x slower there than per-lane
+  // shared-memory adds (bench raster, lavapipe). GPUs reduce in the subgroup first.
+  subgroup_reduce_ = !cpu;
+  if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) subgroup_reduce_ = e[0] == '1';
+  // Compositing kernels: one pixel per invocation (GPUs) or a block of pixels per invocation
+  // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
+  block_suffix_ = cpu ? "_block" : "";
+  if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
+    const std::string k = e;
+    if (k != "pixel" && k != "block") throw gpu::Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + k + "'");
+    block_suffix_ = k == "block" ? "_block" : "";
+  }
+}
 
 // SH band l of a set of buffers, or band 0 standing in for a band above its degree (the
 // shaders never read it, but every binding needs a buffer).
@@ -111,159 +129,154 @@ static uint32_t bit_width(uint32_t v) {
   return b;
 }
 
-void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const RenderSettings& s) {
+void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const RenderSettings& s, RenderState& st) const {
   if (cam.width == 0 || cam.height == 0) throw gpu::Error("render: camera has zero size");
-  width_ = cam.width;
-  height_ = cam.height;
-  tiles_x_ = (width_ + kTileSize - 1) / kTileSize;
-  tiles_y_ = (height_ + kTileSize - 1) / kTileSize;
-  const uint32_t tile_bits = bit_width(tiles_x_ * tiles_y_);  // 2^tile_bits > number of tiles
-  if (tile_bits > 24) throw gpu::Error("render: image of " + std::to_string(width_) + "x" + std::to_string(height_) + " has too many tiles");
-  depth_bits_ = std::min(23u, 32u - tile_bits);
-  sort_bits_ = tile_bits + depth_bits_;
+  st.width_ = cam.width;
+  st.height_ = cam.height;
+  const uint32_t tiles_x = (st.width_ + kTileSize - 1) / kTileSize, tiles_y = (st.height_ + kTileSize - 1) / kTileSize;
+  const uint32_t tile_bits = bit_width(tiles_x * tiles_y);  // 2^tile_bits > number of tiles
+  if (tile_bits > 24) throw gpu::Error("render: image of " + std::to_string(st.width_) + "x" + std::to_string(st.height_) + " has too many tiles");
+  const uint32_t depth_bits = std::min(23u, 32u - tile_bits);
+  st.sort_bits_ = tile_bits + depth_bits;
   const int degree = s.sh_degree < 0 ? params.sh_degree : std::min(s.sh_degree, params.sh_degree);
 
-  ProjectPC pp{};
+  ProjectPC& pp = st.project_pc_;
+  pp = ProjectPC{};
   pp.cam = camera_pc(cam);
   pp.num_gaussians = static_cast<uint32_t>(params.count);
   pp.sh_degree = static_cast<uint32_t>(degree);
   pp.flags = (s.antialiased ? kFlagAntialiased : 0u) | (uint32_t(params.sh_degree) << 8);
-  pp.tiles_x = tiles_x_;
-  pp.tiles_y = tiles_y_;
-  pp.depth_bits = depth_bits_;
+  pp.tiles_x = tiles_x;
+  pp.tiles_y = tiles_y;
+  pp.depth_bits = depth_bits;
   pp.num_isects = 0;
-  pp.sentinel_key = sort_bits_ >= 32 ? 0xFFFFFFFFu : ((1u << sort_bits_) - 1u);
+  pp.sentinel_key = st.sort_bits_ >= 32 ? 0xFFFFFFFFu : ((1u << st.sort_bits_) - 1u);
   static_assert(sizeof(ProjectPC) <= 128 && sizeof(RasterPC) <= 128);
-  std::memcpy(project_pc_.data(), &pp, sizeof(pp));
 
-  RasterPC rp{};
+  RasterPC& rp = st.raster_pc_;
+  rp = RasterPC{};
   rp.background = glm::vec4(s.background[0], s.background[1], s.background[2], 0.0f);
-  rp.width = width_;
-  rp.height = height_;
-  rp.tiles_x = tiles_x_;
-  rp.tiles_y = tiles_y_;
-  rp.depth_bits = depth_bits_;
-  // Cross-lane operations are emulated on CPU drivers; measured 3x slower there than per-lane
-  // shared-memory adds (bench raster, lavapipe). GPUs reduce in the subgroup first.
-  rp.subgroup_reduce = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 0u : 1u;
-  if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) rp.subgroup_reduce = e[0] == '1';
-  // Compositing kernels: one pixel per invocation (GPUs) or a block of pixels per invocation
-  // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
-  block_suffix_ = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? "_block" : "";
-  if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
-    const std::string k = e;
-    if (k != "pixel" && k != "block") throw gpu::Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + k + "'");
-    block_suffix_ = k == "block" ? "_block" : "";
-  }
-  std::memcpy(raster_pc_.data(), &rp, sizeof(rp));
+  rp.width = st.width_;
+  rp.height = st.height_;
+  rp.tiles_x = tiles_x;
+  rp.tiles_y = tiles_y;
+  rp.depth_bits = depth_bits;
+  rp.subgroup_reduce = subgroup_reduce_ ? 1u : 0u;
 }
 
-void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings) {
-  set_pc(params, cam, settings);
-  stage_ms_.clear();
-  count_ = params.count;
-  const size_t n = params.count;
-  const uint64_t pixels = uint64_t(width_) * height_;
-  const uint32_t num_tiles = tiles_x_ * tiles_y_;
-  proj_mean_conic_.ensure(n * 16);
-  proj_misc_.ensure(n * 16);
-  proj_color_.ensure(n * 16);
+// The per-Gaussian and per-pixel buffers of a render.
+void Rasterizer::ensure_forward_buffers(RenderState& st) const {
+  const size_t n = st.count_;
+  const uint64_t pixels = uint64_t(st.width_) * st.height_;
+  st.proj_mean_conic_.ensure(n * 16);
+  st.proj_misc_.ensure(n * 16);
+  st.proj_color_.ensure(n * 16);
   // d(colour)/d(direction) for project_bwd: only with view-dependent colour (SH degree >= 1), where
   // its 36 B per Gaussian fit the binding limit like the degree-1 band does.
-  if (reinterpret_cast<const ProjectPC*>(project_pc_.data())->sh_degree >= 1) proj_dcolor_.ensure(n * 36);
-  tile_rect_.ensure(n * 16);
-  tiles_touched_.ensure(n * 4);
-  isect_offset_.ensure((n + 1) * 4);
-  tile_range_.ensure(uint64_t(num_tiles) * 8);
-  out_.rgb.ensure(pixels * 12);
-  out_.alpha.ensure(pixels * 4);
-  out_.depth.ensure(pixels * 4);
-  final_T_.ensure(pixels * 4);
-  last_isect_.ensure(pixels * 4);
+  if (st.project_pc_.sh_degree >= 1) st.proj_dcolor_.ensure(n * 36);
+  st.tile_rect_.ensure(n * 16);
+  st.tiles_touched_.ensure(n * 4);
+  st.isect_offset_.ensure((n + 1) * 4);
+  st.tile_range_.ensure(uint64_t(st.raster_pc_.tiles_x) * st.raster_pc_.tiles_y * 8);
+  st.out_.rgb.ensure(pixels * 12);
+  st.out_.alpha.ensure(pixels * 4);
+  st.out_.depth.ensure(pixels * 4);
+  st.final_T_.ensure(pixels * 4);
+  st.last_isect_.ensure(pixels * 4);
+}
 
-  auto* pp = reinterpret_cast<ProjectPC*>(project_pc_.data());
+RenderState Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings) {
+  RenderState st(ctx_);
+  forward(params, cam, settings, st);
+  return st;
+}
+
+void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings, RenderState& st) {
+  set_pc(params, cam, settings, st);
+  stage_ms_.clear();
+  st.count_ = params.count;
+  const size_t n = params.count;
+  ensure_forward_buffers(st);
+  ProjectPC& pp = st.project_pc_;
   cmd_.dispatch("splat/project",
-                {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1), sh_band(params, 2),
-                 sh_band(params, 3), proj_mean_conic_, proj_misc_, proj_color_, tile_rect_, tiles_touched_, proj_dcolor_},
-                project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
+                {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1),
+                 sh_band(params, 2), sh_band(params, 3), st.proj_mean_conic_, st.proj_misc_, st.proj_color_, st.tile_rect_,
+                 st.tiles_touched_, st.proj_dcolor_},
+                pp, cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
   cmd_.mark("project");
-  scan_.record(cmd_, tiles_touched_, isect_offset_, uint32_t(n), uint32_t(n + 1));
+  scan_.record(cmd_, st.tiles_touched_, st.isect_offset_, uint32_t(n), uint32_t(n + 1));
   cmd_.mark("scan");
   cmd_.submit();
   stage_ms_ = cmd_.stage_ms();
-  num_isects_ = n ? isect_offset_.read_one<uint32_t>(n) : 0;
-  const uint32_t m = num_isects_;
-  pp->num_isects = m;
-  auto* rp = reinterpret_cast<RasterPC*>(raster_pc_.data());
-  rp->num_isects = m;
+  const uint32_t m = st.num_isects_ = n ? st.isect_offset_.read_one<uint32_t>(n) : 0;
+  pp.num_isects = m;
+  st.raster_pc_.num_isects = m;
 
   const uint64_t max_range = ctx_.caps().max_storage_buffer_range;
   if (uint64_t(m) * 4 > max_range)
     throw gpu::Error(std::to_string(m) + " tile intersections exceed the storage binding limit of " + ctx_.caps().name +
                      " (" + std::to_string(max_range / 4) + " at most)");
-  keys_.ensure(uint64_t(m) * 4);
-  slot_from_isect_.ensure(uint64_t(m) * 4);
-  gaussian_id_from_slot_.ensure(uint64_t(m) * 4);
+  st.keys_.ensure(uint64_t(m) * 4);
+  st.slot_from_isect_.ensure(uint64_t(m) * 4);
+  st.gaussian_id_from_slot_.ensure(uint64_t(m) * 4);
   if (m) {
     cmd_.dispatch("splat/emit",
-                  {proj_mean_conic_, proj_misc_, tile_rect_, isect_offset_, keys_, slot_from_isect_, gaussian_id_from_slot_},
-                  project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
+                  {st.proj_mean_conic_, st.proj_misc_, st.tile_rect_, st.isect_offset_, st.keys_, st.slot_from_isect_,
+                   st.gaussian_id_from_slot_},
+                  pp, cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
   }
   cmd_.mark("emit");
-  auto [sorted_keys, sorted_slots] = sort_.record(cmd_, keys_, slot_from_isect_, m, sort_bits_);
-  sorted_slots_ = sorted_slots;
+  auto [sorted_keys, sorted_slots] = sort_.record(cmd_, st.keys_, st.slot_from_isect_, st.keys_alt_, st.slots_alt_, m, st.sort_bits_);
+  st.sorted_in_alt_ = sorted_slots == &st.slots_alt_;
   cmd_.mark("sort");
-  cmd_.fill(tile_range_, 0);
-  cmd_.dispatch("splat/tile_ranges", {*sorted_keys, tile_range_}, raster_pc_.data(), sizeof(RasterPC),
+  cmd_.fill(st.tile_range_, 0);
+  cmd_.dispatch("splat/tile_ranges", {*sorted_keys, st.tile_range_}, st.raster_pc_,
                 cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
   cmd_.dispatch("splat/rasterize" + block_suffix_,
-                {tile_range_, *sorted_slots_, gaussian_id_from_slot_, proj_mean_conic_, proj_misc_, proj_color_, out_.rgb,
-                 out_.alpha, out_.depth, final_T_, last_isect_},
-                raster_pc_.data(), sizeof(RasterPC), cmd_.linear_groups(num_tiles));
+                {st.tile_range_, st.sorted_slots(), st.gaussian_id_from_slot_, st.proj_mean_conic_, st.proj_misc_,
+                 st.proj_color_, st.out_.rgb, st.out_.alpha, st.out_.depth, st.final_T_, st.last_isect_},
+                st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize");
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
 }
 
-void Rasterizer::backward(const GaussianBuffers& params, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
-                          GaussianBuffers& grads, bool accumulate, gpu::Buffer* grad2d_norm_into) {
-  if (params.count != count_) throw gpu::Error("Rasterizer::backward: parameters differ from the last forward");
+void Rasterizer::backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
+                          const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate) {
+  if (params.count != st.count_) throw gpu::Error("Rasterizer::backward: parameters differ from the render's");
   if (grads.count != params.count || grads.sh_degree != params.sh_degree)
     throw gpu::Error("Rasterizer::backward: gradient buffers do not match the parameters");
-  const uint64_t pixels = uint64_t(width_) * height_;
+  const uint64_t pixels = uint64_t(st.width_) * st.height_;
   if (v_rgb.size() < pixels * 12 || v_alpha.size() < pixels * 4)
     throw gpu::Error("Rasterizer::backward: v_rgb / v_alpha are smaller than the image");
   const size_t n = params.count;
-  const uint32_t m = num_isects_;
   const uint64_t align = std::max<uint64_t>(256, ctx_.caps().min_storage_offset_alignment);
-  grad_plane_stride_ = ((std::max<uint64_t>(m, 1) * 4 + align - 1) / align) * align;
-  gpu::Buffer& isect_grad = scratch_owner_ ? scratch_owner_->isect_grad_ : isect_grad_;
-  isect_grad.ensure(grad_plane_stride_ * 9);
-  gpu::Buffer& grad2d_norm = grad2d_norm_into ? *grad2d_norm_into : grad2d_norm_;
-  grad2d_norm.ensure(n * 4);
+  const uint64_t stride = ((std::max<uint64_t>(st.num_isects_, 1) * 4 + align - 1) / align) * align;
+  isect_grad_.ensure(stride * 9);
+  grad2d_norm_.ensure(n * 4);
   const uint32_t groups = gpu::Commands::div_up(n, kProjectGroupSize);
   pose_partial_.ensure(uint64_t(std::max<uint32_t>(groups, 1)) * 24);
-  auto plane = [&](int k) { return gpu::BufferRef(isect_grad, grad_plane_stride_ * k, grad_plane_stride_); };
+  auto plane = [&](int k) { return gpu::BufferRef(isect_grad_, stride * k, stride); };
   stage_ms_.erase(std::remove_if(stage_ms_.begin(), stage_ms_.end(),
                                  [](auto& s) { return s.first.find("backward") != std::string::npos; }),
                   stage_ms_.end());
 
   const std::string raster_bwd = "splat/rasterize_bwd" + block_suffix_ + (ctx_.caps().shared_float_atomic_add ? "" : "_cas");
   cmd_.dispatch(raster_bwd,
-                {tile_range_, *sorted_slots_, gaussian_id_from_slot_, proj_mean_conic_, proj_misc_, proj_color_, final_T_,
-                 last_isect_, v_rgb, v_alpha, plane(0), plane(1), plane(2), plane(3), plane(4), plane(5), plane(6), plane(7),
-                 plane(8)},
-                raster_pc_.data(), sizeof(RasterPC), cmd_.linear_groups(tiles_x_ * tiles_y_));
+                {st.tile_range_, st.sorted_slots(), st.gaussian_id_from_slot_, st.proj_mean_conic_, st.proj_misc_,
+                 st.proj_color_, st.final_T_, st.last_isect_, v_rgb, v_alpha, plane(0), plane(1), plane(2), plane(3),
+                 plane(4), plane(5), plane(6), plane(7), plane(8)},
+                st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize backward");
-  auto* pp = reinterpret_cast<ProjectPC*>(project_pc_.data());
-  pp->flags = accumulate ? (pp->flags | kFlagAccumulate) : (pp->flags & ~kFlagAccumulate);
+  ProjectPC pp = st.project_pc_;
+  pp.flags = accumulate ? (pp.flags | kFlagAccumulate) : (pp.flags & ~kFlagAccumulate);
   cmd_.dispatch(accumulate ? "splat/project_bwd_acc" : "splat/project_bwd",
                 {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1),
-                 sh_band(params, 2), sh_band(params, 3), isect_offset_, gaussian_id_from_slot_, plane(0), plane(1), plane(2),
-                 plane(3), plane(4), plane(5), plane(6), plane(7), plane(8), grads.means, grads.log_scales, grads.quats,
-                 grads.opacity_logits, sh_band(grads, 0), sh_band(grads, 1), sh_band(grads, 2), sh_band(grads, 3), grad2d_norm,
-                 pose_partial_, proj_color_, proj_dcolor_},
-                project_pc_.data(), sizeof(ProjectPC), cmd_.linear_groups(groups));
+                 sh_band(params, 2), sh_band(params, 3), st.isect_offset_, st.gaussian_id_from_slot_, plane(0), plane(1),
+                 plane(2), plane(3), plane(4), plane(5), plane(6), plane(7), plane(8), grads.means, grads.log_scales,
+                 grads.quats, grads.opacity_logits, sh_band(grads, 0), sh_band(grads, 1), sh_band(grads, 2),
+                 sh_band(grads, 3), grad2d_norm_, pose_partial_, st.proj_color_, st.proj_dcolor_},
+                pp, cmd_.linear_groups(groups));
   ReducePC rp{groups, 0, 0, 0};
   cmd_.dispatch("splat/pose_reduce", {pose_partial_, pose_}, rp, gpu::Groups{1, 1, 1});
   cmd_.mark("project backward");

@@ -10,6 +10,7 @@
 #include "scan/prefix_sum.h"
 #include "sort/radix_sort.h"
 #include "splat/gaussians.h"
+#include "splat/splat_layout.h"
 
 namespace evflow {
 
@@ -32,57 +33,72 @@ struct RasterOutputs {
   gpu::Buffer rgb, alpha, depth;  // [3][H][W], [H][W], [H][W]
 };
 
+// What one render leaves for its backward pass: the projected Gaussians, the sorted tile
+// intersections, each pixel's compositing state, the images and the push constants. The caller
+// owns it: renders kept side by side (the virtual frames of an exposure) each keep a state,
+// and any of them can go back through one Rasterizer in any order. A state is reused across
+// renders (its buffers only grow).
+class RenderState {
+ public:
+  explicit RenderState(gpu::Context& ctx);
+  const RasterOutputs& outputs() const { return out_; }
+  uint32_t num_intersections() const { return num_isects_; }
+  uint32_t width() const { return width_; }
+  uint32_t height() const { return height_; }
+
+ private:
+  friend class Rasterizer;
+  const gpu::Buffer& sorted_slots() const { return sorted_in_alt_ ? slots_alt_ : slot_from_isect_; }
+  // Per Gaussian.
+  gpu::Buffer proj_mean_conic_, proj_misc_, proj_color_, proj_dcolor_, tile_rect_, tiles_touched_, isect_offset_;
+  // Per intersection (the sort ping-pongs between the two key/slot pairs).
+  gpu::Buffer keys_, slot_from_isect_, keys_alt_, slots_alt_, gaussian_id_from_slot_;
+  bool sorted_in_alt_ = false;
+  // Per tile / pixel.
+  gpu::Buffer tile_range_, final_T_, last_isect_;
+  RasterOutputs out_;
+  shaderio::ProjectPC project_pc_{};
+  shaderio::RasterPC raster_pc_{};
+  uint32_t width_ = 0, height_ = 0, num_isects_ = 0, sort_bits_ = 0;
+  size_t count_ = 0;
+};
+
+// The kernels and what renders share: the sort's and the backward pass's scratch, the
+// screen-space gradient norms and the pose gradient of the last backward.
 class Rasterizer {
  public:
   explicit Rasterizer(gpu::Context& ctx);
 
-  // Renders; returns after the GPU finished. One scalar (the intersection count) is read back
-  // between the projection and the sort to size the intersection buffers.
-  void forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings);
-  // Gradients for the last forward: v_rgb [3][H][W] and v_alpha [H][W] in GPU buffers. Writes
-  // every parameter gradient into `grads`, the pose gradient (se(3), translation first) and
-  // the per-Gaussian screen-space gradient norm.
-  // With `accumulate`, gradients (and the screen-gradient norms) are added to what `grads`
-  // holds (several renders in one step); the pose gradient is always this render's alone.
-  // `grad2d_norm_into`: where the screen-gradient norms go (default: this rasterizer's own
-  // buffer), so renders held by several rasterizers can add into one.
-  void backward(const GaussianBuffers& params, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
-                GaussianBuffers& grads, bool accumulate = false, gpu::Buffer* grad2d_norm_into = nullptr);
+  // Renders into `state`; returns after the GPU finished. One scalar (the intersection count)
+  // is read back between the projection and the sort to size the intersection buffers.
+  void forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings, RenderState& state);
+  // The same into a new state.
+  RenderState forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings);
+  // Gradients for the render in `state`: v_rgb [3][H][W] and v_alpha [H][W] in GPU buffers.
+  // Writes every parameter gradient into `grads`, the pose gradient (se(3), translation first)
+  // and the per-Gaussian screen-space gradient norm. With `accumulate`, gradients and the
+  // screen-gradient norms are added to what `grads` and grad2d_norm() hold (several renders in
+  // one step); the pose gradient is always this render's alone.
+  void backward(const RenderState& state, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
+                const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate = false);
 
-  // Backward passes of this rasterizer use `owner`'s per-intersection gradient scratch (the
-  // largest backward buffer) instead of their own: for render states kept side by side whose
-  // backward passes run one after the other.
-  void borrow_backward_scratch(Rasterizer& owner) { scratch_owner_ = &owner; }
-  const RasterOutputs& outputs() const { return out_; }
+  // Of the last backward.
   std::array<float, 6> pose_gradient() const;
   const gpu::Buffer& grad2d_norm() const { return grad2d_norm_; }
-  gpu::Buffer& grad2d_norm() { return grad2d_norm_; }
-  uint32_t num_intersections() const { return num_isects_; }
   // Stage times (ms) of the last forward and backward, in order.
   const std::vector<std::pair<std::string, double>>& stage_ms() const { return stage_ms_; }
 
  private:
-  void set_pc(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings);
+  void set_pc(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings, RenderState& st) const;
+  void ensure_forward_buffers(RenderState& st) const;
   gpu::Context& ctx_;
   gpu::Commands cmd_;
   PrefixSum scan_;
   RadixSort sort_;
-  // Per Gaussian.
-  gpu::Buffer proj_mean_conic_, proj_misc_, proj_color_, proj_dcolor_, tile_rect_, tiles_touched_, isect_offset_;
-  // Per intersection.
-  gpu::Buffer keys_, slot_from_isect_, gaussian_id_from_slot_, isect_grad_;
-  const gpu::Buffer* sorted_slots_ = nullptr;
-  uint64_t grad_plane_stride_ = 0;
-  // Per tile / pixel.
-  gpu::Buffer tile_range_, final_T_, last_isect_;
-  RasterOutputs out_;
-  // Backward.
+  gpu::Buffer isect_grad_;  // per-intersection gradient planes of the backward pass
   gpu::Buffer grad2d_norm_, pose_partial_, pose_;
-  std::array<uint8_t, 128> project_pc_{}, raster_pc_{};
-  uint32_t width_ = 0, height_ = 0, tiles_x_ = 0, tiles_y_ = 0, num_isects_ = 0, depth_bits_ = 0, sort_bits_ = 0;
-  size_t count_ = 0;
-  Rasterizer* scratch_owner_ = nullptr;
-  std::string block_suffix_;  // "" (one pixel per invocation) or "_block" (see set_pc)
+  bool subgroup_reduce_ = false;  // backward: subgroupAdd before the shared add
+  std::string block_suffix_;      // "" (one pixel per invocation) or "_block" (see the constructor)
   std::vector<std::pair<std::string, double>> stage_ms_;
 };
 

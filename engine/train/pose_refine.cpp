@@ -18,20 +18,21 @@ PoseRefineResult refine_pose(gpu::Context& ctx, Rasterizer& raster, const Gaussi
   gpu::Buffer v_rgb(ctx, hw * 12, "refine_v_rgb"), v_alpha(ctx, hw * 4, "refine_v_alpha");
   v_alpha.write(std::vector<float>(hw, 0.0f));
   GaussianBuffers grads(ctx, params.count, params.sh_degree, "refine_v_");
+  RenderState raster_state(ctx);
   gpu::Commands cmd(ctx);
   lie::Vec6 delta{}, m{}, v{};
   PoseRefineResult best{start, 0, std::numeric_limits<double>::infinity(), {}};
   for (uint32_t it = 0; it <= o.iterations; ++it) {
     const Camera cam = start.perturbed(delta);
-    raster.forward(params, cam, o.settings);
-    loss.record(cmd, raster.outputs().rgb, target, v_rgb, false);
+    raster.forward(params, cam, o.settings, raster_state);
+    loss.record(cmd, raster_state.outputs().rgb, target, v_rgb, false);
     cmd.submit();
     const double l = loss.value();
     if (it == 0) best.first_loss = l;
     if (!std::isfinite(l)) break;
     if (l < best.last_loss) best = {cam, best.first_loss, l, delta};
     if (it == o.iterations) break;
-    raster.backward(params, v_rgb, v_alpha, grads, false);
+    raster.backward(raster_state, params, v_rgb, v_alpha, grads, false);
     auto g = raster.pose_gradient();
     const lie::Vec6 gd = lie::mul_transposed(lie::se3_right_jacobian(delta), lie::Vec6{g[0], g[1], g[2], g[3], g[4], g[5]});
     host_adam_step(delta.data(), gd.data(), m.data(), v.data(), 6, it + 1, o.lr);

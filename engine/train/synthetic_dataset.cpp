@@ -19,15 +19,16 @@ io::Dataset render_synthetic_dataset(gpu::Context& ctx, uint32_t w, uint32_t h, 
   GaussianBuffers gt(ctx, truth.size(), 0, "gt_");
   gt.upload(truth);
   Rasterizer r(ctx);
+  RenderState rs(ctx);
   for (int i = 0; i < n_train + n_novel; ++i) {
     const double ang = (i < n_train ? (i - 0.5 * (n_train - 1)) / n_train : (i - n_train + 0.5 - 0.5 * n_novel) / n_novel * 0.8) * 0.5;
     Camera cam = Camera::look_at(w, h, 60.0, {6 * std::sin(ang), 0.3 * std::cos(3.0 * i), 6 - 6 * std::cos(ang)}, {0, 0, 6},
                                  {0, -1, 0});
-    r.forward(gt, cam, RenderSettings{});
+    r.forward(gt, cam, RenderSettings{}, rs);
     io::View v;
     v.name = (i < n_train ? "train" : "novel") + std::to_string(i);
     v.camera = cam;
-    io::Image img = io::image_from_render(r.outputs().rgb.read<float>(size_t(w) * h * 3), w, h);
+    io::Image img = io::image_from_render(rs.outputs().rgb.read<float>(size_t(w) * h * 3), w, h);
     v.sharp_mid = img;
     if (i < n_train) {
       v.blurry = std::move(img);

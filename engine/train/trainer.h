@@ -1,23 +1,29 @@
-// The training loop: per step one view, render, loss terms (a registry: each adds its weighted
-// gradient into one image gradient), backward, Adam. Parameters, images and gradients stay on
-// the GPU; per step the host reads back the loss value (and the intersection count).
+// The training loop. A step is a short pipeline of stages, each its own object:
+//
+//   choose the view -> render the exposure (ExposureRender: 2N+1 frames at the CameraModel's
+//   poses) -> image model (ImageModel: the blurry mean) -> loss terms (LossTerms: image terms,
+//   then exposure terms; DirectionCheck) -> backward through frames, trajectory and poses ->
+//   optimizer and density control (GaussianOptimizer).
+//
+// Parameters, images and gradients stay on the GPU; per step the host reads back the loss
+// values (and the intersection counts). docs/architecture.md shows where new terms plug in.
 #pragma once
-#include <functional>
 #include <memory>
-#include <random>
 #include <string>
 #include <vector>
 
-#include "camera/trajectory.h"
-#include "densify/density_control.h"
 #include "events/gpu_events.h"
 #include "io/dataset.h"
-#include "loss/loss_term.h"
-#include "optim/adam.h"
 #include "splat/rasterizer.h"
+#include "train/camera_model.h"
 #include "train/checkpoint.h"
+#include "train/direction_check.h"
+#include "train/exposure_render.h"
+#include "train/gaussian_optimizer.h"
 #include "train/image_model.h"
+#include "train/loss_terms.h"
 #include "train/train_config.h"
+#include "train/training_data.h"
 
 namespace evflow {
 
@@ -28,22 +34,23 @@ struct StepStats {
   bool skipped = false;  // non-finite loss: the update was not applied
   bool flipped = false;  // the view's trajectory was reversed in time (events scored it better); no update this step
   double ms = 0;
-  // Wall-clock split of the step (each part ends in a submit and wait).
+  // Wall-clock split of the step (each part ends in a submit and wait); optimizer_ms includes
+  // density control.
   double raster_forward_ms = 0, loss_ms = 0, raster_backward_ms = 0, optimizer_ms = 0;
-  // Each registered term's unweighted value, in registry order (names: Trainer::losses()).
+  // Each term's unweighted value, in the order the terms were added (names: Trainer::losses()).
   std::vector<double> term_values;
 };
 
-// The image a training view is fitted to: its blurry input, its sharp ground truth, or the EDI
-// estimate at mid-exposure (cfg.target). EDI needs the dataset's events.
-io::Image training_target(const io::Dataset& data, size_t view, const TrainConfig& cfg);
-// Event thresholds for the event loss / EDI: the config's, else the dataset's (simulator
-// manifest), else 0.2.
-std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainConfig& cfg);
+// Training view v as the model sees it between steps (for viewers).
+struct ViewSnapshot {
+  std::vector<double> times;               // the frames' exposure times u
+  std::vector<const gpu::Buffer*> frames;  // their renders, planar sRGB on the GPU (valid until the next step or snapshot)
+  std::vector<float> model;                // the image model's prediction (blur: the frames' mean), planar sRGB
+  std::vector<float> target;               // the training target, planar sRGB
+};
 
-// Random Gaussians inside the training views' frustums between the near and far bounds, coloured
-// from the pixel they were seeded on.
-GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg);
+// The training view of a step: a seeded shuffle of the views per epoch (steps count from 1).
+uint32_t view_for_step(uint32_t step, size_t views, uint64_t seed);
 
 class Trainer {
  public:
@@ -56,58 +63,59 @@ class Trainer {
   const TrainConfig& config() const { return cfg_; }
   GaussianCloud cloud() const { return params_->download(); }
   Checkpoint checkpoint() const;
-  // Renders `cam` with the current Gaussians into planar RGB (3 x H x W) on the host.
+  // Renders `cam` with the current Gaussians into planar sRGB (3 x H x W) on the host.
   std::vector<float> render(const Camera& cam);
-  Rasterizer& rasterizer() { return raster_; }
+  const Rasterizer& rasterizer() const { return raster_; }
   const GaussianBuffers& params() const { return *params_; }
   // Blur mode: the training views' exposure trajectories (empty in plain mode).
-  const std::vector<ExposureTrajectory>& trajectories() const { return trajectories_; }
+  const std::vector<ExposureTrajectory>& trajectories() const { return cameras_->trajectories(); }
   // The camera the model currently believes view v was taken from: mid-exposure of its
   // trajectory (blur mode), the refined pose (pose_refine) or the dataset's pose.
-  Camera training_camera(uint32_t v) const;
-  // The loss-term registry.
-  // Image terms compare the image model with the target; exposure terms see every virtual frame.
-  void add_loss(std::unique_ptr<LossTerm> term);
-  const std::vector<std::unique_ptr<LossTerm>>& losses() const { return terms_; }
+  Camera training_camera(uint32_t v) const { return cameras_->training_camera(v); }
+  // The loss terms, in the order added. Exposure terms need the virtual frames of mode=blur.
+  void add_loss(std::unique_ptr<ImageLossTerm> term) { terms_.add(std::move(term)); }
+  void add_loss(std::unique_ptr<ExposureLossTerm> term);
+  const std::vector<LossTerm*>& losses() const { return terms_.all(); }
   // What the last step applied, before Adam: the loss gradient of every Gaussian parameter (a
   // cloud of gradients), and that of its view's camera (54 trajectory knots in blur mode, the
   // 6-vector pose delta with pose_refine, else empty). For tests and diagnostics.
   GaussianCloud last_gradients() const { return grads_->download(); }
-  const std::vector<double>& last_camera_gradient() const { return last_camera_grad_; }
+  const std::vector<double>& last_camera_gradient() const { return cameras_->last_gradient(); }
+  uint32_t trajectory_flips() const { return flips_; }
+  // Renders view v's exposure as the next step would (its render settings) without training.
+  ViewSnapshot snapshot(uint32_t v);
 
  private:
   void setup(const GaussianCloud& start);
-  // Virtual frame i's render state: frame 0 is raster_, the others are held so the backward
-  // pass does not render them again (blur mode).
-  Rasterizer& frame_raster(uint32_t i);
-  void camera_adam(uint32_t v, const double* grad, double lr_init, double lr_final);
-  void flip_trajectory(uint32_t v);
+  void upload_targets();
+  void add_event_term();
+  RenderSettings render_settings() const;
+  // The stages of a step.
+  void render_exposure(uint32_t view);
+  void record_losses(StepStats& st, bool exposure_on);
+  void record_exposure_terms(StepStats& st);
+  void read_losses(StepStats& st, bool exposure_on) const;
+  void backward(uint32_t view, bool exposure_on);
+
   gpu::Context& ctx_;
   const io::Dataset& data_;
   TrainConfig cfg_;
   Rasterizer raster_;
   gpu::Commands cmd_;
   std::unique_ptr<GaussianBuffers> params_, grads_;
-  std::vector<gpu::Buffer> targets_;
+  std::vector<gpu::Buffer> targets_;  // per view, in loss_space
   gpu::Buffer v_alpha_;
-  std::vector<std::unique_ptr<LossTerm>> terms_;
-  std::unique_ptr<Adam> adam_;
-  std::unique_ptr<DensityStats> density_stats_;
-  std::unique_ptr<DensityControl> density_;
-  std::vector<ExposureTrajectory> trajectories_;
-  std::vector<TrajectoryState> trajectory_state_;  // Adam moments per view (knots live in trajectories_)
-  std::vector<lie::Vec6> pose_deltas_;              // plain mode with pose_refine: c2w' = c2w Exp(delta)
+  std::unique_ptr<CameraModel> cameras_;
+  std::unique_ptr<ExposureRender> exposure_;
   std::unique_ptr<ImageModel> image_model_;
-  std::unique_ptr<GpuEvents> events_;               // training views' events (when a term needs them)
-  std::vector<std::unique_ptr<Rasterizer>> frame_raster_;  // virtual frames 1..2N (blur mode)
-  std::vector<gpu::Buffer> frame_grad_;             // per virtual frame, linear light (exposure terms only)
-  size_t means_group_ = 0;
-  double extent_ = 1.0;
+  LossTerms terms_;
+  std::unique_ptr<GpuEvents> events_;  // training views' events (when a term needs them)
+  std::unique_ptr<DirectionCheck> direction_;
+  std::vector<gpu::Buffer> frame_grad_;  // per virtual frame, linear light (exposure terms only)
+  std::unique_ptr<GaussianOptimizer> optimizer_;
+  RenderState preview_;  // render()
   uint32_t step_ = 0;
   uint32_t flips_ = 0;
-  std::vector<double> last_camera_grad_;
- public:
-  uint32_t trajectory_flips() const { return flips_; }
 };
 
 }  // namespace evflow

@@ -1,0 +1,109 @@
+#include "train/camera_model.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "optim/host_adam.h"
+#include "optim/schedule.h"
+
+namespace evflow {
+
+static CameraModel::Kind kind_of(const TrainConfig& cfg) {
+  if (cfg.mode == TrainMode::Blur) return CameraModel::Kind::Trajectory;
+  return cfg.pose_refine ? CameraModel::Kind::PoseRefine : CameraModel::Kind::Fixed;
+}
+
+CameraModel::CameraModel(const io::Dataset& data, const TrainConfig& cfg)
+    : data_(data), kind_(kind_of(cfg)), iterations_(cfg.iterations) {
+  const size_t nv = data.train.size();
+  if (kind_ == Kind::Trajectory) {
+    times_ = ExposureTrajectory::virtual_times(int(cfg.virtual_frames));
+    lr_init_ = cfg.lr_trajectory_init, lr_final_ = cfg.lr_trajectory_final;
+    for (size_t v = 0; v < nv; ++v) trajectories_.emplace_back(data.train[v].camera, cfg.seed * 100003 + v);
+  } else {
+    times_ = {0.5};
+    lr_init_ = cfg.lr_pose_init, lr_final_ = cfg.lr_pose_final;
+    if (kind_ == Kind::PoseRefine) deltas_.assign(nv, lie::Vec6{});
+  }
+  const size_t dof = kind_ == Kind::Trajectory ? ExposureTrajectory::kSize : 6;
+  if (kind_ != Kind::Fixed) adam_.assign(nv, {0, {}, std::vector<double>(dof, 0.0), std::vector<double>(dof, 0.0)});
+}
+
+Camera CameraModel::frame_camera(uint32_t view, uint32_t frame) const {
+  if (kind_ == Kind::Trajectory) return trajectories_[view].camera_at(times_[frame]);
+  return training_camera(view);
+}
+
+Camera CameraModel::training_camera(uint32_t v) const {
+  switch (kind_) {
+    case Kind::Trajectory: return trajectories_.at(v).camera_at(0.5);
+    case Kind::PoseRefine: return data_.train.at(v).camera.perturbed(deltas_.at(v));
+    case Kind::Fixed: break;
+  }
+  return data_.train.at(v).camera;
+}
+
+double* CameraModel::params(uint32_t v) { return kind_ == Kind::Trajectory ? trajectories_[v].data() : deltas_[v].data(); }
+const double* CameraModel::params(uint32_t v) const {
+  return kind_ == Kind::Trajectory ? trajectories_[v].data() : deltas_[v].data();
+}
+
+void CameraModel::backward_and_step(uint32_t view, const std::vector<lie::Vec6>& g, uint32_t step) {
+  if (kind_ == Kind::Fixed) return;
+  if (kind_ == Kind::Trajectory) {
+    std::array<double, ExposureTrajectory::kSize> knot_grad{};
+    for (size_t i = 0; i < g.size(); ++i) {
+      const auto kg = trajectories_[view].backward(times_[i], g[i]);
+      for (size_t k = 0; k < kg.size(); ++k) knot_grad[k] += kg[k];
+    }
+    last_grad_.assign(knot_grad.begin(), knot_grad.end());
+  } else {
+    // c2w Exp(delta) Exp(g-step) = c2w Exp(delta + J_r(delta)^-1 g-step): dL/ddelta = J_r(delta)^T g.
+    const lie::Vec6 d = lie::mul_transposed(lie::se3_right_jacobian(deltas_[view]), g.back());
+    last_grad_.assign(d.begin(), d.end());
+  }
+  TrajectoryState& a = adam_[view];
+  const ExponentialDecay sched{lr_init_, lr_final_, iterations_};
+  host_adam_step(params(view), last_grad_.data(), a.exp_avg.data(), a.exp_avg_sq.data(), a.exp_avg.size(), ++a.step,
+                 sched(step));
+}
+
+// T'(u) = T(1 - u) up to the order of the factors (exact for commuting knots, close for
+// exposure-sized motions): knot k takes knot 8 - k, and so do its Adam moments.
+void CameraModel::flip(uint32_t v) {
+  if (kind_ != Kind::Trajectory) throw std::logic_error("CameraModel::flip: only trajectories have a time direction");
+  double* k = trajectories_[v].data();
+  TrajectoryState& a = adam_[v];
+  const int K = ExposureTrajectory::kKnots, D = ExposureTrajectory::kDof;
+  for (int j = 0; j < K / 2; ++j)
+    for (int c = 0; c < D; ++c) {
+      std::swap(k[j * D + c], k[(K - 1 - j) * D + c]);
+      std::swap(a.exp_avg[j * D + c], a.exp_avg[(K - 1 - j) * D + c]);
+      std::swap(a.exp_avg_sq[j * D + c], a.exp_avg_sq[(K - 1 - j) * D + c]);
+    }
+}
+
+std::vector<TrajectoryState> CameraModel::state() const {
+  std::vector<TrajectoryState> out = adam_;
+  for (uint32_t v = 0; v < out.size(); ++v) {
+    const double* p = params(v);
+    out[v].knots.assign(p, p + out[v].exp_avg.size());
+  }
+  return out;
+}
+
+void CameraModel::load(const std::vector<TrajectoryState>& saved, const TrainConfig& cfg) {
+  if (saved.empty()) return;
+  const size_t want = adam_.size(), dof = kind_ == Kind::Trajectory ? ExposureTrajectory::kSize : 6;
+  if (saved.size() != want || saved[0].knots.size() != dof)
+    throw std::invalid_argument("checkpoint has " + std::to_string(saved.size()) + " camera states of " +
+                                std::to_string(saved[0].knots.size()) + " values; this run (mode " +
+                                std::string(mode_name(cfg.mode)) + (cfg.pose_refine ? ", pose_refine" : "") + ") has " +
+                                std::to_string(want) + " of " + std::to_string(dof));
+  for (uint32_t v = 0; v < want; ++v) {
+    std::copy(saved[v].knots.begin(), saved[v].knots.end(), params(v));
+    adam_[v] = saved[v];
+  }
+}
+
+}  // namespace evflow

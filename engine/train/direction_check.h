@@ -1,0 +1,30 @@
+// The time direction of an exposure trajectory. The blur loss cannot tell a trajectory from its
+// time reversal; the events can. Until `until_step`, each step also scores the time-reversed
+// frame order with the event loss; when that scores lower by `margin` than the forward order,
+// the view's trajectory is to be flipped (and the step's gradients, which belong to the other
+// direction, are not applied).
+#pragma once
+#include <cstdint>
+
+#include "loss/event_loss.h"
+
+namespace evflow {
+
+class DirectionCheck {
+ public:
+  DirectionCheck(EventLoss& events, uint32_t until_step, double margin);
+  bool active(uint32_t step) const { return step <= until_step_; }
+  // Submits what `cmd` holds, then scores `frames` (in forward order; gradients not read) with
+  // their order reversed: the value alone, the same pairs and seed.
+  void score_reversed(gpu::Commands& cmd, ExposureFrames frames);
+  // After the event loss recorded the forward order into `cmd`: submits and compares.
+  bool prefers_reversed(gpu::Commands& cmd) const;
+
+ private:
+  EventLoss& events_;
+  uint32_t until_step_;
+  double margin_;
+  double reversed_ = 0;
+};
+
+}  // namespace evflow

@@ -1,0 +1,46 @@
+#include "train/loss_terms.h"
+
+#include <cmath>
+
+namespace evflow {
+
+void LossTerms::add(std::unique_ptr<ImageLossTerm> term) {
+  all_.push_back(term.get());
+  is_exposure_.push_back(false);
+  image_.push_back(std::move(term));
+}
+
+void LossTerms::add(std::unique_ptr<ExposureLossTerm> term) {
+  all_.push_back(term.get());
+  is_exposure_.push_back(true);
+  exposure_.push_back(std::move(term));
+}
+
+void LossTerms::record_image_terms(gpu::Commands& cmd, const ImageModel& m, const gpu::Buffer& target) const {
+  bool first = true;
+  for (auto& t : image_) {
+    t->record(cmd, m.prediction(), target, m.prediction_grad(), t->weight() / float(m.frames()), !first);
+    first = false;
+  }
+}
+
+void LossTerms::record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames) const {
+  for (auto& t : exposure_) t->record(cmd, frames);
+}
+
+LossValues LossTerms::read(bool exposure_recorded) const {
+  LossValues out;
+  for (size_t i = 0; i < all_.size(); ++i) {
+    if (is_exposure_[i] && !exposure_recorded) {
+      out.terms.push_back(0.0);
+      continue;
+    }
+    const double v = all_[i]->value();
+    out.terms.push_back(v);
+    out.total += all_[i]->weight() * v;
+    if (!std::isfinite(v) && !out.first_bad) out.first_bad = all_[i];
+  }
+  return out;
+}
+
+}  // namespace evflow

@@ -1,0 +1,44 @@
+// The training loss as a list of terms, kept by kind as they are added:
+//   image terms     compare the image model's prediction with the view's target;
+//   exposure terms  see every virtual frame of the exposure (the event loss; flow, LDI and
+//                   residual terms plug in here).
+// Values are read back in the order the terms were added (the order of curve.csv's columns).
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "loss/loss_term.h"
+#include "train/image_model.h"
+
+namespace evflow {
+
+struct LossValues {
+  std::vector<double> terms;  // unweighted, in the order added; 0 for a term not recorded this step
+  double total = 0;           // sum of weight * value
+  const LossTerm* first_bad = nullptr;  // the first term whose value is not finite
+};
+
+class LossTerms {
+ public:
+  void add(std::unique_ptr<ImageLossTerm> term);
+  void add(std::unique_ptr<ExposureLossTerm> term);
+  const std::vector<LossTerm*>& all() const { return all_; }
+  bool has_exposure_terms() const { return !exposure_.empty(); }
+
+  // Image terms: d(loss)/d(prediction) into image_model.prediction_grad(), each frame's share
+  // (1/frames of it) already applied.
+  void record_image_terms(gpu::Commands& cmd, const ImageModel& image_model, const gpu::Buffer& target) const;
+  // Exposure terms add their per-frame gradients into frames.grad.
+  void record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames) const;
+  // After the submit: every term's value (exposure terms only when `exposure_recorded`).
+  LossValues read(bool exposure_recorded) const;
+
+ private:
+  std::vector<std::unique_ptr<ImageLossTerm>> image_;
+  std::vector<std::unique_ptr<ExposureLossTerm>> exposure_;
+  std::vector<LossTerm*> all_;
+  std::vector<bool> is_exposure_;  // per entry of all_
+};
+
+}  // namespace evflow

@@ -1,0 +1,81 @@
+#include "train/training_data.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "events/edi.h"
+
+namespace evflow {
+
+// Colours for the initial Gaussians: the sharp image when training on it, else the blurry one.
+static const io::Image& target_image(const io::View& v, const TrainConfig& cfg) {
+  if (cfg.target == TrainTarget::Sharp) {
+    if (!v.sharp_mid) throw std::invalid_argument("target=sharp, but view '" + v.name + "' has no sharp image");
+    return *v.sharp_mid;
+  }
+  return v.blurry;
+}
+
+std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainConfig& cfg) {
+  double pos = 0.2, neg = 0.2;
+  const auto& m = data.manifest;
+  if (m.is_object() && m.contains("simulator") && m["simulator"].contains("events")) {
+    const auto& e = m["simulator"]["events"];
+    if (e.contains("theta_pos") && e["theta_pos"].is_number()) pos = e["theta_pos"].get<double>();
+    if (e.contains("theta_neg") && e["theta_neg"].is_number()) neg = e["theta_neg"].get<double>();
+  }
+  if (cfg.event_theta_pos > 0) pos = cfg.event_theta_pos;
+  if (cfg.event_theta_neg > 0) neg = cfg.event_theta_neg;
+  return {pos, neg};
+}
+
+io::Image training_target(const io::Dataset& data, size_t view, const TrainConfig& cfg) {
+  const io::View& v = data.train.at(view);
+  if (cfg.target != TrainTarget::Edi) return target_image(v, cfg);
+  if (data.events.size() == 0)
+    throw std::invalid_argument("target=edi needs events, and the dataset in '" + data.root + "' has none");
+  if (!(v.exposure_end > v.exposure_start))
+    throw std::invalid_argument("target=edi: view '" + v.name + "' has no exposure interval");
+  auto [pos, neg] = event_thresholds(data, cfg);
+  io::Image out = v.blurry;
+  out.data = events::edi_deblur(v.blurry.data.data(), v.blurry.channels, data.events, v.exposure_start, v.exposure_end,
+                                events::EdiThresholds{pos, neg, {}, {}});
+  for (float& x : out.data) x = std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 0.0f;  // a training target lives in [0, 1]
+  return out;
+}
+
+GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg) {
+  if (data.train.empty()) throw std::invalid_argument("dataset has no training views");
+  std::mt19937_64 rng(cfg.seed * 7919 + 17);
+  auto uni = [&](double a, double b) { return a + (b - a) * (double(rng() >> 11) * (1.0 / 9007199254740992.0)); };
+  const double near = data.near > 0 ? data.near : 0.5, far = data.far > near ? data.far : near * 20;
+  GaussianCloud c;
+  c.resize(cfg.init_gaussians, cfg.sh_degree);
+  const int K = c.coeffs();
+  for (size_t i = 0; i < c.size(); ++i) {
+    const io::View& v = data.train[rng() % data.train.size()];
+    const io::Image& img = target_image(v, cfg);
+    const Camera& cam = v.camera;
+    const double px = uni(0, cam.width), py = uni(0, cam.height);
+    const double z = near * std::pow(far / near, uni(0.05, 0.9));  // log-uniform, away from the bounds
+    const double pc[3] = {(px - cam.cx) / cam.fx * z - cam.t[0], (py - cam.cy) / cam.fy * z - cam.t[1], z - cam.t[2]};
+    for (int r = 0; r < 3; ++r) c.means[i * 3 + r] = float(cam.R[r] * pc[0] + cam.R[3 + r] * pc[1] + cam.R[6 + r] * pc[2]);
+    const float ls = float(std::log(1.5 * z / cam.fx));  // ~1.5 px
+    for (int k = 0; k < 3; ++k) c.log_scales[i * 3 + k] = ls;
+    c.quats[i * 4] = 1;
+    c.quats[i * 4 + 1] = c.quats[i * 4 + 2] = c.quats[i * 4 + 3] = 0;
+    c.opacity_logits[i] = float(std::log(0.1 / 0.9));
+    const uint32_t ix = std::min<uint32_t>(uint32_t(px), img.width - 1), iy = std::min<uint32_t>(uint32_t(py), img.height - 1);
+    for (int ch = 0; ch < 3; ++ch) {
+      // Splat colours are display-referred sRGB (image_model.h); images are linear in memory.
+      const float col = io::linear_to_srgb(img.data[(size_t(iy) * img.width + ix) * img.channels + std::min<uint32_t>(ch, img.channels - 1)]);
+      c.sh[(i * K) * 3 + ch] = float((col - 0.5) / 0.28209479177387814);
+      for (int k = 1; k < K; ++k) c.sh[(i * K + k) * 3 + ch] = 0;
+    }
+  }
+  return c;
+}
+
+}  // namespace evflow

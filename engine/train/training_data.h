@@ -1,0 +1,23 @@
+// What training starts from, taken from the dataset: each view's target image, the event
+// thresholds and the initial Gaussians.
+#pragma once
+#include <utility>
+
+#include "io/dataset.h"
+#include "splat/gaussians.h"
+#include "train/train_config.h"
+
+namespace evflow {
+
+// The image a training view is fitted to: its blurry input, its sharp ground truth, or the EDI
+// estimate at mid-exposure (cfg.target). EDI needs the dataset's events.
+io::Image training_target(const io::Dataset& data, size_t view, const TrainConfig& cfg);
+// Event thresholds for the event loss / EDI: the config's, else the dataset's (simulator
+// manifest), else 0.2.
+std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainConfig& cfg);
+
+// Random Gaussians inside the training views' frustums between the near and far bounds, coloured
+// from the pixel they were seeded on.
+GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg);
+
+}  // namespace evflow
