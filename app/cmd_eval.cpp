@@ -58,15 +58,7 @@ static int run_eval(const Args& a) {
     throw std::runtime_error("checkpoint has " + std::to_string(trajs.size()) + " trajectories for " +
                              std::to_string(data.train.size()) + " training views");
   auto eval_camera = [&](const io::View& v, size_t index, bool train) {
-    if (!train || trajs.empty()) return v.camera;
-    if (trajs[index].knots.size() == 6) {  // plain mode with pose refinement
-      std::array<double, 6> d;
-      std::copy(trajs[index].knots.begin(), trajs[index].knots.end(), d.begin());
-      return v.camera.perturbed(d);
-    }
-    ExposureTrajectory t(v.camera, 0, 0.0);
-    std::copy(trajs[index].knots.begin(), trajs[index].knots.end(), t.data());
-    return t.camera_at(0.5);
+    return train ? run.learned_camera(v, index, 0.5) : v.camera;
   };
   auto score = [&](const std::vector<io::View>& views, const char* set, bool refine) {
     fs::create_directories(run.dir / "eval" / set);

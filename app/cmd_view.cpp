@@ -45,10 +45,7 @@ static int run_view(const Args& a) {
     throw std::invalid_argument("--width/--height must be in 16..16384");
   if (!o.screenshot.empty() && o.frames <= 0) throw std::invalid_argument("--screenshot needs --frames N");
   std::filesystem::path src = pos[0];
-  GaussianCloud cloud;
-  if (std::filesystem::is_directory(src)) cloud = RunFolder::open(src).checkpoint.cloud;
-  else if (src.extension() == ".ply") cloud = io::read_ply(src);
-  else cloud = io::read_gltf_splats(src);
+  const GaussianCloud cloud = load_splats(src);
   o.title = "evflow view " + src.filename().string();
   return viewer::run_viewer(cloud, o);
 }

@@ -3,7 +3,10 @@
 #include <filesystem>
 #include <fstream>
 
+#include "camera/trajectory.h"
 #include "io/dataset.h"
+#include "io/gltf_splats.h"
+#include "io/ply_splats.h"
 #include "train/checkpoint.h"
 #include "train/train_config.h"
 
@@ -28,6 +31,30 @@ struct RunFolder {
     return r;
   }
   std::string data_dir() const { return config.value("data", std::string()); }
+  // Training view `index`'s learned camera at exposure time u: its trajectory's pose (blur
+  // mode), its refined pose (pose_refine, any u) or, without either, the dataset's.
+  Camera learned_camera(const io::View& v, size_t index, double u) const {
+    const auto& trajs = checkpoint.trajectories;
+    if (trajs.empty()) return v.camera;
+    if (index >= trajs.size())
+      throw std::runtime_error(dir.string() + ": the checkpoint has " + std::to_string(trajs.size()) +
+                               " learned cameras, not one for training view " + std::to_string(index));
+    if (trajs[index].knots.size() == 6) {
+      std::array<double, 6> d;
+      std::copy(trajs[index].knots.begin(), trajs[index].knots.end(), d.begin());
+      return v.camera.perturbed(d);
+    }
+    ExposureTrajectory t(v.camera, 0, 0.0);
+    std::copy(trajs[index].knots.begin(), trajs[index].knots.end(), t.data());
+    return t.camera_at(u);
+  }
 };
+
+// Splats from a run folder (its checkpoint), a .ply or a .glb/.gltf.
+inline GaussianCloud load_splats(const std::filesystem::path& src) {
+  if (std::filesystem::is_directory(src)) return RunFolder::open(src).checkpoint.cloud;
+  if (src.extension() == ".ply") return io::read_ply(src);
+  return io::read_gltf_splats(src);
+}
 
 }  // namespace evflow::app
