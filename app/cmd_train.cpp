@@ -27,14 +27,36 @@ static void write_text(const fs::path& p, const std::string& s) {
   });
 }
 
+// The keys with their defaults, one line per settings group, wrapped.
+static void print_keys_brief() {
+  std::string group, line;
+  auto flush = [&] { if (!line.empty()) std::printf("%s\n", line.c_str()); line.clear(); };
+  for (const SettingDoc& r : TrainConfig::describe()) {
+    if (r.group != group) {
+      flush();
+      std::printf("    %s:\n", r.group.c_str());
+      group = r.group;
+    }
+    const std::string item = " " + r.key + "=" + r.value;
+    if (line.size() + item.size() > 100) flush();
+    line += (line.empty() ? "     " : "") + item;
+  }
+  flush();
+}
+
 static int run_train(const Args& a) {
   ArgParser p(a);
+  if (p.flag("--keys")) {
+    std::printf("%s", TrainConfig::describe_markdown().c_str());
+    return 0;
+  }
   if (p.flag("--help")) {
     std::printf("usage: evflow train DATA --out RUN [--config FILE.json] [--preset fast|paper] [--resume] [--device N|name] [key=value ...]\n"
                 "  DATA: a dataset folder (our layout, E3NeRF Real-World-Challenge or EBAD-NeRF; docs/datasets.md).\n"
-                "  RUN: output folder: config.json, train.log, curve.csv, checkpoint.ckpt.\n  keys:");
-    for (auto& k : TrainConfig::keys()) std::printf(" %s", k.c_str());
-    std::printf("\n  (docs/training.md gives each key's meaning and default)\n"
+                "  RUN: output folder: config.json, train.log, curve.csv, checkpoint.ckpt.\n"
+                "  keys with their defaults (--keys: the tables of docs/training.md, each key's meaning):\n");
+    print_keys_brief();
+    std::printf(
                 "  --view: watch training live in a window (docs/viewer.md): the splats from a free camera, and for\n"
                 "    one training view its blurry input, the mid-exposure render, the virtual frames along the\n"
                 "    exposure and the events; overlay with step, loss, PSNR, Gaussians, it/s.\n"
