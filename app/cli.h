@@ -23,6 +23,13 @@ struct Command {
 };
 
 // Small argument helpers: "--key value" and "--flag".
+// "a, b, c" from {a, b, c} with sep ", ".
+inline std::string join(const std::vector<std::string>& items, const std::string& sep) {
+  std::string s;
+  for (const auto& i : items) s += (s.empty() ? "" : sep) + i;
+  return s;
+}
+
 struct ArgParser {
   explicit ArgParser(const Args& a) : args(a) {}
   Args args;

@@ -32,6 +32,9 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
+// A built-in scene's simulation seed: its place in sim::builtin_scene_names(), from 1.
+std::string builtin_scene_seed(size_t index) { return std::to_string(index + 1); }
+
 std::string quote(const std::string& s) {
   std::string q = "'";
   for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -51,9 +54,13 @@ double run_command(const std::string& cmd, const fs::path& log) {
 
 static int run_experiment(const Args& a) {
   ArgParser p(a);
+  const auto names = sim::builtin_scene_names();
+  const std::string all_scenes = join(names, ",");
   if (p.flag("--help")) {
+    std::string seeds;  // "default 1, gallery 2, ..."
+    for (size_t i = 0; i < names.size(); ++i) seeds += (i ? ", " : "") + names[i] + " " + builtin_scene_seed(i);
     std::printf(
-        "usage: evflow experiment --out DIR [--scenes default,gallery,workshop] [--blur-px 6,4,9]\n"
+        "usage: evflow experiment --out DIR [--scenes %s] [--blur-px 6,4,9]\n"
         "         [--width 173] [--height 130] [--methods plain,edi,blur-only,blur+events] [--preset fast]\n"
         "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device N|name]\n"
         "         [--no-baseline-pose-refine] [key=value ...]\n"
@@ -61,11 +68,12 @@ static int run_experiment(const Args& a) {
         "  from blurry images), trains every method on it with the preset\n"
         "  and the key=value overrides, evaluates (deblur at mid-exposure; novel views as given and after\n"
         "  test-pose refinement) and writes DIR/experiment.md and DIR/experiment.json.\n"
-        "  Each scene is simulated with its own seed (default 1, gallery 2, workshop 3), so a scene's data\n"
+        "  Each scene is simulated with its own seed (%s), so a scene's data\n"
         "  do not depend on which scenes are listed; --sim-seed N uses N for every scene instead.\n"
         "  A scene may be a glTF file (.glb/.gltf; needs --sim-seed): its data and runs go to DIR/<file stem>/.\n"
         "  plain and edi refine each training view's pose while they train (pose_refine=true), as the blur\n"
-        "  methods do through their trajectories; --no-baseline-pose-refine turns that off.\n");
+        "  methods do through their trajectories; --no-baseline-pose-refine turns that off.\n",
+        all_scenes.c_str(), seeds.c_str());
     return 0;
   }
   auto value_or = [&](const char* key, const char* fallback) {
@@ -73,7 +81,7 @@ static int run_experiment(const Args& a) {
     return v.empty() ? std::string(fallback) : v;
   };
   const std::string out = p.value("--out");
-  const auto scenes = split(value_or("--scenes", "default,gallery,workshop"));
+  const auto scenes = split(value_or("--scenes", all_scenes.c_str()));
   const auto blur = split(value_or("--blur-px", "6,4,9"));
   const std::string width = value_or("--width", "173"), height = value_or("--height", "130");
   const auto methods = split(value_or("--methods", "plain,edi,blur-only,blur+events"));
@@ -114,7 +122,6 @@ static int run_experiment(const Args& a) {
   // refused here, before any work.
   // A scene's folder: its name, or a scene file's stem.
   std::vector<std::string> seeds, labels;
-  const auto names = sim::builtin_scene_names();
   for (auto& scene : scenes) {
     const auto it = std::find(names.begin(), names.end(), scene);
     const bool file = it == names.end() && fs::is_regular_file(scene);
@@ -126,11 +133,9 @@ static int run_experiment(const Args& a) {
     if (!sim_seed.empty() && (it != names.end() || file)) {
       seeds.push_back(sim_seed);
     } else if (it != names.end()) {
-      seeds.push_back(std::to_string(it - names.begin() + 1));
+      seeds.push_back(builtin_scene_seed(size_t(it - names.begin())));
     } else {
-      std::string known;
-      for (auto& n : names) known += (known.empty() ? "" : ", ") + n;
-      throw std::invalid_argument("experiment: '" + scene + "' is not a built-in scene (" + known + ")" +
+      throw std::invalid_argument("experiment: '" + scene + "' is not a built-in scene (" + join(names, ", ") + ")" +
                                   (file ? "; a scene file needs --sim-seed N" : " nor a scene file"));
     }
   }

@@ -16,7 +16,7 @@ static const char* kSimulateHelp =
     "Renders a scene (glTF 2.0 or the built-in default) from a camera rig with shaken exposures and\n"
     "writes a dataset in our layout (docs/datasets.md) plus ground truth (docs/simulator.md).\n\n"
     "  --out DIR                 output folder (default: sim_dataset)\n"
-    "  --scene FILE|NAME         .gltf/.glb scene, or a built-in scene: default, gallery, workshop\n"
+    "  --scene FILE|NAME         .gltf/.glb scene, or a built-in scene: {scenes}\n"
     "                            (default: default)\n"
     "  --write-default-scene F   write the default scene as glTF (.glb or .gltf) and exit\n"
     "  --width N --height N      image and sensor size (default: 346 x 260)\n"
@@ -46,7 +46,12 @@ static const char* kSimulateHelp =
 
 static int run_simulate(const Args& a) {
   ArgParser p(a);
-  if (p.flag("--help")) { std::printf("%s", kSimulateHelp); return 0; }
+  if (p.flag("--help")) {
+    std::string help = kSimulateHelp;
+    help.replace(help.find("{scenes}"), 8, join(sim::builtin_scene_names(), ", "));
+    std::printf("%s", help.c_str());
+    return 0;
+  }
   const std::string export_path = p.value("--write-default-scene");
   if (!export_path.empty()) {
     p.reject_unknown();

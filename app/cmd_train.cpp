@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <type_traits>
 
 #include "cli.h"
 #include "io/atomic_file.h"
@@ -27,28 +29,144 @@ static void write_text(const fs::path& p, const std::string& s) {
   });
 }
 
+// The --view-* options: each one's name, argument, member, help and allowed values, once.
+using viewer::TrainViewOptions;
+struct ViewOption {
+  const char* name;
+  const char* arg;  // "" for a flag
+  std::function<void(ArgParser&, TrainViewOptions&)> read;
+  std::function<std::string(const TrainViewOptions&)> shown;  // the value as help shows it
+  const char* doc;
+  const char* allowed = "";  // "in 64..16384": the error reads "NAME must be in 64..16384"
+  std::function<bool(const TrainViewOptions&)> valid = nullptr;
+};
+
+// An option stored in one member of TrainViewOptions, read as the member's type.
+template <typename T>
+static ViewOption view_option(const char* name, const char* arg, T TrainViewOptions::*m, const char* doc,
+                              const char* allowed = "", std::function<bool(const T&)> valid = nullptr) {
+  ViewOption o{name, arg, nullptr, nullptr, doc, allowed, nullptr};
+  if constexpr (std::is_same_v<T, bool>) o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = p.flag(name); };
+  else if constexpr (std::is_same_v<T, std::string>) o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = p.value(name); };
+  else if constexpr (std::is_integral_v<T>) o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = T(p.integer(name, v.*m)); };
+  else o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = p.number(name, v.*m); };
+  o.shown = [=](const TrainViewOptions& v) {
+    if constexpr (std::is_same_v<T, bool>) return std::string(v.*m ? "on" : "off");
+    else if constexpr (std::is_same_v<T, std::string>) return v.*m;
+    else { char b[32]; std::snprintf(b, sizeof b, "%g", double(v.*m)); return std::string(b); }
+  };
+  if (valid) o.valid = [=](const TrainViewOptions& v) { return valid(v.*m); };
+  return o;
+}
+
+static const std::vector<ViewOption>& view_options() {
+  using O = TrainViewOptions;
+  static const std::vector<ViewOption> table = {
+      view_option<uint32_t>("--view-width", "W", &O::width, "window width", "in 64..16384",
+                            [](const uint32_t& w) { return w >= 64 && w <= 16384; }),
+      view_option<uint32_t>("--view-height", "H", &O::height, "window height", "in 64..16384",
+                            [](const uint32_t& h) { return h >= 64 && h <= 16384; }),
+      view_option<double>("--view-budget", "B", &O::budget, "the viewer's share of the wall time while training runs",
+                          "in (0, 1]", [](const double& b) { return b > 0 && b <= 1; }),
+      view_option<double>("--view-fps-cap", "F", &O::fps_cap, "at most F frames per second; 0: no cap"),
+      view_option<double>("--view-refresh", "S", &O::refresh_s,
+                          "while training runs, re-render the training-view panels at most every S seconds", ">= 0",
+                          [](const double& s) { return s >= 0; }),
+      view_option<int>("--view-index", "V", &O::view, "training view shown first, 0-based, checked against the dataset"),
+      view_option<bool>("--view-paused", "", &O::start_paused, "start paused (look first, then Space)"),
+      view_option<bool>("--view-hold", "", &O::hold, "after the last step keep the window open (state \"DONE\") until it is closed"),
+      view_option<bool>("--view-vsync", "", &O::vsync, "present with vsync (FIFO)"),
+      view_option<int>("--view-frames", "N", &O::frames, "close the viewer after N presented frames (training goes on); 0: never",
+                       ">= 0", [](const int& n) { return n >= 0; }),
+      view_option<std::string>("--view-screenshot", "F.png", &O::screenshot, "the last presented frame, written when the viewer closes"),
+      view_option<std::string>("--view-report", "F.json", &O::report,
+                               "written when the viewer closes: per frame {frame, step, paused, view, content_step, ms}, the "
+                               "panels' tile rectangles (with source sizes), the free-camera rectangle, the shown view's PSNR and "
+                               "event counts, viewer and training wall seconds"),
+      view_option<std::string>("--view-script", "\"F:KEY,...\"", &O::script,
+                               "testing: presses KEY (space, n, right, left, 1-9, o, r) just before frame F is drawn"),
+  };
+  return table;
+}
+
+// "(default 1280; in 64..16384)" for help and docs; empty for an option with neither.
+static std::string view_option_limits(const ViewOption& v) {
+  const std::string def = *v.arg ? v.shown(TrainViewOptions{}) : "";
+  std::string s = def.empty() ? "" : "default " + def;
+  if (*v.allowed) s += (s.empty() ? "" : "; ") + std::string(v.allowed);
+  return s.empty() ? "" : " (" + s + ")";
+}
+
+static TrainViewOptions read_view_options(ArgParser& p) {
+  TrainViewOptions vo;
+  for (const ViewOption& v : view_options()) v.read(p, vo);
+  return vo;
+}
+
+// Without --view every --view-* option is an error; with it, each value must be allowed.
+static void check_view_options(const TrainViewOptions& vo, const Args& a, bool view) {
+  for (const ViewOption& v : view_options()) {
+    const std::string name = v.name;
+    if (!view) {
+      for (const auto& arg : a)
+        if (arg == name || arg.rfind(name + "=", 0) == 0) throw std::invalid_argument(name + " needs --view");
+    } else if (v.valid && !v.valid(vo)) {
+      throw std::invalid_argument(name + " must be " + v.allowed);
+    }
+  }
+}
+
+// The options as the markdown table of docs/viewer.md.
+static std::string view_options_markdown() {
+  std::string md = "| option | meaning |\n|---|---|\n";
+  for (const ViewOption& v : view_options())
+    md += "| `" + std::string(v.name) + (*v.arg ? " " : "") + v.arg + "` | " + v.doc + view_option_limits(v) + " |\n";
+  return md;
+}
+
+// The keys with their defaults, one line per settings group, wrapped.
+static void print_keys_brief() {
+  std::string group, line;
+  auto flush = [&] { if (!line.empty()) std::printf("%s\n", line.c_str()); line.clear(); };
+  for (const SettingDoc& r : TrainConfig::describe()) {
+    if (r.group != group) {
+      flush();
+      std::printf("    %s:\n", r.group.c_str());
+      group = r.group;
+    }
+    const std::string item = " " + r.key + "=" + r.value;
+    if (line.size() + item.size() > 100) flush();
+    line += (line.empty() ? "     " : "") + item;
+  }
+  flush();
+}
+
 static int run_train(const Args& a) {
   ArgParser p(a);
+  if (p.flag("--keys")) {
+    std::printf("%s", TrainConfig::describe_markdown().c_str());
+    return 0;
+  }
+  if (p.flag("--view-options")) {
+    std::printf("%s", view_options_markdown().c_str());
+    return 0;
+  }
   if (p.flag("--help")) {
     std::printf("usage: evflow train DATA --out RUN [--config FILE.json] [--preset fast|paper] [--resume] [--device N|name] [key=value ...]\n"
                 "  DATA: a dataset folder (our layout, E3NeRF Real-World-Challenge or EBAD-NeRF; docs/datasets.md).\n"
-                "  RUN: output folder: config.json, train.log, curve.csv, checkpoint.ckpt.\n  keys:");
-    for (auto& k : TrainConfig::keys()) std::printf(" %s", k.c_str());
-    std::printf("\n  (docs/training.md gives each key's meaning and default)\n"
+                "  RUN: output folder: config.json, train.log, curve.csv, checkpoint.ckpt.\n"
+                "  keys with their defaults (--keys: the tables of docs/training.md, each key's meaning):\n");
+    print_keys_brief();
+    std::printf(
                 "  --view: watch training live in a window (docs/viewer.md): the splats from a free camera, and for\n"
                 "    one training view its blurry input, the mid-exposure render, the virtual frames along the\n"
                 "    exposure and the events; overlay with step, loss, PSNR, Gaussians, it/s.\n"
                 "    keys: Space pause/resume, N single step (pauses first), Right/] and Left/[ next/previous view,\n"
                 "    1-4 toggle panels, O overlay, R reset camera, Esc close the viewer (training goes on);\n"
-                "    mouse: left-drag orbit, wheel zoom; W/A/S/D/Q/E fly.\n"
-                "    --view-width 1280 --view-height 720   window size\n"
-                "    --view-budget 0.1     viewer share of the wall time while training runs\n"
-                "    --view-fps-cap 30     frame cap (0: none)   --view-refresh 1   panel re-render interval, s\n"
-                "    --view-index V        training view shown first   --view-paused   start paused\n"
-                "    --view-hold           keep the window open after training until it is closed\n"
-                "    --view-frames N       close the viewer after N frames (training goes on)\n"
-                "    --view-screenshot F.png, --view-report F.json   written when the viewer closes\n"
-                "    --view-script \"FRAME:KEY,...\"   (testing) press KEY (space, n, right, left, 1-4, o, r) before FRAME\n");
+                "    mouse: left-drag orbit, wheel zoom; W/A/S/D/Q/E fly. Its options (--view-options: as a table):\n");
+    for (const ViewOption& v : view_options())
+      std::printf("    %-26s %s%s\n", (std::string(v.name) + (*v.arg ? " " : "") + v.arg).c_str(), v.doc,
+                  view_option_limits(v).c_str());
     return 0;
   }
   const std::string out = p.value("--out");
@@ -56,41 +174,14 @@ static int run_train(const Args& a) {
   const std::string preset = p.value("--preset");
   const bool resume = p.flag("--resume");
   const bool view = p.flag("--view");
-  viewer::TrainViewOptions vo;
-  vo.width = static_cast<uint32_t>(p.integer("--view-width", vo.width));
-  vo.height = static_cast<uint32_t>(p.integer("--view-height", vo.height));
-  vo.budget = p.number("--view-budget", vo.budget);
-  vo.fps_cap = p.number("--view-fps-cap", vo.fps_cap);
-  vo.refresh_s = p.number("--view-refresh", vo.refresh_s);
-  vo.view = static_cast<int>(p.integer("--view-index", 0));
-  vo.start_paused = p.flag("--view-paused");
-  vo.hold = p.flag("--view-hold");
-  vo.frames = static_cast<int>(p.integer("--view-frames", 0));
-  vo.screenshot = p.value("--view-screenshot");
-  vo.report = p.value("--view-report");
-  vo.script = p.value("--view-script");
-  vo.vsync = p.flag("--view-vsync");
+  const viewer::TrainViewOptions vo = read_view_options(p);
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   std::vector<std::string> pos = p.positional(), overrides;
   std::string data_dir;
   for (auto& s : pos) (s.find('=') != std::string::npos ? overrides.push_back(s) : (void)(data_dir = s));
   if (data_dir.empty() || out.empty()) throw std::invalid_argument("usage: evflow train DATA --out RUN (see --help)");
-  if (!view) {
-    for (const char* opt : {"--view-width", "--view-height", "--view-budget", "--view-fps-cap", "--view-refresh", "--view-index",
-                            "--view-paused", "--view-hold", "--view-frames", "--view-screenshot", "--view-report",
-                            "--view-script", "--view-vsync"})
-      for (const auto& arg : a)
-        if (arg == opt || arg.rfind(std::string(opt) + "=", 0) == 0)
-          throw std::invalid_argument(std::string(opt) + " needs --view");
-  } else {
-    if (vo.width < 64 || vo.height < 64 || vo.width > 16384 || vo.height > 16384)
-      throw std::invalid_argument("--view-width/--view-height must be in 64..16384");
-    if (!(vo.budget > 0 && vo.budget <= 1)) throw std::invalid_argument("--view-budget must be in (0, 1]");
-    if (!(vo.refresh_s >= 0)) throw std::invalid_argument("--view-refresh must be >= 0 seconds");
-    if (vo.frames < 0) throw std::invalid_argument("--view-frames must be >= 0");
-  }
-
+  check_view_options(vo, a, view);
   TrainConfig cfg;
   if (!config_file.empty()) {
     std::ifstream f(config_file);

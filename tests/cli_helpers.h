@@ -34,6 +34,16 @@ inline std::string slurp(const std::filesystem::path& p) {
   return ss.str();
 }
 
+// The text of a docs/ file between "<!-- begin: COMMAND -->" and "<!-- end: COMMAND -->" (the
+// output of COMMAND kept in the docs); "(markers missing)" when the file lacks them.
+inline std::string generated_section(const std::string& doc_file, const std::string& command) {
+  const std::string doc = slurp(std::filesystem::path(EVF_SOURCE_DIR) / "docs" / doc_file);
+  const std::string begin = "<!-- begin: " + command + " -->\n", end = "<!-- end: " + command + " -->";
+  const size_t b = doc.find(begin), e = doc.find(end);
+  if (b == std::string::npos || e == std::string::npos || e < b) return "(markers missing)";
+  return doc.substr(b + begin.size(), e - b - begin.size());
+}
+
 // A linear value as the 8-bit sRGB byte a screenshot holds.
 inline uint8_t encode8(float linear) {
   float v = std::isnan(linear) ? 0.f : std::clamp(linear, 0.f, 1.f);

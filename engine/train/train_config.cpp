@@ -1,16 +1,18 @@
 #include "train/train_config.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <functional>
 #include <initializer_list>
-#include <map>
 #include <stdexcept>
+#include <type_traits>
 
 namespace evflow {
 
 namespace {
 
-using Setter = std::function<void(TrainConfig&, const std::string&)>;
-
+// Parsing of a key's text value; each error names the key and what it expects.
 double to_double(const std::string& k, const std::string& v) {
   try { size_t p; double d = std::stod(v, &p); if (p != v.size()) throw 1; return d; }
   catch (...) { throw std::invalid_argument("config key '" + k + "' expects a number, got '" + v + "'"); }
@@ -25,7 +27,7 @@ bool to_bool(const std::string& k, const std::string& v) {
   throw std::invalid_argument("config key '" + k + "' expects true/false, got '" + v + "'");
 }
 
-// The value of `names` whose name is v; the error lists the names.
+// The value of `values` whose name is v; the error lists the names.
 template <typename E>
 E to_enum(const std::string& k, const std::string& v, std::initializer_list<E> values, const char* (*name)(E)) {
   std::string all;
@@ -37,64 +39,243 @@ E to_enum(const std::string& k, const std::string& v, std::initializer_list<E> v
   throw std::invalid_argument("config key '" + k + "' must be one of " + all + ", got '" + v + "'");
 }
 
-const std::map<std::string, Setter>& setters() {
-  static const std::map<std::string, Setter> m = {
-      {"preset", [](TrainConfig& c, const std::string& v) { c = TrainConfig::preset_named(v); }},
-      {"iterations", [](TrainConfig& c, const std::string& v) { c.iterations = uint32_t(to_uint("iterations", v)); }},
-      {"init_gaussians", [](TrainConfig& c, const std::string& v) { c.init_gaussians = uint32_t(to_uint("init_gaussians", v)); }},
-      {"sh_degree", [](TrainConfig& c, const std::string& v) {
-         uint64_t d = to_uint("sh_degree", v);
-         if (d > 3) throw std::invalid_argument("config key 'sh_degree' must be 0..3");
-         c.sh_degree = int(d); }},
-      {"sh_increase_every", [](TrainConfig& c, const std::string& v) { c.sh_increase_every = uint32_t(to_uint("sh_increase_every", v)); }},
-      {"lr_means_init", [](TrainConfig& c, const std::string& v) { c.lr_means_init = to_double("lr_means_init", v); }},
-      {"lr_means_final", [](TrainConfig& c, const std::string& v) { c.lr_means_final = to_double("lr_means_final", v); }},
-      {"lr_sh_dc", [](TrainConfig& c, const std::string& v) { c.lr_sh_dc = to_double("lr_sh_dc", v); }},
-      {"lr_sh_rest", [](TrainConfig& c, const std::string& v) { c.lr_sh_rest = to_double("lr_sh_rest", v); }},
-      {"lr_opacity", [](TrainConfig& c, const std::string& v) { c.lr_opacity = to_double("lr_opacity", v); }},
-      {"lr_log_scales", [](TrainConfig& c, const std::string& v) { c.lr_log_scales = to_double("lr_log_scales", v); }},
-      {"lr_quats", [](TrainConfig& c, const std::string& v) { c.lr_quats = to_double("lr_quats", v); }},
-      {"ssim_lambda", [](TrainConfig& c, const std::string& v) { c.ssim_lambda = to_double("ssim_lambda", v); }},
-      {"loss_space", [](TrainConfig& c, const std::string& v) {
-         c.loss_space = to_enum("loss_space", v, {LossSpace::Linear, LossSpace::Srgb}, loss_space_name); }},
-      {"mode", [](TrainConfig& c, const std::string& v) {
-         c.mode = to_enum("mode", v, {TrainMode::Plain, TrainMode::Blur}, mode_name); }},
-      {"virtual_frames", [](TrainConfig& c, const std::string& v) { c.virtual_frames = uint32_t(to_uint("virtual_frames", v)); }},
-      {"lr_trajectory_init", [](TrainConfig& c, const std::string& v) { c.lr_trajectory_init = to_double("lr_trajectory_init", v); }},
-      {"lr_trajectory_final", [](TrainConfig& c, const std::string& v) { c.lr_trajectory_final = to_double("lr_trajectory_final", v); }},
-      {"target", [](TrainConfig& c, const std::string& v) {
-         c.target = to_enum("target", v, {TrainTarget::Blurry, TrainTarget::Sharp, TrainTarget::Edi}, target_name); }},
-      {"method", [](TrainConfig& c, const std::string& v) { c.apply_method(v); }},
-      {"event_weight", [](TrainConfig& c, const std::string& v) { c.event_weight = to_double("event_weight", v); }},
-      {"event_theta_pos", [](TrainConfig& c, const std::string& v) { c.event_theta_pos = to_double("event_theta_pos", v); }},
-      {"event_theta_neg", [](TrainConfig& c, const std::string& v) { c.event_theta_neg = to_double("event_theta_neg", v); }},
-      {"event_norm_floor", [](TrainConfig& c, const std::string& v) { c.event_norm_floor = to_double("event_norm_floor", v); }},
-      {"event_from", [](TrainConfig& c, const std::string& v) { c.event_from = to_double("event_from", v); }},
-      {"event_flip_until", [](TrainConfig& c, const std::string& v) { c.event_flip_until = to_double("event_flip_until", v); }},
-      {"event_flip_margin", [](TrainConfig& c, const std::string& v) { c.event_flip_margin = to_double("event_flip_margin", v); }},
-      {"pose_refine", [](TrainConfig& c, const std::string& v) { c.pose_refine = to_bool("pose_refine", v); }},
-      {"lr_pose_init", [](TrainConfig& c, const std::string& v) { c.lr_pose_init = to_double("lr_pose_init", v); }},
-      {"lr_pose_final", [](TrainConfig& c, const std::string& v) { c.lr_pose_final = to_double("lr_pose_final", v); }},
-      {"antialiased", [](TrainConfig& c, const std::string& v) { c.antialiased = to_bool("antialiased", v); }},
-      {"background", [](TrainConfig& c, const std::string& v) {
-         float r, g, b;
-         if (std::sscanf(v.c_str(), "%f,%f,%f", &r, &g, &b) != 3)
-           throw std::invalid_argument("config key 'background' expects r,g,b, got '" + v + "'");
-         c.background = {r, g, b}; }},
-      {"seed", [](TrainConfig& c, const std::string& v) { c.seed = to_uint("seed", v); }},
-      {"log_every", [](TrainConfig& c, const std::string& v) { c.log_every = uint32_t(std::max<uint64_t>(1, to_uint("log_every", v))); }},
-      {"densify", [](TrainConfig& c, const std::string& v) { c.densify = to_bool("densify", v); }},
-      {"densify_from", [](TrainConfig& c, const std::string& v) { c.densify_from = uint32_t(to_uint("densify_from", v)); }},
-      {"densify_until", [](TrainConfig& c, const std::string& v) { c.densify_until = uint32_t(to_uint("densify_until", v)); }},
-      {"densify_every", [](TrainConfig& c, const std::string& v) { c.densify_every = uint32_t(to_uint("densify_every", v)); }},
-      {"densify_grad_threshold", [](TrainConfig& c, const std::string& v) { c.densify_grad_threshold = to_double("densify_grad_threshold", v); }},
-      {"prune_screen_px", [](TrainConfig& c, const std::string& v) { c.prune_screen_px = to_double("prune_screen_px", v); }},
-      {"prune_world_scale", [](TrainConfig& c, const std::string& v) { c.prune_world_scale = to_double("prune_world_scale", v); }},
-      {"opacity_reset_every", [](TrainConfig& c, const std::string& v) { c.opacity_reset_every = uint32_t(to_uint("opacity_reset_every", v)); }},
-      {"max_gaussians", [](TrainConfig& c, const std::string& v) { c.max_gaussians = uint32_t(to_uint("max_gaussians", v)); }},
-      {"checkpoint_every", [](TrainConfig& c, const std::string& v) { c.checkpoint_every = uint32_t(to_uint("checkpoint_every", v)); }},
+// How a member type is read from a key's text and written to JSON.
+template <typename T> struct Codec;
+template <> struct Codec<double> {
+  static double parse(const std::string& k, const std::string& v) { return to_double(k, v); }
+};
+template <> struct Codec<uint32_t> {
+  static uint32_t parse(const std::string& k, const std::string& v) { return uint32_t(to_uint(k, v)); }
+};
+template <> struct Codec<uint64_t> {
+  static uint64_t parse(const std::string& k, const std::string& v) { return to_uint(k, v); }
+};
+template <> struct Codec<bool> {
+  static bool parse(const std::string& k, const std::string& v) { return to_bool(k, v); }
+};
+template <> struct Codec<std::array<float, 3>> {
+  static std::array<float, 3> parse(const std::string& k, const std::string& v) {
+    float r, g, b;
+    if (std::sscanf(v.c_str(), "%f,%f,%f", &r, &g, &b) != 3)
+      throw std::invalid_argument("config key '" + k + "' expects r,g,b, got '" + v + "'");
+    return {r, g, b};
+  }
+};
+template <typename E, const char* (*Name)(E), E... Values> struct EnumCodec {
+  static E parse(const std::string& k, const std::string& v) { return to_enum(k, v, {Values...}, Name); }
+  static nlohmann::json json(E e) { return Name(e); }
+};
+template <> struct Codec<LossSpace> : EnumCodec<LossSpace, loss_space_name, LossSpace::Linear, LossSpace::Srgb> {};
+template <> struct Codec<TrainMode> : EnumCodec<TrainMode, mode_name, TrainMode::Plain, TrainMode::Blur> {};
+template <> struct Codec<TrainTarget>
+    : EnumCodec<TrainTarget, target_name, TrainTarget::Blurry, TrainTarget::Sharp, TrainTarget::Edi> {};
+
+// Enums are written by name, everything else as its JSON number, bool or array.
+template <typename T> nlohmann::json json_of(const T& x) {
+  if constexpr (std::is_enum_v<T>) return Codec<T>::json(x);
+  else return x;
+}
+
+// One key: how its text sets the config, its JSON value (empty `get`: a key that only sets
+// others), and what it means.
+struct Setting {
+  std::string key;
+  std::function<void(TrainConfig&, const std::string&)> set;
+  std::function<nlohmann::json(const TrainConfig&)> get;
+  std::string doc;
+};
+struct Group {
+  std::string title;
+  std::vector<Setting> settings;
+};
+
+// A key stored in one member, read and written by the member type's Codec.
+template <typename T> Setting field(const char* key, T TrainConfig::*m, const char* doc) {
+  return {key, [key, m](TrainConfig& c, const std::string& v) { c.*m = Codec<T>::parse(key, v); },
+          [m](const TrainConfig& c) { return json_of(c.*m); }, doc};
+}
+
+// The settings tables: every key once, with what it means. Defaults are the member initialisers
+// of TrainConfig; `evflow train --keys` prints these tables and docs/training.md holds them.
+
+std::vector<Setting> run_settings() {
+  return {
+      {"preset", [](TrainConfig& c, const std::string& v) { c = TrainConfig::preset_named(v); },
+       [](const TrainConfig& c) { return nlohmann::json(c.preset); },
+       "`fast` (sized for CPUs) or `paper` (the paper's sizes: 40k iterations, 100k initial Gaussians); "
+       "resets every other key to the preset's value, so it is applied first"},
+      {"method", [](TrainConfig& c, const std::string& v) { c.apply_method(v); }, nullptr,
+       "sets `mode`, `target` and `event_weight` for one of the paper's configurations: `plain` (3DGS on the "
+       "blurry images), `edi` (3DGS on EDI-deblurred images), `blur-only` (mode=blur), `blur+events` "
+       "(mode=blur, event_weight 0.1). Applied after `preset` and before the other keys of a config file; on "
+       "the command line, in order"},
+      field("iterations", &TrainConfig::iterations, "optimisation steps, one training view per step"),
+      field("init_gaussians", &TrainConfig::init_gaussians,
+            "random Gaussians seeded in the training views' frustums between near and far, coloured from their pixel"),
+      field("seed", &TrainConfig::seed, "initialisation and view order"),
+      {"log_every", [](TrainConfig& c, const std::string& v) { c.log_every = uint32_t(std::max<uint64_t>(1, to_uint("log_every", v))); },
+       [](const TrainConfig& c) { return nlohmann::json(c.log_every); }, "a log line every this many steps (0 reads as 1)"},
+      field("checkpoint_every", &TrainConfig::checkpoint_every,
+            "`RUN/checkpoint.ckpt` every this many steps (0: only at the end); also on Ctrl-C"),
   };
-  return m;
+}
+
+std::vector<Setting> image_settings() {
+  return {
+      {"sh_degree",
+       [](TrainConfig& c, const std::string& v) {
+         const uint64_t d = to_uint("sh_degree", v);
+         if (d > 3) throw std::invalid_argument("config key 'sh_degree' must be 0..3, got '" + v + "'");
+         c.sh_degree = int(d);
+       },
+       [](const TrainConfig& c) { return nlohmann::json(c.sh_degree); }, "largest spherical-harmonics degree (0..3)"},
+      field("sh_increase_every", &TrainConfig::sh_increase_every, "the active SH degree grows by one every this many steps"),
+      field("lr_means_init", &TrainConfig::lr_means_init, "Adam learning rate of the means at the start, × the scene extent"),
+      field("lr_means_final", &TrainConfig::lr_means_final, "… at the end (exponential decay from `lr_means_init` over the run)"),
+      field("lr_sh_dc", &TrainConfig::lr_sh_dc, "learning rate of the SH degree-0 (base colour) coefficients"),
+      field("lr_sh_rest", &TrainConfig::lr_sh_rest, "learning rate of the higher SH coefficients"),
+      field("lr_opacity", &TrainConfig::lr_opacity, "learning rate of the opacity logits"),
+      field("lr_log_scales", &TrainConfig::lr_log_scales, "learning rate of the log scales"),
+      field("lr_quats", &TrainConfig::lr_quats, "learning rate of the rotation quaternions"),
+      field("ssim_lambda", &TrainConfig::ssim_lambda, "λ of the image loss (1−λ)·L1 + λ·(1 − SSIM)"),
+      field("loss_space", &TrainConfig::loss_space,
+            "where the L1 + D-SSIM term compares the model image with the target: `srgb` (the linear blur mean "
+            "re-encoded to sRGB, against the image as stored and scored; in plain mode the render itself, as "
+            "3DGS) or `linear` (both decoded to linear light). Splat colours are sRGB either way "
+            "([architecture.md](architecture.md#colour-spaces)); the measurement behind the default is in "
+            "[experiments.md](experiments.md)"),
+      field("target", &TrainConfig::target,
+            "what a training view is fitted to: `blurry` (its blurry input), `sharp` (its sharp ground truth, for "
+            "sharp data) or `edi` (the blurry image deblurred at mid-exposure by EDI with the dataset's events "
+            "and thresholds, clamped to [0, 1]: the 3DGS+EDI baseline)"),
+      field("antialiased", &TrainConfig::antialiased, "opacity compensation of the antialiased rasterizer mode"),
+      field("background", &TrainConfig::background, "background colour r,g,b (sRGB, as splat colours)"),
+  };
+}
+
+std::vector<Setting> blur_settings() {
+  return {
+      field("mode", &TrainConfig::mode,
+            "`plain`: each image is one render (3DGS); `blur`: each blurry image is the mean of 2N+1 renders, "
+            "decoded to linear light, along the view's learned Bézier exposure trajectory (9 se(3) knots, paper "
+            "Sec. 4.1, [trajectory.md](trajectory.md)), the blur-only baseline of the paper"),
+      field("virtual_frames", &TrainConfig::virtual_frames, "N: 2N+1 virtual poses per exposure"),
+      field("lr_trajectory_init", &TrainConfig::lr_trajectory_init,
+            "the knots' Adam learning rate at the start; the fast preset's 1500 steps leave the paper's "
+            "1e-3 → 1e-5 too little room to learn the exposure motion"),
+      field("lr_trajectory_final", &TrainConfig::lr_trajectory_final,
+            "… at the end (exponential decay from `lr_trajectory_init`)"),
+  };
+}
+
+std::vector<Setting> event_settings() {
+  return {
+      field("event_weight", &TrainConfig::event_weight,
+            "λ of the event loss L_ev^gs (paper Eq. 5; [losses.md](losses.md)); 0: off; > 0 needs `mode=blur` "
+            "and events"),
+      field("event_theta_pos", &TrainConfig::event_theta_pos,
+            "threshold Θ+ of the event loss and of EDI targets; 0: the dataset's (`simulator.events` in "
+            "dataset.json), else 0.2"),
+      field("event_theta_neg", &TrainConfig::event_theta_neg, "threshold Θ−, as `event_theta_pos`"),
+      field("event_from", &TrainConfig::event_from,
+            "fraction of the run before which the event term is off (its value reads 0): its gradients swamp a "
+            "model that does not resemble the scene yet (log-luminance differences of a poor render are noise)"),
+      field("event_flip_until", &TrainConfig::event_flip_until,
+            "direction check: the blur loss cannot tell a trajectory from its time reversal, the events can. "
+            "Until this fraction of the run, each blur+events step also scores the time-reversed frame order "
+            "with the event loss and reverses the view's trajectory (knots and their Adam moments) when that "
+            "is lower by `event_flip_margin`; that step's update is the flip"),
+      field("event_flip_margin", &TrainConfig::event_flip_margin, "the margin of the direction check"),
+      field("event_norm_floor", &TrainConfig::event_norm_floor,
+            "per-pixel RMS below which the event loss holds a norm at its floor (static frame pairs)"),
+  };
+}
+
+std::vector<Setting> pose_settings() {
+  return {
+      field("pose_refine", &TrainConfig::pose_refine,
+            "plain mode: learn an se(3) delta per training view, c2w' = c2w·Exp(δ) (gradient: the rasterizer's "
+            "pose gradient through J_r(δ)^T); eval renders the refined pose"),
+      field("lr_pose_init", &TrainConfig::lr_pose_init, "its Adam learning rate at the start"),
+      field("lr_pose_final", &TrainConfig::lr_pose_final, "… at the end (exponential decay from `lr_pose_init`)"),
+  };
+}
+
+std::vector<Setting> density_settings() {
+  return {
+      field("densify", &TrainConfig::densify, "adaptive density control ([density_control.md](density_control.md))"),
+      field("densify_from", &TrainConfig::densify_from, "first step of refinement"),
+      field("densify_until", &TrainConfig::densify_until, "no refinement from this step on"),
+      field("densify_every", &TrainConfig::densify_every, "steps between refinements"),
+      field("densify_grad_threshold", &TrainConfig::densify_grad_threshold,
+            "grow where the mean screen-space gradient (× width/2) exceeds this"),
+      field("prune_screen_px", &TrainConfig::prune_screen_px,
+            "after the first opacity reset, prune Gaussians whose screen radius (3σ, px) exceeds this (0: off; "
+            "3DGS: 20; off by default, [density_control.md](density_control.md) says why)"),
+      field("prune_world_scale", &TrainConfig::prune_world_scale,
+            "after the first opacity reset, prune Gaussians larger than this × the scene extent (0: off; "
+            "3DGS: 0.1; off by default, as `prune_screen_px`)"),
+      field("opacity_reset_every", &TrainConfig::opacity_reset_every,
+            "opacities clamped to 0.01 every this many steps while refining"),
+      field("max_gaussians", &TrainConfig::max_gaussians,
+            "cap on the Gaussian count (0: none); growth goes to the largest gradients first"),
+  };
+}
+
+const std::vector<Group>& settings_groups() {
+  static const std::vector<Group> groups = {
+      {"Run", run_settings()},
+      {"Gaussians and the image loss", image_settings()},
+      {"Blur mode (exposure trajectories)", blur_settings()},
+      {"Event loss", event_settings()},
+      {"Pose refinement (plain mode)", pose_settings()},
+      {"Density control", density_settings()},
+  };
+  return groups;
+}
+
+const Setting* find_setting(const std::string& key) {
+  for (const Group& g : settings_groups())
+    for (const Setting& s : g.settings)
+      if (s.key == key) return &s;
+  return nullptr;
+}
+
+// A JSON value as the text `set` parses; arrays of three numbers become "r,g,b".
+std::string json_as_text(const nlohmann::json& v) {
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
+  if (v.is_array() && v.size() == 3)
+    return std::to_string(v[0].get<double>()) + "," + std::to_string(v[1].get<double>()) + "," + std::to_string(v[2].get<double>());
+  if (v.is_number_integer() || v.is_number_unsigned()) return std::to_string(v.get<long long>());
+  return v.dump();
+}
+
+// A default as the docs show it: numbers in their shortest exact form, small ones as "2.5e-3".
+std::string display_text(const nlohmann::json& v) {
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_array()) {
+    std::string s;
+    for (auto& x : v) s += (s.empty() ? "" : ",") + display_text(x);
+    return s;
+  }
+  if (!v.is_number_float()) return v.dump();
+  const double d = v.get<double>();
+  const bool small = d != 0 && std::abs(d) < 1e-2;
+  char buf[32];
+  for (int prec = 1; prec <= 17; ++prec) {
+    std::snprintf(buf, sizeof buf, small ? "%.*e" : "%.*g", small ? prec - 1 : prec, d);
+    if (std::stod(buf) == d) break;
+  }
+  std::string s = buf;
+  const size_t e = s.find('e');
+  if (e != std::string::npos) {
+    size_t digits = e + 1;
+    if (s[digits] == '+' || s[digits] == '-') ++digits;
+    const size_t nz = s.find_first_not_of('0', digits);
+    s = s.substr(0, e + 1) + (s[e + 1] == '-' ? "-" : "") + s.substr(nz == std::string::npos ? s.size() - 1 : nz);
+  }
+  return s;
 }
 
 }  // namespace
@@ -138,48 +319,60 @@ void TrainConfig::apply_method(const std::string& name) {
 }
 
 void TrainConfig::set(const std::string& key, const std::string& value) {
-  auto it = setters().find(key);
-  if (it == setters().end()) throw std::invalid_argument("unknown config key '" + key + "'");
-  it->second(*this, value);
+  const Setting* s = find_setting(key);
+  if (!s) throw std::invalid_argument("unknown config key '" + key + "' (evflow train --keys lists the keys)");
+  s->set(*this, value);
 }
 
 void TrainConfig::apply_json(const nlohmann::json& j) {
   if (!j.is_object()) throw std::invalid_argument("config must be a JSON object");
-  // A preset, then a method, then every other key (so explicit keys win).
-  if (j.contains("preset")) set("preset", j["preset"].get<std::string>());
-  if (j.contains("method")) set("method", j["method"].get<std::string>());
-  for (auto& [k, v] : j.items()) {
-    if (k == "preset" || k == "method") continue;
-    std::string s;
-    if (v.is_string()) s = v.get<std::string>();
-    else if (v.is_boolean()) s = v.get<bool>() ? "true" : "false";
-    else if (v.is_array() && v.size() == 3) s = std::to_string(v[0].get<double>()) + "," + std::to_string(v[1].get<double>()) + "," + std::to_string(v[2].get<double>());
-    else if (v.is_number_integer() || v.is_number_unsigned()) s = std::to_string(v.get<long long>());
-    else s = v.dump();
-    set(k, s);
-  }
+  for (const char* first : {"preset", "method"})
+    if (j.contains(first)) set(first, j[first].get<std::string>());
+  for (auto& [k, v] : j.items())
+    if (k != "preset" && k != "method") set(k, json_as_text(v));
 }
 
 nlohmann::json TrainConfig::to_json() const {
-  return {{"preset", preset}, {"iterations", iterations}, {"init_gaussians", init_gaussians}, {"sh_degree", sh_degree},
-          {"sh_increase_every", sh_increase_every}, {"lr_means_init", lr_means_init}, {"lr_means_final", lr_means_final},
-          {"lr_sh_dc", lr_sh_dc}, {"lr_sh_rest", lr_sh_rest}, {"lr_opacity", lr_opacity}, {"lr_log_scales", lr_log_scales},
-          {"lr_quats", lr_quats}, {"ssim_lambda", ssim_lambda}, {"loss_space", loss_space_name(loss_space)}, {"mode", mode_name(mode)}, {"virtual_frames", virtual_frames},
-          {"lr_trajectory_init", lr_trajectory_init}, {"lr_trajectory_final", lr_trajectory_final}, {"target", target_name(target)}, {"antialiased", antialiased},
-          {"event_weight", event_weight}, {"event_theta_pos", event_theta_pos}, {"event_theta_neg", event_theta_neg},
-          {"event_norm_floor", event_norm_floor}, {"event_from", event_from}, {"event_flip_until", event_flip_until}, {"event_flip_margin", event_flip_margin}, {"pose_refine", pose_refine}, {"lr_pose_init", lr_pose_init},
-          {"lr_pose_final", lr_pose_final},
-          {"background", {background[0], background[1], background[2]}}, {"seed", seed}, {"log_every", log_every},
-          {"checkpoint_every", checkpoint_every}, {"densify", densify}, {"densify_from", densify_from},
-          {"densify_until", densify_until}, {"densify_every", densify_every}, {"densify_grad_threshold", densify_grad_threshold},
-          {"prune_screen_px", prune_screen_px}, {"prune_world_scale", prune_world_scale},
-          {"opacity_reset_every", opacity_reset_every}, {"max_gaussians", max_gaussians}};
+  nlohmann::json j = nlohmann::json::object();
+  for (const Group& g : settings_groups())
+    for (const Setting& s : g.settings)
+      if (s.get) j[s.key] = s.get(*this);
+  return j;
 }
 
 std::vector<std::string> TrainConfig::keys() {
   std::vector<std::string> k;
-  for (auto& [name, s] : setters()) k.push_back(name);
+  for (const Group& g : settings_groups())
+    for (const Setting& s : g.settings) k.push_back(s.key);
   return k;
+}
+
+std::vector<SettingDoc> TrainConfig::describe() {
+  const TrainConfig def, paper = preset_named("paper");
+  std::vector<SettingDoc> rows;
+  for (const Group& g : settings_groups())
+    for (const Setting& s : g.settings) {
+      std::string value = "(none)";
+      if (s.get) {
+        value = display_text(s.get(def));
+        const std::string p = display_text(s.get(paper));
+        if (p != value && s.key != "preset") value += " (paper: " + p + ")";
+      }
+      rows.push_back({g.title, s.key, value, s.doc});
+    }
+  return rows;
+}
+
+std::string TrainConfig::describe_markdown() {
+  std::string md, group;
+  for (const SettingDoc& r : describe()) {
+    if (r.group != group) {
+      md += (group.empty() ? "" : "\n") + std::string("#### ") + r.group + "\n\n| key | default | meaning |\n|---|---|---|\n";
+      group = r.group;
+    }
+    md += "| `" + r.key + "` | " + r.value + " | " + r.doc + " |\n";
+  }
+  return md;
 }
 
 }  // namespace evflow
