@@ -156,8 +156,9 @@ static int run_experiment(const Args& a) {
         std::string cmd = quote(self) + " train " + quote(data.string()) + " --out " + quote(run.string()) + " --preset " +
                           quote(preset) + " method=" + quote(m);
         if (baseline_pose_refine && (m == "plain" || m == "edi")) cmd += " pose_refine=true";  // before the overrides
-        for (auto& kv : overrides) cmd += " " + quote(kv);
-        secs = run_command(cmd + dev, log);
+        for (auto& kv : overrides) cmd.append(" ").append(quote(kv));
+        cmd.append(dev);
+        secs = run_command(cmd, log);
         run_command(quote(self) + " eval " + quote(run.string()) + " --refine-iters " + quote(refine) + dev, log);
         io::write_file_atomic(run / "train_seconds.txt", [&](const fs::path& tmp) { std::ofstream(tmp) << secs << "\n"; });
       } else if (fs::exists(run / "train_seconds.txt")) {
