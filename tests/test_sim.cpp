@@ -15,6 +15,8 @@
 #include "gpu_fixture.h"
 #include "io/dataset.h"
 #include "io/image.h"
+#include "sim/builtin_scenes.h"
+#include "sim/gltf_scene.h"
 #include "sim/mesh_renderer.h"
 #include "sim/scene.h"
 #include "sim/simulator.h"

@@ -8,10 +8,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "camera/camera.h"
 #include "events/event_stream.h"
 #include "io/events_txt.h"  // TimeUnit
 #include "io/image.h"
-#include "splat/gaussians.h"
 
 namespace evflow::io {
 

@@ -26,12 +26,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "camera/camera.h"
 #include "events/event_model.h"
 #include "gpu/context.h"
 #include "io/dataset.h"
 #include "sim/mesh_renderer.h"
 #include "sim/scene.h"
-#include "splat/gaussians.h"
 
 namespace evflow::sim {
 
