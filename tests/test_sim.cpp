@@ -19,6 +19,7 @@
 #include "sim/gltf_scene.h"
 #include "sim/mesh_renderer.h"
 #include "sim/scene.h"
+#include "sim/simulation_writer.h"
 #include "sim/simulator.h"
 
 using namespace evflow;
