@@ -15,7 +15,7 @@
 
 #include "cli.h"
 #include "io/atomic_file.h"
-#include "sim/scene.h"
+#include "sim/builtin_scenes.h"
 #include "train/train_config.h"
 
 namespace evflow::app {

@@ -7,6 +7,9 @@
 #include "cli.h"
 #include "gpu/context.h"
 #include "io/npy.h"
+#include "sim/builtin_scenes.h"
+#include "sim/gltf_scene.h"
+#include "sim/simulation_writer.h"
 #include "sim/simulator.h"
 
 namespace evflow::app {

@@ -12,7 +12,8 @@
 #include "io/dataset.h"
 #include "io/image.h"
 #include "metrics/srgb_metrics.h"
-#include "sim/scene.h"
+#include "sim/builtin_scenes.h"
+#include "sim/gltf_scene.h"
 
 using namespace evflow;
 using namespace evflow::test;

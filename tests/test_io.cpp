@@ -14,6 +14,7 @@
 
 #include "io/atomic_file.h"
 #include "io/dataset.h"
+#include "io/dataset_writer.h"
 #include "io/events_h5.h"
 #include "io/events_txt.h"
 #include "io/image.h"

@@ -15,8 +15,11 @@
 #include "gpu_fixture.h"
 #include "io/dataset.h"
 #include "io/image.h"
+#include "sim/builtin_scenes.h"
+#include "sim/gltf_scene.h"
 #include "sim/mesh_renderer.h"
 #include "sim/scene.h"
+#include "sim/simulation_writer.h"
 #include "sim/simulator.h"
 
 using namespace evflow;

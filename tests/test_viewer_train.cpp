@@ -20,6 +20,7 @@
 #include "metrics/srgb_metrics.h"
 #include "gpu_fixture.h"
 #include "io/dataset.h"
+#include "io/dataset_writer.h"
 #include "io/image.h"
 #include "train/synthetic_dataset.h"
 #include "train/trainer.h"

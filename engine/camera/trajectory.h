@@ -18,8 +18,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "camera/camera.h"
 #include "camera/se3.h"
-#include "splat/gaussians.h"
 
 namespace evflow {
 

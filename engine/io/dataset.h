@@ -1,5 +1,6 @@
-// Multi-view datasets in memory, readers of whole dataset folders (our layout, E3NeRF
-// Real-World-Challenge, EBAD-NeRF) and the writer of our layout. docs/datasets.md has the details.
+// Multi-view datasets in memory and the reader of whole dataset folders: load_dataset detects
+// the layout and calls its reader (io/dataset_<layout>.cpp); the writer of our layout is
+// io/dataset_writer.h. docs/datasets.md has the details.
 #pragma once
 #include <filesystem>
 #include <optional>
@@ -8,10 +9,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "camera/camera.h"
 #include "events/event_stream.h"
 #include "io/events_txt.h"  // TimeUnit
 #include "io/image.h"
-#include "splat/gaussians.h"
 
 namespace evflow::io {
 
@@ -50,13 +51,5 @@ struct LoadOptions {
 // (missing folder/file/view, image count vs poses rows, wrong image size, bad events, truncated
 // or malformed files).
 Dataset load_dataset(const std::filesystem::path& dir, const LoadOptions& options = {});
-
-struct WriteOptions {
-  std::string image_ext = ".png";  // ".png" (8-bit sRGB) or ".exr" (float, exact)
-};
-
-// Writes our layout into `dir` (created if needed), every file atomically, dataset.json last.
-// Throws std::invalid_argument on inconsistent input (image sizes, missing images, bad names).
-void write_evflow_dataset(const Dataset& dataset, const std::filesystem::path& dir, const WriteOptions& options = {});
 
 }  // namespace evflow::io

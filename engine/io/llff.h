@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "splat/gaussians.h"
+#include "camera/camera.h"
 
 namespace evflow::io {
 

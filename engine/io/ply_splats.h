@@ -3,7 +3,7 @@
 #pragma once
 #include <filesystem>
 
-#include "splat/gaussians.h"
+#include "cloud/gaussian_cloud.h"
 
 namespace evflow::io {
 

@@ -8,10 +8,10 @@
 #include <memory>
 #include <vector>
 
+#include "camera/camera.h"
 #include "gpu/commands.h"
 #include "scan/prefix_sum.h"
 #include "sim/scene.h"
-#include "splat/gaussians.h"
 
 namespace evflow::sim {
 

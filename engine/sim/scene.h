@@ -1,9 +1,8 @@
 // Scenes of the simulator: world-space triangle soups with base-colour materials, read from
-// glTF 2.0 (.gltf / .glb, via tinygltf) or made procedurally (the default scene).
+// glTF 2.0 (sim/gltf_scene.h) or made procedurally (sim/builtin_scenes.h).
 #pragma once
 #include <array>
 #include <cstdint>
-#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -50,25 +49,5 @@ struct Scene {
   // Throws std::runtime_error naming `source` on inconsistent arrays or non-finite values.
   void validate() const;
 };
-
-// Reads a glTF 2.0 file (.gltf with external or embedded buffers/images, or .glb): every TRIANGLES
-// primitive of the default scene (or all root nodes when there is none), node transforms
-// applied, TEXCOORD_0 and the base-colour texture + factor of pbrMetallicRoughness (missing UVs =
-// 0, missing material = white). Throws std::runtime_error naming the file on a missing or
-// malformed file, an unsupported accessor, or a scene without triangles.
-Scene load_gltf(const std::filesystem::path& path);
-
-// Writes the scene as a binary glTF (.glb) with embedded PNG textures (or .gltf with embedded
-// data URIs, by extension).
-void write_gltf(const Scene& scene, const std::filesystem::path& path);
-
-// The project's default scene: an open room (textured floor, walls with text-like posters, a
-// dark wall and a bright one) with boxes at several depths; procedural textures with fine detail.
-// Cameras look at it from +z. Deterministic.
-Scene make_default_scene();
-// Built-in scenes by name: "default" (the above) and two variants of its room with other
-// textures ("gallery": fine print and noise; "workshop": coarse bricks, gratings, dark corners).
-Scene make_builtin_scene(const std::string& name);
-std::vector<std::string> builtin_scene_names();
 
 }  // namespace evflow::sim

@@ -26,12 +26,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "camera/camera.h"
 #include "events/event_model.h"
 #include "gpu/context.h"
-#include "io/dataset.h"
 #include "sim/mesh_renderer.h"
 #include "sim/scene.h"
-#include "splat/gaussians.h"
 
 namespace evflow::sim {
 
@@ -150,16 +149,5 @@ class Simulator {
   std::vector<std::array<double, 54>> shake_terms_;  // per view: 6 DoF x 3 terms x (amplitude, frequency, phase)
   double target_dist_ = 1;
 };
-
-// Writes `result` into `dir` in our layout (io::write_evflow_dataset, blurry as 8-bit sRGB PNG,
-// simulator settings and statistics under dataset.json's "simulator" key) plus the ground truth:
-//   gt/trajectories.json   per training view: exposure, gt and recorded mid pose, sub-frame times and poses
-//   gt/depth/<view>.npy    float32 [H, W] depth of the mid-exposure (train) / novel frame, 0 = background
-//   gt/flow/<view>_mid.npy float32 [H, W, 2] flow of the interval starting at mid-exposure
-// (per-interval flows: `flow_all` in the CLI writes gt/flow/<view>_<k>.npy while simulating).
-io::Dataset to_dataset(const SimResult& result);
-void write_simulation(const SimResult& result, const std::filesystem::path& dir);
-
-nlohmann::json camera_json(const Camera& c);
 
 }  // namespace evflow::sim

@@ -1,0 +1,19 @@
+// The built-in scenes of the simulator: one room with procedural textures (sim/textures.h).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "sim/scene.h"
+
+namespace evflow::sim {
+
+// The project's default scene: an open room (textured floor, walls with text-like posters, a
+// dark wall and a bright one) with boxes at several depths; procedural textures with fine detail.
+// Cameras look at it from +z. Deterministic.
+Scene make_default_scene();
+// Built-in scenes by name: "default" (the above) and two variants of its room with other
+// textures ("gallery": fine print and noise; "workshop": coarse bricks, gratings, dark corners).
+Scene make_builtin_scene(const std::string& name);
+std::vector<std::string> builtin_scene_names();
+
+}  // namespace evflow::sim
