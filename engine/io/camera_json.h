@@ -12,7 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "splat/gaussians.h"
+#include "camera/camera.h"
 
 namespace evflow::io {
 
