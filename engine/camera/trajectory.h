@@ -35,7 +35,6 @@ class ExposureTrajectory {
   explicit ExposureTrajectory(const Camera& view = Camera{}, uint64_t seed = 0, double init_sigma = kDefaultInitSigma);
 
   const Camera& view() const { return view_; }
-  void set_view(const Camera& view) { view_ = view; }
 
   // Flat knot storage: knot j, component c at data()[j * 6 + c]; c = 0..2 translation, 3..5 rotation.
   double* data() { return knots_.data(); }
@@ -43,7 +42,6 @@ class ExposureTrajectory {
   static constexpr size_t size() { return kSize; }
   lie::Vec6 knot(int j) const;
   void set_knot(int j, const lie::Vec6& xi);
-  void set_zero() { knots_.fill(0.0); }
   // Conversions for a float GPU buffer of 54 values (same layout).
   void copy_to(float* dst) const;
   void copy_from(const float* src);

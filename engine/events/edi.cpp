@@ -113,9 +113,4 @@ std::vector<float> edi_deblur(const float* blurry, uint32_t channels, const Even
   return EdiIntegrator(ev, t0, t1, th).frame_mid(blurry, channels);
 }
 
-std::vector<float> edi_frame_at(const float* blurry, uint32_t channels, const EventStream& ev, double t0, double t1,
-                                double t, const EdiThresholds& th) {
-  return EdiIntegrator(ev, t0, t1, th).frame_at(blurry, channels, t);
-}
-
 }  // namespace evflow::events

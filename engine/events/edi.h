@@ -73,10 +73,8 @@ class EdiIntegrator {
   std::vector<double> sum_;       // per pixel S = Σ exp(C_j - C_max) (s_{j+1} - s_j)
 };
 
-// One-shot helpers. Sharp latent image at reference time f (default mid-exposure) / at time t.
+// One-shot helper: the sharp latent image at mid-exposure.
 std::vector<float> edi_deblur(const float* blurry, uint32_t channels, const EventStream& ev, double t0, double t1,
                               const EdiThresholds& th = {});
-std::vector<float> edi_frame_at(const float* blurry, uint32_t channels, const EventStream& ev, double t0, double t1,
-                                double t, const EdiThresholds& th = {});
 
 }  // namespace evflow::events

@@ -86,12 +86,9 @@ void Commands::dispatch(const std::string& name, std::initializer_list<BufferRef
     writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[i].pBufferInfo = &infos[i];
   }
-  static PFN_vkCmdPushDescriptorSetKHR push_fn = nullptr;
-  if (!push_fn)
-    push_fn = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(ctx_.device(), "vkCmdPushDescriptorSetKHR"));
   vkCmdBindPipeline(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.pipeline());
   if (!writes.empty())
-    push_fn(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.layout(), 0, static_cast<uint32_t>(writes.size()), writes.data());
+    ctx_.push_descriptor_set()(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.layout(), 0, static_cast<uint32_t>(writes.size()), writes.data());
   uint8_t pc[kPushConstantBytes] = {};
   if (push_bytes > kPushConstantBytes) throw Error("push constants above 128 bytes for kernel '" + name + "'");
   if (push_bytes) std::copy_n(static_cast<const uint8_t*>(push), push_bytes, pc);

@@ -76,6 +76,8 @@ class Context {
   VkQueue queue() const { return queue_; }
   uint32_t queue_family() const { return queue_family_; }
   VkCommandPool command_pool() const { return pool_; }
+  // vkCmdPushDescriptorSetKHR of this context's device (loaded when the device is created).
+  PFN_vkCmdPushDescriptorSetKHR push_descriptor_set() const { return push_descriptor_set_; }
 
   // Whether the compute queue family can present to `surface` (presentation contexts only);
   // require_present throws a clear error naming the device when it cannot.
@@ -107,6 +109,7 @@ class Context {
   VkQueue queue_ = VK_NULL_HANDLE;
   uint32_t queue_family_ = 0;
   VkCommandPool pool_ = VK_NULL_HANDLE;
+  PFN_vkCmdPushDescriptorSetKHR push_descriptor_set_ = nullptr;
   VkPhysicalDeviceMemoryProperties mem_props_{};
   std::map<std::string, std::unique_ptr<Kernel>> kernels_;
   mutable std::mutex msg_mutex_;

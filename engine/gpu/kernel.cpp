@@ -17,8 +17,6 @@ static const EmbeddedShader* find_shader(const std::string& name) {
   return nullptr;
 }
 
-bool Kernel::exists(const std::string& name) { return find_shader(name) != nullptr; }
-
 // Highest `Binding` decoration + 1 (OpDecorate = 71, Decoration Binding = 33).
 static uint32_t count_bindings(const uint32_t* w, size_t n_words) {
   uint32_t max_binding = 0;

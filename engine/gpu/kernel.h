@@ -22,8 +22,6 @@ class Kernel {
   VkPipeline pipeline() const { return pipeline_; }
   VkPipelineLayout layout() const { return layout_; }
 
-  static bool exists(const std::string& name);
-
  private:
   Context& ctx_;
   std::string name_;

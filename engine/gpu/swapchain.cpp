@@ -242,7 +242,6 @@ bool Swapchain::present(const Buffer& rgba8) {
   EVF_VK(vkResetCommandBuffer(cb_, 0));
   if (pr == VK_ERROR_OUT_OF_DATE_KHR || pr == VK_SUBOPTIMAL_KHR) needs_recreate_ = true;
   else check(pr, "vkQueuePresentKHR");
-  ++presented_;
   return true;
 }
 

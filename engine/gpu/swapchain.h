@@ -49,10 +49,6 @@ class Swapchain {
   uint32_t height() const { return extent_.height; }
   // True when the images are B8G8R8A8 (pack with bgr = 1), false for R8G8B8A8.
   bool bgr() const { return bgr_; }
-  VkFormat format() const { return format_.format; }
-  VkPresentModeKHR present_mode() const { return mode_; }
-  uint32_t image_count() const { return static_cast<uint32_t>(images_.size()); }
-  uint64_t frames_presented() const { return presented_; }
   std::string describe() const;
 
  private:
@@ -73,7 +69,6 @@ class Swapchain {
   VkSemaphore acquired_ = VK_NULL_HANDLE;  // the copy waits on it (free again after the fence wait)
   VkFence fence_ = VK_NULL_HANDLE;
   VkCommandBuffer cb_ = VK_NULL_HANDLE;
-  uint64_t presented_ = 0;
 };
 
 }  // namespace evflow::gpu

@@ -15,31 +15,44 @@ namespace evflow::io {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-void write_evflow_dataset(const Dataset& ds, const fs::path& dir, const WriteOptions& opt) {
-  auto bad = [&](const std::string& what) { return std::invalid_argument(dir.string() + ": write_evflow_dataset: " + what); };
-  if (ds.train.empty()) throw bad("no training views");
-  if (opt.image_ext != ".png" && opt.image_ext != ".exr") throw bad("image_ext must be .png or .exr");
+namespace {
+
+std::invalid_argument bad(const fs::path& dir, const std::string& what) {
+  return std::invalid_argument(dir.string() + ": write_evflow_dataset: " + what);
+}
+
+// Throws std::invalid_argument on what our layout cannot hold: no training views, bad or
+// duplicate names, missing images, sizes that differ, event counts that do not match their shape.
+void check_dataset(const Dataset& ds, const fs::path& dir, const WriteOptions& opt) {
+  if (ds.train.empty()) throw bad(dir, "no training views");
+  if (opt.image_ext != ".png" && opt.image_ext != ".exr") throw bad(dir, "image_ext must be .png or .exr");
   const uint32_t W = ds.train[0].blurry.width, H = ds.train[0].blurry.height;
   std::vector<std::string> names;
   auto check = [&](const View& v, const Image* im, const char* kind) {
     if (v.name.empty() || v.name.find_first_of("/\\") != std::string::npos || v.name[0] == '.')
-      throw bad("bad view name '" + v.name + "'");
-    if (std::find(names.begin(), names.end(), v.name) != names.end()) throw bad("duplicate view name '" + v.name + "'");
+      throw bad(dir, "bad view name '" + v.name + "'");
+    if (std::find(names.begin(), names.end(), v.name) != names.end()) throw bad(dir, "duplicate view name '" + v.name + "'");
     names.push_back(v.name);
-    if (!im || im->empty()) throw bad(std::string(kind) + " view '" + v.name + "' has no image");
-    if (im->width != W || im->height != H) throw bad("view '" + v.name + "' image size differs from the first view's");
-    if (v.camera.width != W || v.camera.height != H) throw bad("view '" + v.name + "' camera size differs from its image");
+    if (!im || im->empty()) throw bad(dir, std::string(kind) + " view '" + v.name + "' has no image");
+    if (im->width != W || im->height != H) throw bad(dir, "view '" + v.name + "' image size differs from the first view's");
+    if (v.camera.width != W || v.camera.height != H) throw bad(dir, "view '" + v.name + "' camera size differs from its image");
   };
   for (const View& v : ds.train) {
     check(v, &v.blurry, "training");
-    if (v.sharp_mid && (v.sharp_mid->width != W || v.sharp_mid->height != H)) throw bad("view '" + v.name + "' sharp image size");
+    if (v.sharp_mid && (v.sharp_mid->width != W || v.sharp_mid->height != H)) throw bad(dir, "view '" + v.name + "' sharp image size");
   }
   names.clear();
   for (const View& v : ds.novel) check(v, v.sharp_mid ? &*v.sharp_mid : nullptr, "novel");
   if (!ds.event_counts.empty() &&
       (ds.event_counts_shape.size() != 3 || ds.event_counts_shape[0] * ds.event_counts_shape[1] * ds.event_counts_shape[2] != ds.event_counts.size()))
-    throw bad("event_counts does not match event_counts_shape");
+    throw bad(dir, "event_counts does not match event_counts_shape");
+}
 
+}  // namespace
+
+void write_evflow_dataset(const Dataset& ds, const fs::path& dir, const WriteOptions& opt) {
+  check_dataset(ds, dir, opt);
+  const uint32_t W = ds.train[0].blurry.width, H = ds.train[0].blurry.height;
   json m = ds.manifest.is_object() ? ds.manifest : json::object();
   for (const char* k : {"layout", "train_views", "novel_views", "test_rows", "exposure", "event_time_unit"}) m.erase(k);
   m["format"] = "evflow";
@@ -79,7 +92,7 @@ void write_evflow_dataset(const Dataset& ds, const fs::path& dir, const WriteOpt
                      std::vector<double>(cams.size(), ds.far));
   EventStream ev = ds.events;
   if (ev.width == 0 && ev.height == 0 && ev.size() == 0) { ev.width = W; ev.height = H; }
-  if (ev.width != W || ev.height != H) throw bad("event sensor size differs from the image size");
+  if (ev.width != W || ev.height != H) throw bad(dir, "event sensor size differs from the image size");
   write_events_h5(dir / "events.h5", ev, es, ee);
   m["events"] = "events.h5";
   if (!ds.event_counts.empty()) {

@@ -145,8 +145,4 @@ void Adam::gather(gpu::Commands& cmd, size_t i, const gpu::Buffer& index, uint32
   s.desc.count = static_cast<uint32_t>(new_count);
 }
 
-void Adam::gather_all(gpu::Commands& cmd, const gpu::Buffer& index, uint32_t new_rows) {
-  for (size_t i = 0; i < groups_.size(); ++i) gather(cmd, i, index, new_rows);
-}
-
 }  // namespace evflow

@@ -64,8 +64,6 @@ class Adam {
   // group's count becomes new_rows * row_width (its param/grad buffers must then hold that many).
   // At most one gather per group between two submits (it may reallocate the spare moments).
   void gather(gpu::Commands& cmd, size_t i, const gpu::Buffer& index, uint32_t new_rows);
-  // Same for every group (the same index buffer: groups share the row indexing of the Gaussians).
-  void gather_all(gpu::Commands& cmd, const gpu::Buffer& index, uint32_t new_rows);
   // dst[r * width + k] = src[index[r] * width + k] (kAdamNoSource: 0) for r < rows, k < width.
   static void gather_rows(gpu::Commands& cmd, const gpu::Buffer& src, const gpu::Buffer& dst, const gpu::Buffer& index,
                           uint32_t rows, uint32_t width);

@@ -125,8 +125,6 @@ class Simulator {
  public:
   Simulator(gpu::Context& ctx, const Scene& scene, const SimParams& params);
 
-  const std::vector<Camera>& train_cameras() const { return train_; }
-  const std::vector<Camera>& novel_cameras() const { return novel_; }
   MeshRenderer& renderer() { return renderer_; }
 
   // Camera of training view v at exposure fraction s for a given shake scale.
