@@ -1,7 +1,6 @@
 #include "splat/rasterizer.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <cstring>
 
 #include "splat/camera_pc.h"
@@ -95,7 +94,22 @@ RenderState::RenderState(gpu::Context& ctx)
       last_isect_(ctx, 16, "last_isect"),
       out_{gpu::Buffer(ctx, 16, "out_rgb"), gpu::Buffer(ctx, 16, "out_alpha"), gpu::Buffer(ctx, 16, "out_depth")} {}
 
-Rasterizer::Rasterizer(gpu::Context& ctx)
+RasterKernels RasterKernels::for_context(const gpu::Context& ctx) {
+  const bool cpu = ctx.caps().cpu_driver;
+  const gpu::ContextOptions& o = ctx.options();
+  RasterKernels k;
+  // Compositing kernels: one pixel per invocation (GPUs) or a block of pixels per invocation
+  // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
+  k.block = o.raster_kernel.empty() ? cpu : o.raster_kernel == "block";
+  // Cross-lane operations are emulated on CPU drivers; measured 3x slower there than per-lane
+  // shared-memory adds (bench raster, lavapipe). GPUs reduce in the subgroup first.
+  k.subgroup_reduce = o.subgroup_reduce < 0 ? !cpu : o.subgroup_reduce == 1;
+  return k;
+}
+
+Rasterizer::Rasterizer(gpu::Context& ctx) : Rasterizer(ctx, RasterKernels::for_context(ctx)) {}
+
+Rasterizer::Rasterizer(gpu::Context& ctx, const RasterKernels& kernels)
     : ctx_(ctx),
       cmd_(ctx),
       scan_(ctx),
@@ -103,21 +117,9 @@ Rasterizer::Rasterizer(gpu::Context& ctx)
       isect_grad_(ctx, 16, "isect_grad"),
       grad2d_norm_(ctx, 16, "grad2d_norm"),
       pose_partial_(ctx, 16, "pose_partial"),
-      pose_(ctx, 32, "pose_gradient") {
-  const bool cpu = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
-  // Cross-lane operations are emulated on CPU drivers; measured 3x slower there than per-lane
-  // shared-memory adds (bench raster, lavapipe). GPUs reduce in the subgroup first.
-  subgroup_reduce_ = !cpu;
-  if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) subgroup_reduce_ = e[0] == '1';
-  // Compositing kernels: one pixel per invocation (GPUs) or a block of pixels per invocation
-  // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
-  block_suffix_ = cpu ? "_block" : "";
-  if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
-    const std::string k = e;
-    if (k != "pixel" && k != "block") throw gpu::Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + k + "'");
-    block_suffix_ = k == "block" ? "_block" : "";
-  }
-}
+      pose_(ctx, 32, "pose_gradient"),
+      subgroup_reduce_(kernels.subgroup_reduce),
+      block_suffix_(kernels.block ? "_block" : "") {}
 
 // SH band l of a set of buffers, or band 0 standing in for a band above its degree (the
 // shaders never read it, but every binding needs a buffer).
