@@ -73,9 +73,11 @@ TEST_CASE("gpu: dispatch binds by name and checks the bindings against the kerne
   CHECK(k.bindings()[0].index == shaderio::kIotaBindValues.index);
   CHECK(k.bindings()[0].block == "Values");
   // A binding the shader lacks, one bound twice, one missing, one under another block's name.
-  REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, a}, {shaderio::BindSlot{1, "Extra"}, b}}, pc, one),
+  REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, a}, {shaderio::BindSlot{1, "Extra"}, b}},
+                                   pc, one),
                       Catch::Contains("'common/iota' has no binding 1 (Extra)") && Catch::Contains("declares 0 (Values)"));
-  REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, a}, {shaderio::kIotaBindValues, b}}, pc, one),
+  REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, a}, {shaderio::kIotaBindValues, b}},
+                                   pc, one),
                       Catch::Contains("binding 0 (Values) is bound twice"));
   REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {}, pc, one), Catch::Contains("binding 0 (Values) is not bound"));
   REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {{shaderio::BindSlot{0, "Keys"}, a}}, pc, one),

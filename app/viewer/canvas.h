@@ -49,7 +49,8 @@ class Canvas {
   void blit(const gpu::Buffer& rgb, uint32_t src_w, uint32_t src_h, const Rect& r) {
     if (r.empty() || src_w == 0 || src_h == 0) return;
     shaderio::BlitPC pc{src_w, src_h, w_, h_, r.x, r.y, r.w, r.h, bgr_ ? 1u : 0u};
-    cmd_.dispatch("view/blit_rgb", {{shaderio::kBlitRgbBindRgb, rgb}, {shaderio::kBlitRgbBindCanvas, packed_}}, pc, groups(uint64_t(r.w) * r.h));
+    cmd_.dispatch("view/blit_rgb", {{shaderio::kBlitRgbBindRgb, rgb}, {shaderio::kBlitRgbBindCanvas, packed_}},
+                  pc, groups(uint64_t(r.w) * r.h));
   }
 
   // Queues a line of text with its top-left corner at (x, y); draw_text() draws all queued text.

@@ -92,7 +92,8 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     r.n_partials = groups;
     r.dst = 4 * q;
     r.n_out = 3;
-    cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}}, r, gpu::Groups{1, 1, 1});
+    cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}},
+                 r, gpu::Groups{1, 1, 1});
     if (gradients)
       cmd.dispatch("loss/event_pair_bwd", {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},
                                            {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
@@ -103,7 +104,8 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
                                            {shaderio::kEventPairBwdBindValues, value_buffer()}}, pc, g);
     else
       cmd.dispatch("loss/event_pair_value", {{shaderio::kEventPairValueBindSums, sums_},
-                                             {shaderio::kEventPairValueBindValues, value_buffer()}}, pc, gpu::Groups{1, 1, 1});
+                                             {shaderio::kEventPairValueBindValues, value_buffer()}},
+                   pc, gpu::Groups{1, 1, 1});
   }
 }
 

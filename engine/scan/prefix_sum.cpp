@@ -22,7 +22,8 @@ void PrefixSum::record_level(gpu::Commands& cmd, const gpu::Buffer& in, const gp
                                    {shaderio::kScanBlockBindSums, sums}}, pc, cmd.linear_groups(blocks));
   if (blocks > 1) {
     record_level(cmd, sums, sums, blocks, blocks, level + 1);
-    cmd.dispatch("scan/scan_add", {{shaderio::kScanAddBindValues, out}, {shaderio::kScanAddBindOffsets, sums}}, pc, cmd.linear_groups(blocks));
+    cmd.dispatch("scan/scan_add", {{shaderio::kScanAddBindValues, out}, {shaderio::kScanAddBindOffsets, sums}},
+                 pc, cmd.linear_groups(blocks));
   }
 }
 

@@ -114,7 +114,8 @@ Frame MeshRenderer::render(const Camera& c) {
   pc.misc = glm::vec4(float(std::max(c.near_plane, 1e-6)), float(shading_.texture_samples >= 4 ? 4 : 1), 0.f, 0.f);
 
   cmd_.dispatch("sim/tri_setup", {{kSimTriSetupBindTris, tris_}, {kSimTriSetupBindCamVerts, cam_},
-                                  {kSimTriSetupBindBoxes, boxes_}, {kSimTriSetupBindCounts, counts_}}, pc, cmd_.linear_groups(gpu::Commands::div_up(n_tris_, kSimSetupGroupSize)));
+                                  {kSimTriSetupBindBoxes, boxes_}, {kSimTriSetupBindCounts, counts_}},
+                pc, cmd_.linear_groups(gpu::Commands::div_up(n_tris_, kSimSetupGroupSize)));
   scan_.record(cmd_, counts_, offsets_, n_tris_, n_tris_ + 1);
   cmd_.fill(depth_, 0xFFFFFFFFu, 0, P * 4);
   cmd_.fill(ids_, kSimNoTriangle, 0, P * 4);

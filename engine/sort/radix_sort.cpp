@@ -39,7 +39,8 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Command
   const gpu::Buffer* vout = &values_alt;
   for (uint32_t shift = 0; shift < bits; shift += 4) {
     SortPC pc{n, shift, blocks, items};
-    cmd.dispatch("sort/radix_count", {{kRadixCountBindKeys, *kin}, {kRadixCountBindCounts, counts_}}, pc, cmd.linear_groups(blocks));
+    cmd.dispatch("sort/radix_count", {{kRadixCountBindKeys, *kin}, {kRadixCountBindCounts, counts_}},
+                 pc, cmd.linear_groups(blocks));
     scan_.record(cmd, counts_, counts_, n_counts, n_counts);
     cmd.dispatch("sort/radix_scatter", {{kRadixScatterBindKeysIn, *kin}, {kRadixScatterBindValuesIn, *vin},
                                         {kRadixScatterBindKeysOut, *kout}, {kRadixScatterBindValuesOut, *vout},

@@ -237,7 +237,8 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   st.sorted_in_alt_ = sorted_slots == &st.slots_alt_;
   cmd_.mark("sort");
   cmd_.fill(st.tile_range_, 0);
-  cmd_.dispatch("splat/tile_ranges", {{kTileRangesBindKeys, *sorted_keys}, {kTileRangesBindRanges, st.tile_range_}}, st.raster_pc_,
+  cmd_.dispatch("splat/tile_ranges", {{kTileRangesBindKeys, *sorted_keys}, {kTileRangesBindRanges, st.tile_range_}},
+                st.raster_pc_,
                 cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
   cmd_.dispatch("splat/rasterize" + block_suffix_,
                 {{kRasterBindRanges, st.tile_range_}, {kRasterBindSlots, st.sorted_slots()},
@@ -301,7 +302,8 @@ void Rasterizer::backward(const RenderState& st, const GaussianBuffers& params, 
                  {kProjectBwdBindProjC, st.proj_color_}, {kProjectBwdBindDColor, st.proj_dcolor_}},
                 pp, cmd_.linear_groups(groups));
   ReducePC rp{groups, 0, 0, 0};
-  cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, pose_}}, rp, gpu::Groups{1, 1, 1});
+  cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, pose_}},
+                rp, gpu::Groups{1, 1, 1});
   cmd_.mark("project backward");
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);

@@ -24,7 +24,8 @@ ImageModel::ImageModel(gpu::Context& ctx, uint32_t frames, size_t values, LossSp
 
 void ImageModel::colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y) {
   shaderio::ColourPC pc{uint32_t(values_), op, 0, 0};
-  cmd.dispatch("train/colour", {{shaderio::kColourBindX, x}, {shaderio::kColourBindG, g}, {shaderio::kColourBindY, y}}, pc, cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kColourGroupSize)));
+  cmd.dispatch("train/colour", {{shaderio::kColourBindX, x}, {shaderio::kColourBindG, g}, {shaderio::kColourBindY, y}},
+               pc, cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kColourGroupSize)));
 }
 
 void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders) {
