@@ -42,10 +42,9 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
   std::mt19937 rng(11);
   // Both block sizes (16 keys per invocation on GPUs, up to 128 on CPU drivers) whatever the
   // device, and the device's own choice (smaller blocks for short inputs).
-  for (const char* items : {"16", "128", ""})
+  for (uint32_t items : {16u, 128u, 0u})
   for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{{1, 8}, {17, 4}, {4096, 12}, {4097, 32}, {16385, 8}, {70000, 16}, {250000, 20}, {600000, 32}}) {
-    if (*items) setenv("EVF_SORT_ITEMS", items, 1);
-    else unsetenv("EVF_SORT_ITEMS");
+    sort.set_items(items);
     std::vector<uint32_t> keys(n), vals(n);
     // Few distinct keys in the sorted bits so stability is exercised; junk above `bits`.
     for (auto& k : keys) k = (rng() % 977) * 2654435761u;
@@ -68,6 +67,5 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
     INFO("n = " << n << ", bits = " << bits << ", items " << items);
     REQUIRE(ok);
   }
-  unsetenv("EVF_SORT_ITEMS");
   test::require_no_validation_messages();
 }

@@ -177,14 +177,14 @@ TEST_CASE("splat gradients match finite differences of the reference", "[gpu][sp
 TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-reduction paths agree", "[gpu][splat]") {
   Scene s = make_scene(31, 600, 2, 96, 80, false);
   struct Result { GaussianCloud grads; std::vector<float> rgb, alpha; };
-  auto run = [&](gpu::Context& ctx) {
+  auto run = [&](gpu::Context& ctx, const RasterKernels& kernels) {
     GaussianBuffers params(ctx, s.cloud.size(), 2, "p_"), grads(ctx, s.cloud.size(), 2, "v_");
     params.upload(s.cloud);
     const size_t hw = 96 * 80;
     gpu::Buffer vr(ctx, hw * 12, "v_rgb"), va(ctx, hw * 4, "v_alpha");
     vr.write(reference::random_weights(1, 3 * hw));
     va.write(reference::random_weights(2, hw));
-    Rasterizer r(ctx);
+    Rasterizer r(ctx, kernels);
     RenderState rs(ctx);
     r.forward(params, s.cam, s.settings, rs);
     r.backward(rs, params, vr, va, grads);
@@ -200,7 +200,9 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
     for (size_t i = 0; i < a.grads.sh.size(); ++i) REQUIRE(a.grads.sh[i] == Approx(b.grads.sh[i]).margin(1e-6).epsilon(1e-4));
   };
   // The device's default kernels (CPU drivers: several pixels per invocation).
-  auto a = run(test::gpu_context());
+  auto& ctx = test::gpu_context();
+  const RasterKernels device = RasterKernels::for_context(ctx);
+  auto a = run(ctx, device);
   // Without shared float atomics: the compare-and-swap build.
   gpu::ContextOptions o = gpu::ContextOptions::from_env();
   o.validation = true;
@@ -208,23 +210,23 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
   o.force_cas = true;
   gpu::Context cas_ctx(o);
   REQUIRE_FALSE(cas_ctx.caps().shared_float_atomic_add);
-  same(a, run(cas_ctx));
+  same(a, run(cas_ctx, device));
   REQUIRE(cas_ctx.take_validation_messages().empty());
   // Both compositing kernels, whichever the device picks by default.
-  for (const char* kernel : {"pixel", "block"}) {
-    INFO(kernel);
-    setenv("EVF_RASTER_KERNEL", kernel, 1);
-    same(a, run(test::gpu_context()));
-    same(a, run(cas_ctx));
+  for (bool block : {false, true}) {
+    INFO((block ? "block" : "pixel"));
+    RasterKernels k = device;
+    k.block = block;
+    same(a, run(ctx, k));
+    same(a, run(cas_ctx, k));
     REQUIRE(cas_ctx.take_validation_messages().empty());
   }
-  // And the subgroup-reduction path GPUs take (lavapipe defaults to per-lane adds).
-  setenv("EVF_RASTER_KERNEL", "pixel", 1);
-  setenv("EVF_SUBGROUP_REDUCE", "1", 1);
-  auto c = run(test::gpu_context());
-  unsetenv("EVF_SUBGROUP_REDUCE");
-  unsetenv("EVF_RASTER_KERNEL");
-  same(a, c);
+  // And both reductions of the per-pixel backward: subgroupAdd first (GPUs) and per-lane adds
+  // (CPU drivers).
+  for (bool subgroup : {false, true}) {
+    INFO("subgroup_reduce " << subgroup);
+    same(a, run(ctx, RasterKernels{false, subgroup}));
+  }
   test::require_no_validation_messages();
 }
 

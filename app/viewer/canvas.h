@@ -42,14 +42,15 @@ class Canvas {
   void fill(const Rect& r, uint32_t color) {
     if (r.empty()) return;
     shaderio::FillPC pc{w_, h_, r.x, r.y, r.w, r.h, color, bgr_ ? 1u : 0u};
-    cmd_.dispatch("view/fill_rect", {packed_}, pc, groups(uint64_t(r.w) * r.h));
+    cmd_.dispatch("view/fill_rect", {{shaderio::kFillRectBindCanvas, packed_}}, pc, groups(uint64_t(r.w) * r.h));
   }
 
   // `rgb`: planar linear float [3][src_h][src_w].
   void blit(const gpu::Buffer& rgb, uint32_t src_w, uint32_t src_h, const Rect& r) {
     if (r.empty() || src_w == 0 || src_h == 0) return;
     shaderio::BlitPC pc{src_w, src_h, w_, h_, r.x, r.y, r.w, r.h, bgr_ ? 1u : 0u};
-    cmd_.dispatch("view/blit_rgb", {rgb, packed_}, pc, groups(uint64_t(r.w) * r.h));
+    cmd_.dispatch("view/blit_rgb", {{shaderio::kBlitRgbBindRgb, rgb}, {shaderio::kBlitRgbBindCanvas, packed_}},
+                  pc, groups(uint64_t(r.w) * r.h));
   }
 
   // Queues a line of text with its top-left corner at (x, y); draw_text() draws all queued text.
@@ -69,7 +70,8 @@ class Canvas {
     glyphs_.write(queued_);
     shaderio::TextPC pc{uint32_t(queued_.size()), scale_, w_, h_, bg, backdrop ? 1u : 0u, bgr_ ? 1u : 0u};
     const uint64_t cell = uint64_t(shaderio::kGlyphCellW) * shaderio::kGlyphCellH * scale_ * scale_;
-    cmd_.dispatch("view/text", {font_, glyphs_, packed_}, pc, groups(queued_.size() * cell));
+    cmd_.dispatch("view/text", {{shaderio::kTextBindFont, font_}, {shaderio::kTextBindGlyphs, glyphs_},
+                                {shaderio::kTextBindCanvas, packed_}}, pc, groups(queued_.size() * cell));
     queued_.clear();
   }
 

@@ -63,7 +63,8 @@ int run_viewer(const GaussianCloud& cloud, const ViewerOptions& opt) {
       const Camera cam = orbit_camera(display.input().orbit, w, h);
       raster.forward(params, cam, settings, raster_state);
       shaderio::PackPC pc{w, h, sc.bgr() ? 1u : 0u};
-      cmd.dispatch("view/pack_rgba8", {raster_state.outputs().rgb, packed}, pc,
+      cmd.dispatch("view/pack_rgba8", {{shaderio::kPackRgba8BindRgb, raster_state.outputs().rgb},
+                                       {shaderio::kPackRgba8BindPacked, packed}}, pc,
                    cmd.linear_groups(gpu::Commands::div_up(uint64_t(w) * h, shaderio::kViewGroupSize)));
       cmd.submit();
       const bool ok = sc.present(packed);

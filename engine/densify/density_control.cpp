@@ -60,7 +60,13 @@ void DensityStats::accumulate(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm
   pc.use_camera = 0;
   pc.grad_scale = grad_scale;
   // Parameter bindings are unused without a camera: bind the statistics buffers in their place.
-  cmd.dispatch("densify/accumulate", {grad2d_norm, grad_sum_, grad_sum_, grad_sum_, grad_sum_, vis_count_, max_radius_}, pc,
+  cmd.dispatch("densify/accumulate", {{kDensifyAccumulateBindGrad2d, grad2d_norm},
+                                      {kDensifyAccumulateBindMeans, grad_sum_},
+                                      {kDensifyAccumulateBindLogScales, grad_sum_},
+                                      {kDensifyAccumulateBindQuats, grad_sum_},
+                                      {kDensifyAccumulateBindGradSum, grad_sum_},
+                                      {kDensifyAccumulateBindVisCount, vis_count_},
+                                      {kDensifyAccumulateBindMaxRadius, max_radius_}}, pc,
                groups_for(cmd, count_));
 }
 
@@ -75,7 +81,10 @@ void DensityStats::accumulate(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm
   pc.use_camera = 1;
   pc.grad_scale = grad_scale;
   cmd.dispatch("densify/accumulate",
-               {grad2d_norm, params.means, params.log_scales, params.quats, grad_sum_, vis_count_, max_radius_}, pc,
+               {{kDensifyAccumulateBindGrad2d, grad2d_norm}, {kDensifyAccumulateBindMeans, params.means},
+                {kDensifyAccumulateBindLogScales, params.log_scales}, {kDensifyAccumulateBindQuats, params.quats},
+                {kDensifyAccumulateBindGradSum, grad_sum_}, {kDensifyAccumulateBindVisCount, vis_count_},
+                {kDensifyAccumulateBindMaxRadius, max_radius_}}, pc,
                groups_for(cmd, count_));
 }
 
@@ -141,16 +150,21 @@ RefineResult DensityControl::refine(gpu::Commands& cmd, GaussianBuffers& params,
   const gpu::Buffer& keys = capped ? keys_ : offsets_;
   const gpu::Buffer& ids = capped ? ids_ : offsets_;
   cmd.dispatch("densify/decide",
-               {params.log_scales, params.opacity_logits, stats.grad_sum(), stats.vis_count(), stats.max_radius(), decision_,
-                out_count_, keys, ids},
+               {{kDecideBindLogScales, params.log_scales}, {kDecideBindOpacity, params.opacity_logits},
+                {kDecideBindGradSum, stats.grad_sum()}, {kDecideBindVisCount, stats.vis_count()},
+                {kDecideBindMaxRadius, stats.max_radius()}, {kDecideBindDecision, decision_},
+                {kDecideBindOutCount, out_count_}, {kDecideBindKeys, keys}, {kDecideBindIds, ids}},
                dpc, groups_for(cmd, n));
   if (capped) {
     scan_.record(cmd, out_count_, base_offsets_, n, n + 1);  // base_offsets_[n]: rows without growth
     auto sorted = sort_.record(cmd, keys_, ids_, n, 32);
     CapPC cpc{n, cfg_.max_gaussians, 0, 0};
-    cmd.dispatch("densify/cap_extra", {*sorted.second, decision_, sorted_extra_}, cpc, groups_for(cmd, n));
+    cmd.dispatch("densify/cap_extra", {{kCapExtraBindIds, *sorted.second}, {kCapExtraBindDecision, decision_},
+                                       {kCapExtraBindExtra, sorted_extra_}}, cpc, groups_for(cmd, n));
     scan_.record(cmd, sorted_extra_, extra_offsets_, n, n);
-    cmd.dispatch("densify/cap_grant", {*sorted.second, sorted_extra_, extra_offsets_, base_offsets_, decision_, out_count_}, cpc,
+    cmd.dispatch("densify/cap_grant", {{kCapGrantBindIds, *sorted.second}, {kCapGrantBindExtra, sorted_extra_},
+                                       {kCapGrantBindExtraScan, extra_offsets_}, {kCapGrantBindBaseScan, base_offsets_},
+                                       {kCapGrantBindDecision, decision_}, {kCapGrantBindOutCount, out_count_}}, cpc,
                  groups_for(cmd, n));
   }
   scan_.record(cmd, out_count_, offsets_, n, n + 1);
@@ -172,11 +186,15 @@ RefineResult DensityControl::refine(gpu::Commands& cmd, GaussianBuffers& params,
   epc.seed = cfg_.seed * 0x9E3779B9u + refinements_ * 0x85EBCA6Bu + 0x1234567u;
   epc.log_split_div = log_div;
   epc.max_sigma = cfg_.split_max_sigma;
-  cmd.dispatch("densify/index", {decision_, offsets_, param_src_, state_src_, row_code_}, epc, groups_for(cmd, n));
+  cmd.dispatch("densify/index", {{kDensifyIndexBindDecision, decision_}, {kDensifyIndexBindOffsets, offsets_},
+                                 {kDensifyIndexBindParamSrc, param_src_}, {kDensifyIndexBindStateSrc, state_src_},
+                                 {kDensifyIndexBindCode, row_code_}}, epc, groups_for(cmd, n));
   if (m > 0) {
     cmd.dispatch("densify/geometry",
-                 {params.means, params.log_scales, params.quats, param_src_, row_code_, new_params.means,
-                  new_params.log_scales},
+                 {{kDensifyGeometryBindMeans, params.means}, {kDensifyGeometryBindLogScales, params.log_scales},
+                  {kDensifyGeometryBindQuats, params.quats}, {kDensifyGeometryBindParamSrc, param_src_},
+                  {kDensifyGeometryBindCode, row_code_}, {kDensifyGeometryBindNewMeans, new_params.means},
+                  {kDensifyGeometryBindNewLogScales, new_params.log_scales}},
                  epc, groups_for(cmd, m));
     Adam::gather_rows(cmd, params.quats, new_params.quats, param_src_, m, 4);
     Adam::gather_rows(cmd, params.opacity_logits, new_params.opacity_logits, param_src_, m, 1);
@@ -222,7 +240,8 @@ void DensityControl::reset_opacity(gpu::Commands& cmd, GaussianBuffers& params, 
   if (n == 0) return;
   mask_.ensure(words(n));
   ResetPC pc{n, logit(cfg_.reset_opacity), 0, 0};
-  cmd.dispatch("densify/opacity_reset", {params.opacity_logits, mask_}, pc, groups_for(cmd, n));
+  cmd.dispatch("densify/opacity_reset", {{kOpacityResetBindOpacity, params.opacity_logits},
+                                         {kOpacityResetBindMask, mask_}}, pc, groups_for(cmd, n));
   for (size_t i = 0; i < adam.group_count(); ++i)
     if (adam.group(i).name == "opacity_logits") adam.reset_masked(cmd, i, mask_);
 }

@@ -52,7 +52,8 @@ void GpuEvents::accumulate(gpu::Commands& cmd, size_t w, double t0, double t1, c
   auto [first, last] = range(w, t0, t1);
   if (last == first) return;
   shaderio::EventAccumulatePC pc{first, last - first, width_, height_, plane, 0, 0, 0};
-  cmd.dispatch("events/accumulate", {packed_, counts}, pc,
+  cmd.dispatch("events/accumulate", {{shaderio::kEventAccumulateBindPacked, packed_},
+                                     {shaderio::kEventAccumulateBindCounts, counts}}, pc,
                cmd.linear_groups(gpu::Commands::div_up(last - first, shaderio::kEventGroupSize)));
 }
 

@@ -63,16 +63,39 @@ void Commands::barrier() {
   vkCmdPipelineBarrier(cb_, st, st, 0, 1, &mb, 0, nullptr, 0, nullptr);
 }
 
-void Commands::dispatch(const std::string& name, std::initializer_list<BufferRef> bindings, const void* push,
+static std::string describe(const Kernel::Binding& b) { return std::to_string(b.index) + " (" + b.block + ")"; }
+
+static std::string describe_all(const Kernel& k) {
+  std::string s;
+  for (const Kernel::Binding& b : k.bindings()) s += (s.empty() ? "" : ", ") + describe(b);
+  return s.empty() ? "none" : s;
+}
+
+void Commands::dispatch(const std::string& name, std::initializer_list<Bind> bindings, const void* push,
                         uint32_t push_bytes, Groups g) {
   if (g.x == 0 || g.y == 0 || g.z == 0) return;
   const Kernel& k = ctx_.kernel(name);
-  if (bindings.size() != k.binding_count())
-    throw Error("kernel '" + name + "' takes " + std::to_string(k.binding_count()) + " buffers, given " +
-                std::to_string(bindings.size()));
+  const std::vector<Kernel::Binding>& declared = k.bindings();
+  std::vector<const Bind*> bound(declared.size(), nullptr);
+  for (const Bind& b : bindings) {
+    auto host = [&] { return std::to_string(b.slot.index) + " (" + b.slot.block + ")"; };
+    auto it = std::lower_bound(declared.begin(), declared.end(), b.slot.index,
+                               [](const Kernel::Binding& d, uint32_t i) { return d.index < i; });
+    if (it == declared.end() || it->index != b.slot.index)
+      throw Error("kernel '" + name + "' has no binding " + host() + "; its SPIR-V declares " + describe_all(k));
+    if (!it->block.empty() && it->block != b.slot.block)
+      throw Error("kernel '" + name + "': binding " + std::to_string(b.slot.index) + " is block '" + it->block +
+                  "' in its SPIR-V, the host binds '" + b.slot.block + "'");
+    const size_t i = static_cast<size_t>(it - declared.begin());
+    if (bound[i]) throw Error("kernel '" + name + "': binding " + host() + " is bound twice");
+    bound[i] = &b;
+  }
+  for (size_t i = 0; i < declared.size(); ++i)
+    if (!bound[i]) throw Error("kernel '" + name + "': binding " + describe(declared[i]) + " is not bound");
   std::vector<VkDescriptorBufferInfo> infos;
-  infos.reserve(bindings.size());
-  for (const BufferRef& r : bindings) {
+  infos.reserve(bound.size());
+  for (const Bind* b : bound) {
+    const BufferRef& r = b->buffer;
     if (!r.buffer || !r.buffer->valid()) throw Error("kernel '" + name + "': an unallocated buffer was bound");
     uint64_t range = r.range ? r.range : r.buffer->size() - r.offset;
     ctx_.check_binding_size(range, "buffer '" + r.buffer->name() + "' in kernel '" + name + "'");
@@ -81,7 +104,7 @@ void Commands::dispatch(const std::string& name, std::initializer_list<BufferRef
   std::vector<VkWriteDescriptorSet> writes(infos.size());
   for (size_t i = 0; i < infos.size(); ++i) {
     writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-    writes[i].dstBinding = static_cast<uint32_t>(i);
+    writes[i].dstBinding = declared[i].index;
     writes[i].descriptorCount = 1;
     writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[i].pBufferInfo = &infos[i];

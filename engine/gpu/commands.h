@@ -6,10 +6,18 @@
 #include <utility>
 #include <vector>
 
+#include "common/shared_prelude.h"
 #include "gpu/buffer.h"
 #include "gpu/kernel.h"
 
 namespace evflow::gpu {
+
+// A buffer for one binding of a kernel, named by the EVF_BIND constant of the kernel's layout
+// header (shaders/<module>/<module>_layout.h): {shaderio::kAdamBindParam, params}.
+struct Bind {
+  shaderio::BindSlot slot;
+  BufferRef buffer;
+};
 
 struct Groups {
   uint32_t x = 1, y = 1, z = 1;
@@ -29,10 +37,12 @@ class Commands {
   Groups linear_groups(uint64_t n_groups) const;
   static uint32_t div_up(uint64_t n, uint32_t d) { return static_cast<uint32_t>((n + d - 1) / d); }
 
-  void dispatch(const std::string& kernel, std::initializer_list<BufferRef> bindings, const void* push, uint32_t push_bytes,
+  // Binds each buffer at its slot's index and runs the kernel. Throws unless the slots are
+  // exactly the bindings the kernel's SPIR-V declares, each once, with the same block names.
+  void dispatch(const std::string& kernel, std::initializer_list<Bind> bindings, const void* push, uint32_t push_bytes,
                 Groups groups);
   template <class PC>
-  void dispatch(const std::string& kernel, std::initializer_list<BufferRef> bindings, const PC& pc, Groups groups) {
+  void dispatch(const std::string& kernel, std::initializer_list<Bind> bindings, const PC& pc, Groups groups) {
     static_assert(sizeof(PC) <= kPushConstantBytes, "push constants above 128 bytes");
     dispatch(kernel, bindings, &pc, sizeof(PC), groups);
   }

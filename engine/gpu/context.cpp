@@ -24,6 +24,15 @@ ContextOptions ContextOptions::from_env() {
   if (const char* d = std::getenv("EVF_DEVICE")) o.device = d;
   o.validation = env_flag("EVF_VALIDATION");
   o.poison = env_flag("EVF_POISON");
+  o.force_cas = env_flag("EVF_FORCE_CAS");
+  o.print_validation = env_flag("EVF_VALIDATION_PRINT");
+  if (const char* e = std::getenv("EVF_SORT_ITEMS")) o.sort_items = std::clamp<uint32_t>(uint32_t(std::atoi(e)), 1u, 256u);
+  if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) o.subgroup_reduce = e[0] == '1' ? 1 : 0;
+  if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
+    o.raster_kernel = e;
+    if (o.raster_kernel != "pixel" && o.raster_kernel != "block")
+      throw Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + o.raster_kernel + "'");
+  }
   return o;
 }
 
@@ -191,6 +200,7 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   caps_.name = props.deviceName;
   caps_.api_version = props.apiVersion;
   caps_.type = props.deviceType;
+  caps_.cpu_driver = props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
   caps_.subgroup_size = sub.subgroupSize;
   caps_.subgroup_arithmetic = (sub.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
                               (sub.supportedOperations & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&
@@ -220,7 +230,7 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   vkGetPhysicalDeviceFeatures2(physical_, &f2);
   caps_.shared_float_atomic_add = has_atomic_float && af.shaderSharedFloat32AtomicAdd;
   caps_.buffer_float_atomic_add = has_atomic_float && af.shaderBufferFloat32AtomicAdd;
-  if (opts_.force_cas || std::getenv("EVF_FORCE_CAS")) { caps_.shared_float_atomic_add = false; caps_.buffer_float_atomic_add = false; }
+  if (opts_.force_cas) { caps_.shared_float_atomic_add = false; caps_.buffer_float_atomic_add = false; }
 
   vkGetPhysicalDeviceMemoryProperties(physical_, &mem_props_);
   caps_.unified_memory = true;
@@ -320,7 +330,7 @@ void Context::report_validation(const std::string& msg) {
   std::lock_guard<std::mutex> lock(msg_mutex_);
   messages_.push_back(msg);
   ++message_total_;
-  if (opts_.verbose || std::getenv("EVF_VALIDATION_PRINT")) std::fprintf(stderr, "%s\n", msg.c_str());
+  if (opts_.verbose || opts_.print_validation) std::fprintf(stderr, "%s\n", msg.c_str());
 }
 
 std::vector<std::string> Context::take_validation_messages() {

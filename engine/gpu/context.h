@@ -29,12 +29,19 @@ struct ContextOptions {
   bool poison = false;      // fill fresh buffers with 0xFFFFFFFF (NaN) instead of leaving them
   bool verbose = false;
   bool force_cas = false;   // use the compare-and-swap path even where float atomics exist
+  bool print_validation = false;  // also print each validation message to stderr
+  // Kernel choices for the device, overridden where set (Rasterizer, RadixSort read them):
+  uint32_t sort_items = 0;        // keys per radix-sort invocation, 1..256; 0 = by device and size
+  int subgroup_reduce = -1;       // rasterize backward: 1 = subgroupAdd first, 0 = per-lane adds; -1 = by device
+  std::string raster_kernel;      // "pixel" or "block" compositing kernels; "" = by device
   // Presentation (opt-in, for a window): enables these instance extensions (the windowing
   // system's surface extensions, e.g. from glfwGetRequiredInstanceExtensions) plus
   // VK_KHR_surface, and VK_KHR_swapchain on the device; devices without it are skipped.
   bool presentation = false;
   std::vector<std::string> instance_extensions;
-  // Defaults that read the environment: EVF_DEVICE, EVF_VALIDATION=1, EVF_POISON=1.
+  // Defaults that read the environment, once: EVF_DEVICE, EVF_VALIDATION=1, EVF_POISON=1,
+  // EVF_FORCE_CAS=1, EVF_VALIDATION_PRINT=1, EVF_SORT_ITEMS=n, EVF_SUBGROUP_REDUCE=0|1,
+  // EVF_RASTER_KERNEL=pixel|block.
   static ContextOptions from_env();
 };
 
@@ -42,6 +49,7 @@ struct DeviceCaps {
   std::string name;
   uint32_t api_version = 0;
   VkPhysicalDeviceType type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
+  bool cpu_driver = false;  // a CPU implementation (lavapipe): kernels pick their CPU variants
   uint32_t subgroup_size = 0;
   uint32_t max_workgroup_count[3] = {0, 0, 0};
   uint32_t max_workgroup_invocations = 0;

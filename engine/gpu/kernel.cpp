@@ -1,5 +1,8 @@
 #include "gpu/kernel.h"
 
+#include <algorithm>
+#include <cstring>
+#include <map>
 #include <vector>
 
 namespace evflow::gpu {
@@ -17,42 +20,61 @@ static const EmbeddedShader* find_shader(const std::string& name) {
   return nullptr;
 }
 
-// Highest `Binding` decoration + 1 (OpDecorate = 71, Decoration Binding = 33).
-static uint32_t count_bindings(const uint32_t* w, size_t n_words) {
-  uint32_t max_binding = 0;
-  bool any = false;
+// The bindings of a module: variables decorated with Binding, named by their block type (the
+// pointee of the variable's pointer type). Opcodes: OpName 5, OpTypePointer 32, OpVariable 59,
+// OpDecorate 71; decoration Binding 33.
+static std::vector<Kernel::Binding> reflect_bindings(const uint32_t* w, size_t n_words) {
+  std::map<uint32_t, std::string> names;
+  std::map<uint32_t, uint32_t> pointee, var_type, binding_of;
   for (size_t i = 5; i < n_words;) {
-    uint32_t op = w[i] & 0xFFFF, len = w[i] >> 16;
-    if (len == 0) break;
-    if (op == 71 && len >= 4 && w[i + 2] == 33) {
-      max_binding = std::max(max_binding, w[i + 3]);
-      any = true;
+    const uint32_t op = w[i] & 0xFFFF, len = w[i] >> 16;
+    if (len == 0 || i + len > n_words) break;
+    if (op == 5 && len >= 3) {
+      const char* c = reinterpret_cast<const char*>(&w[i + 2]);
+      names[w[i + 1]] = std::string(c, strnlen(c, (len - 2) * 4));
+    } else if (op == 32 && len >= 4) {
+      pointee[w[i + 1]] = w[i + 3];
+    } else if (op == 59 && len >= 4) {
+      var_type[w[i + 2]] = w[i + 1];
+    } else if (op == 71 && len >= 4 && w[i + 2] == 33) {
+      binding_of[w[i + 1]] = w[i + 3];
     }
     i += len;
   }
-  return any ? max_binding + 1 : 0;
+  std::vector<Kernel::Binding> out;
+  for (auto [id, index] : binding_of) {
+    std::string block;
+    auto t = var_type.find(id);
+    if (t != var_type.end()) {
+      auto p = pointee.find(t->second);
+      if (p != pointee.end() && names.count(p->second)) block = names[p->second];
+    }
+    out.push_back({index, block});
+  }
+  std::sort(out.begin(), out.end(), [](const Kernel::Binding& a, const Kernel::Binding& b) { return a.index < b.index; });
+  return out;
 }
 
 Kernel::Kernel(Context& ctx, const std::string& name) : ctx_(ctx), name_(name) {
   const EmbeddedShader* s = find_shader(name);
   if (!s) throw Error("no embedded shader named '" + name + "'");
-  bindings_ = count_bindings(s->words, s->bytes / 4);
+  bindings_ = reflect_bindings(s->words, s->bytes / 4);
   VkShaderModuleCreateInfo smci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   smci.codeSize = s->bytes;
   smci.pCode = s->words;
   EVF_VK(vkCreateShaderModule(ctx.device(), &smci, nullptr, &module_));
 
-  std::vector<VkDescriptorSetLayoutBinding> binds(bindings_);
-  for (uint32_t i = 0; i < bindings_; ++i) {
+  std::vector<VkDescriptorSetLayoutBinding> binds(bindings_.size());
+  for (size_t i = 0; i < bindings_.size(); ++i) {
     binds[i] = {};
-    binds[i].binding = i;
+    binds[i].binding = bindings_[i].index;
     binds[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     binds[i].descriptorCount = 1;
     binds[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
   }
   VkDescriptorSetLayoutCreateInfo dci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   dci.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
-  dci.bindingCount = bindings_;
+  dci.bindingCount = static_cast<uint32_t>(binds.size());
   dci.pBindings = binds.data();
   EVF_VK(vkCreateDescriptorSetLayout(ctx.device(), &dci, nullptr, &set_layout_));
 

@@ -1,8 +1,10 @@
 // A compute pipeline built from an embedded SPIR-V module. Its descriptor set layout (push
-// descriptors, storage buffers 0..n-1) is read from the module's Binding decorations; every
-// kernel has a 128-byte push-constant range (the Vulkan minimum).
+// descriptors, one storage buffer per binding) is read from the module: each variable's Binding
+// decoration and the name of its block type (glslang keeps names). Every kernel has a 128-byte
+// push-constant range (the Vulkan minimum).
 #pragma once
 #include <string>
+#include <vector>
 
 #include "gpu/context.h"
 
@@ -17,15 +19,21 @@ class Kernel {
   Kernel(const Kernel&) = delete;
   Kernel& operator=(const Kernel&) = delete;
 
+  struct Binding {
+    uint32_t index;
+    std::string block;  // the block type's name in the SPIR-V ("" where it has none)
+  };
+
   const std::string& name() const { return name_; }
-  uint32_t binding_count() const { return bindings_; }
+  // The storage-buffer bindings the module declares (and its optimiser kept), by index.
+  const std::vector<Binding>& bindings() const { return bindings_; }
   VkPipeline pipeline() const { return pipeline_; }
   VkPipelineLayout layout() const { return layout_; }
 
  private:
   Context& ctx_;
   std::string name_;
-  uint32_t bindings_ = 0;
+  std::vector<Binding> bindings_;
   VkShaderModule module_ = VK_NULL_HANDLE;
   VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
   VkPipelineLayout layout_ = VK_NULL_HANDLE;

@@ -80,7 +80,11 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     pc.value_accumulate = q > 0 ? 1u : 0u;
     pc.value_index = value_offset();
     pc.pair = q;
-    cmd.dispatch("loss/event_pair", {counts_, *f.rgb[s], *f.rgb[j], scratch_, partials_}, pc, g);
+    cmd.dispatch("loss/event_pair", {{shaderio::kEventPairBindCounts, counts_},
+                                     {shaderio::kEventPairBindFrameS, *f.rgb[s]},
+                                     {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
+                                     {shaderio::kEventPairBindScratch, scratch_},
+                                     {shaderio::kEventPairBindPartials, partials_}}, pc, g);
     shaderio::ReducePC r{};
     r.coeff0 = glm::vec4(1, 0, 0, 0);
     r.coeff1 = glm::vec4(0, 1, 0, 0);
@@ -88,11 +92,20 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     r.n_partials = groups;
     r.dst = 4 * q;
     r.n_out = 3;
-    cmd.dispatch("loss/reduce", {partials_, sums_}, r, gpu::Groups{1, 1, 1});
+    cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}},
+                 r, gpu::Groups{1, 1, 1});
     if (gradients)
-      cmd.dispatch("loss/event_pair_bwd", {*f.rgb[s], *f.rgb[j], scratch_, sums_, *f.grad[s], *f.grad[j], value_buffer()}, pc, g);
+      cmd.dispatch("loss/event_pair_bwd", {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},
+                                           {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
+                                           {shaderio::kEventPairBwdBindScratch, scratch_},
+                                           {shaderio::kEventPairBwdBindSums, sums_},
+                                           {shaderio::kEventPairBwdBindGradS, *f.grad[s]},
+                                           {shaderio::kEventPairBwdBindGradJ, *f.grad[j]},
+                                           {shaderio::kEventPairBwdBindValues, value_buffer()}}, pc, g);
     else
-      cmd.dispatch("loss/event_pair_value", {sums_, value_buffer()}, pc, gpu::Groups{1, 1, 1});
+      cmd.dispatch("loss/event_pair_value", {{shaderio::kEventPairValueBindSums, sums_},
+                                             {shaderio::kEventPairValueBindValues, value_buffer()}},
+                   pc, gpu::Groups{1, 1, 1});
   }
 }
 

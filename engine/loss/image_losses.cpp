@@ -35,7 +35,8 @@ void record_reduce(gpu::Commands& cmd, const gpu::Buffer& partials, uint32_t n_p
   pc.dst = o.first;
   pc.n_out = o.count;
   pc.log_mask = o.log_mask;
-  cmd.dispatch("loss/reduce", {partials, *o.values}, pc, gpu::Groups{1, 1, 1});
+  cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials}, {shaderio::kReduceBindOut, *o.values}},
+               pc, gpu::Groups{1, 1, 1});
 }
 
 }  // namespace
@@ -74,12 +75,15 @@ void SsimPipeline::record(gpu::Commands& cmd, const ImageShape& shape, const gpu
   pc.ssim_grad_scale = ssim_grad_scale;
   pc.pixel_grad_scale = pixel_grad_scale;
   const gpu::Groups g = cmd.linear_groups(h_groups), gv = cmd.linear_groups(v_groups);
-  cmd.dispatch("loss/ssim_h", {a, b, h_}, pc, g);
-  cmd.dispatch("loss/ssim_v", {a, b, h_, d_, partials_}, pc, gv);
+  cmd.dispatch("loss/ssim_h", {{shaderio::kSsimHBindA, a}, {shaderio::kSsimHBindB, b}, {shaderio::kSsimHBindH, h_}},
+               pc, g);
+  cmd.dispatch("loss/ssim_v", {{shaderio::kSsimVBindA, a}, {shaderio::kSsimVBindB, b}, {shaderio::kSsimVBindH, h_},
+                               {shaderio::kSsimVBindD, d_}, {shaderio::kSsimVBindPartials, partials_}}, pc, gv);
   record_reduce(cmd, partials_, v_groups, out);
   if (grad) {
-    cmd.dispatch("loss/ssim_bwd_h", {d_, h_}, pc, g);
-    cmd.dispatch("loss/ssim_bwd_v", {a, b, h_, *grad}, pc, gv);
+    cmd.dispatch("loss/ssim_bwd_h", {{shaderio::kSsimBwdHBindD, d_}, {shaderio::kSsimBwdHBindH, h_}}, pc, g);
+    cmd.dispatch("loss/ssim_bwd_v", {{shaderio::kSsimBwdVBindA, a}, {shaderio::kSsimBwdVBindB, b},
+                                     {shaderio::kSsimBwdVBindH, h_}, {shaderio::kSsimBwdVBindGrad, *grad}}, pc, gv);
   }
 }
 
@@ -99,7 +103,9 @@ void L1Loss::record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buff
   pc.count = static_cast<uint32_t>(n);
   pc.flags = shaderio::kLossWriteGrad | (accumulate ? shaderio::kLossAccumulate : 0u);
   pc.grad_scale = static_cast<float>(double(weight) / double(n));
-  cmd.dispatch("loss/pixel", {pred, target, grad_out, partials_}, pc, cmd.linear_groups(groups));
+  cmd.dispatch("loss/pixel", {{shaderio::kPixelLossBindA, pred}, {shaderio::kPixelLossBindB, target},
+                              {shaderio::kPixelLossBindGrad, grad_out}, {shaderio::kPixelLossBindPartials, partials_}},
+               pc, cmd.linear_groups(groups));
   SsimPipeline::Outputs o;
   o.values = &value_buffer();
   o.first = value_offset();

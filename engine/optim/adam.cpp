@@ -91,7 +91,8 @@ void Adam::step_group(gpu::Commands& cmd, size_t i) {
   pc.one_minus_beta2 = static_cast<float>(1.0 - opts_.beta2);
   pc.step_size = static_cast<float>(double(g.lr) / bc1);
   pc.inv_sqrt_bc2 = static_cast<float>(1.0 / std::sqrt(bc2));
-  cmd.dispatch("optim/adam", {*g.param, *g.grad, *s.m, *s.v}, pc,
+  cmd.dispatch("optim/adam", {{shaderio::kAdamBindParam, *g.param}, {shaderio::kAdamBindGrad, *g.grad},
+                              {shaderio::kAdamBindM, *s.m}, {shaderio::kAdamBindV, *s.v}}, pc,
                cmd.linear_groups(gpu::Commands::div_up(g.count, kOptimGroupSize)));
 }
 
@@ -101,7 +102,8 @@ void Adam::reset_rows(gpu::Commands& cmd, size_t i, const gpu::Buffer& rows, uin
   if (n == 0) return;
   check_floats(&rows, n, s.desc.name + " reset rows");
   shaderio::RowsPC pc{n, s.desc.row_width, 1u, s.desc.count / s.desc.row_width};
-  cmd.dispatch("optim/reset", {*s.m, *s.v, rows}, pc,
+  cmd.dispatch("optim/reset", {{shaderio::kOptimResetBindM, *s.m}, {shaderio::kOptimResetBindV, *s.v},
+                               {shaderio::kOptimResetBindSelect, rows}}, pc,
                cmd.linear_groups(gpu::Commands::div_up(uint64_t(n) * s.desc.row_width, kOptimGroupSize)));
 }
 
@@ -112,7 +114,8 @@ void Adam::reset_masked(gpu::Commands& cmd, size_t i, const gpu::Buffer& mask) {
   if (rows == 0) return;
   check_floats(&mask, rows, s.desc.name + " reset mask");
   shaderio::RowsPC pc{rows, s.desc.row_width, 0u, rows};
-  cmd.dispatch("optim/reset", {*s.m, *s.v, mask}, pc,
+  cmd.dispatch("optim/reset", {{shaderio::kOptimResetBindM, *s.m}, {shaderio::kOptimResetBindV, *s.v},
+                               {shaderio::kOptimResetBindSelect, mask}}, pc,
                cmd.linear_groups(gpu::Commands::div_up(s.desc.count, kOptimGroupSize)));
 }
 
@@ -122,7 +125,8 @@ void Adam::gather_rows(gpu::Commands& cmd, const gpu::Buffer& src, const gpu::Bu
   check_floats(&dst, uint64_t(rows) * width, "gather dst");
   check_floats(&index, rows, "gather index");
   shaderio::RowsPC pc{rows, width, 0u, 0u};
-  cmd.dispatch("optim/gather", {src, dst, index}, pc,
+  cmd.dispatch("optim/gather", {{shaderio::kOptimGatherBindSrc, src}, {shaderio::kOptimGatherBindDst, dst},
+                                {shaderio::kOptimGatherBindIndex, index}}, pc,
                cmd.linear_groups(gpu::Commands::div_up(uint64_t(rows) * width, kOptimGroupSize)));
 }
 

@@ -12,6 +12,9 @@ namespace evflow {
 class RadixSort {
  public:
   explicit RadixSort(gpu::Context& ctx);
+  // Keys per invocation, 1..256, for every record from now on; 0 = the device's choice by input
+  // size (the default, unless the context's options set sort_items).
+  void set_items(uint32_t items);
   // Records the passes; returns the buffers holding the sorted keys and values (either the
   // inputs or the internal scratch buffers, depending on the pass count).
   std::pair<const gpu::Buffer*, const gpu::Buffer*> record(gpu::Commands& cmd, const gpu::Buffer& keys,
@@ -26,6 +29,7 @@ class RadixSort {
   gpu::Context& ctx_;
   PrefixSum scan_;
   gpu::Buffer keys_tmp_, values_tmp_, counts_;
+  uint32_t items_ = 0;
 };
 
 }  // namespace evflow

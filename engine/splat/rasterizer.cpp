@@ -1,7 +1,6 @@
 #include "splat/rasterizer.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <cstring>
 
 #include "splat/camera_pc.h"
@@ -95,7 +94,22 @@ RenderState::RenderState(gpu::Context& ctx)
       last_isect_(ctx, 16, "last_isect"),
       out_{gpu::Buffer(ctx, 16, "out_rgb"), gpu::Buffer(ctx, 16, "out_alpha"), gpu::Buffer(ctx, 16, "out_depth")} {}
 
-Rasterizer::Rasterizer(gpu::Context& ctx)
+RasterKernels RasterKernels::for_context(const gpu::Context& ctx) {
+  const bool cpu = ctx.caps().cpu_driver;
+  const gpu::ContextOptions& o = ctx.options();
+  RasterKernels k;
+  // Compositing kernels: one pixel per invocation (GPUs) or a block of pixels per invocation
+  // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
+  k.block = o.raster_kernel.empty() ? cpu : o.raster_kernel == "block";
+  // Cross-lane operations are emulated on CPU drivers; measured 3x slower there than per-lane
+  // shared-memory adds (bench raster, lavapipe). GPUs reduce in the subgroup first.
+  k.subgroup_reduce = o.subgroup_reduce < 0 ? !cpu : o.subgroup_reduce == 1;
+  return k;
+}
+
+Rasterizer::Rasterizer(gpu::Context& ctx) : Rasterizer(ctx, RasterKernels::for_context(ctx)) {}
+
+Rasterizer::Rasterizer(gpu::Context& ctx, const RasterKernels& kernels)
     : ctx_(ctx),
       cmd_(ctx),
       scan_(ctx),
@@ -103,21 +117,9 @@ Rasterizer::Rasterizer(gpu::Context& ctx)
       isect_grad_(ctx, 16, "isect_grad"),
       grad2d_norm_(ctx, 16, "grad2d_norm"),
       pose_partial_(ctx, 16, "pose_partial"),
-      pose_(ctx, 32, "pose_gradient") {
-  const bool cpu = ctx_.caps().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
-  // Cross-lane operations are emulated on CPU drivers; measured 3x slower there than per-lane
-  // shared-memory adds (bench raster, lavapipe). GPUs reduce in the subgroup first.
-  subgroup_reduce_ = !cpu;
-  if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) subgroup_reduce_ = e[0] == '1';
-  // Compositing kernels: one pixel per invocation (GPUs) or a block of pixels per invocation
-  // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
-  block_suffix_ = cpu ? "_block" : "";
-  if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
-    const std::string k = e;
-    if (k != "pixel" && k != "block") throw gpu::Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + k + "'");
-    block_suffix_ = k == "block" ? "_block" : "";
-  }
-}
+      pose_(ctx, 32, "pose_gradient"),
+      subgroup_reduce_(kernels.subgroup_reduce),
+      block_suffix_(kernels.block ? "_block" : "") {}
 
 // SH band l of a set of buffers, or band 0 standing in for a band above its degree (the
 // shaders never read it, but every binding needs a buffer).
@@ -199,9 +201,13 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   ensure_forward_buffers(st);
   ProjectPC& pp = st.project_pc_;
   cmd_.dispatch("splat/project",
-                {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1),
-                 sh_band(params, 2), sh_band(params, 3), st.proj_mean_conic_, st.proj_misc_, st.proj_color_, st.tile_rect_,
-                 st.tiles_touched_, st.proj_dcolor_},
+                {{kParamBindMeans, params.means}, {kParamBindLogScales, params.log_scales},
+                 {kParamBindQuats, params.quats}, {kParamBindOpacities, params.opacity_logits},
+                 {kParamBindSh0, sh_band(params, 0)}, {kParamBindSh1, sh_band(params, 1)},
+                 {kParamBindSh2, sh_band(params, 2)}, {kParamBindSh3, sh_band(params, 3)},
+                 {kProjectBindProjA, st.proj_mean_conic_}, {kProjectBindProjB, st.proj_misc_},
+                 {kProjectBindProjC, st.proj_color_}, {kProjectBindRect, st.tile_rect_},
+                 {kProjectBindCount, st.tiles_touched_}, {kProjectBindDColor, st.proj_dcolor_}},
                 pp, cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
   cmd_.mark("project");
   scan_.record(cmd_, st.tiles_touched_, st.isect_offset_, uint32_t(n), uint32_t(n + 1));
@@ -221,8 +227,9 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   st.gaussian_id_from_slot_.ensure(uint64_t(m) * 4);
   if (m) {
     cmd_.dispatch("splat/emit",
-                  {st.proj_mean_conic_, st.proj_misc_, st.tile_rect_, st.isect_offset_, st.keys_, st.slot_from_isect_,
-                   st.gaussian_id_from_slot_},
+                  {{kEmitBindProjA, st.proj_mean_conic_}, {kEmitBindProjB, st.proj_misc_},
+                   {kEmitBindRect, st.tile_rect_}, {kEmitBindOffsets, st.isect_offset_}, {kEmitBindKeys, st.keys_},
+                   {kEmitBindValues, st.slot_from_isect_}, {kEmitBindGid, st.gaussian_id_from_slot_}},
                   pp, cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
   }
   cmd_.mark("emit");
@@ -230,11 +237,16 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   st.sorted_in_alt_ = sorted_slots == &st.slots_alt_;
   cmd_.mark("sort");
   cmd_.fill(st.tile_range_, 0);
-  cmd_.dispatch("splat/tile_ranges", {*sorted_keys, st.tile_range_}, st.raster_pc_,
+  cmd_.dispatch("splat/tile_ranges", {{kTileRangesBindKeys, *sorted_keys}, {kTileRangesBindRanges, st.tile_range_}},
+                st.raster_pc_,
                 cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
   cmd_.dispatch("splat/rasterize" + block_suffix_,
-                {st.tile_range_, st.sorted_slots(), st.gaussian_id_from_slot_, st.proj_mean_conic_, st.proj_misc_,
-                 st.proj_color_, st.out_.rgb, st.out_.alpha, st.out_.depth, st.final_T_, st.last_isect_},
+                {{kRasterBindRanges, st.tile_range_}, {kRasterBindSlots, st.sorted_slots()},
+                 {kRasterBindGid, st.gaussian_id_from_slot_}, {kRasterBindProjA, st.proj_mean_conic_},
+                 {kRasterBindProjB, st.proj_misc_}, {kRasterBindProjC, st.proj_color_},
+                 {kRasterizeBindOutRgb, st.out_.rgb}, {kRasterizeBindOutAlpha, st.out_.alpha},
+                 {kRasterizeBindOutDepth, st.out_.depth}, {kRasterizeBindOutT, st.final_T_},
+                 {kRasterizeBindOutLast, st.last_isect_}},
                 st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize");
   cmd_.submit();
@@ -263,22 +275,35 @@ void Rasterizer::backward(const RenderState& st, const GaussianBuffers& params, 
 
   const std::string raster_bwd = "splat/rasterize_bwd" + block_suffix_ + (ctx_.caps().shared_float_atomic_add ? "" : "_cas");
   cmd_.dispatch(raster_bwd,
-                {st.tile_range_, st.sorted_slots(), st.gaussian_id_from_slot_, st.proj_mean_conic_, st.proj_misc_,
-                 st.proj_color_, st.final_T_, st.last_isect_, v_rgb, v_alpha, plane(0), plane(1), plane(2), plane(3),
-                 plane(4), plane(5), plane(6), plane(7), plane(8)},
+                {{kRasterBindRanges, st.tile_range_}, {kRasterBindSlots, st.sorted_slots()},
+                 {kRasterBindGid, st.gaussian_id_from_slot_}, {kRasterBindProjA, st.proj_mean_conic_},
+                 {kRasterBindProjB, st.proj_misc_}, {kRasterBindProjC, st.proj_color_},
+                 {kRasterizeBwdBindInT, st.final_T_}, {kRasterizeBwdBindInLast, st.last_isect_},
+                 {kRasterizeBwdBindVRgb, v_rgb}, {kRasterizeBwdBindVAlpha, v_alpha}, {kRasterizeBwdBindG0, plane(0)},
+                 {kRasterizeBwdBindG1, plane(1)}, {kRasterizeBwdBindG2, plane(2)}, {kRasterizeBwdBindG3, plane(3)},
+                 {kRasterizeBwdBindG4, plane(4)}, {kRasterizeBwdBindG5, plane(5)}, {kRasterizeBwdBindG6, plane(6)},
+                 {kRasterizeBwdBindG7, plane(7)}, {kRasterizeBwdBindG8, plane(8)}},
                 st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize backward");
   ProjectPC pp = st.project_pc_;
   pp.flags = accumulate ? (pp.flags | kFlagAccumulate) : (pp.flags & ~kFlagAccumulate);
   cmd_.dispatch(accumulate ? "splat/project_bwd_acc" : "splat/project_bwd",
-                {params.means, params.log_scales, params.quats, params.opacity_logits, sh_band(params, 0), sh_band(params, 1),
-                 sh_band(params, 2), sh_band(params, 3), st.isect_offset_, st.gaussian_id_from_slot_, plane(0), plane(1),
-                 plane(2), plane(3), plane(4), plane(5), plane(6), plane(7), plane(8), grads.means, grads.log_scales,
-                 grads.quats, grads.opacity_logits, sh_band(grads, 0), sh_band(grads, 1), sh_band(grads, 2),
-                 sh_band(grads, 3), grad2d_norm_, pose_partial_, st.proj_color_, st.proj_dcolor_},
+                {{kParamBindMeans, params.means}, {kParamBindLogScales, params.log_scales},
+                 {kParamBindQuats, params.quats}, {kParamBindOpacities, params.opacity_logits},
+                 {kProjectBwdBindOffsets, st.isect_offset_}, {kProjectBwdBindGid, st.gaussian_id_from_slot_},
+                 {kProjectBwdBindG0, plane(0)}, {kProjectBwdBindG1, plane(1)}, {kProjectBwdBindG2, plane(2)},
+                 {kProjectBwdBindG3, plane(3)}, {kProjectBwdBindG4, plane(4)}, {kProjectBwdBindG5, plane(5)},
+                 {kProjectBwdBindG6, plane(6)}, {kProjectBwdBindG7, plane(7)}, {kProjectBwdBindG8, plane(8)},
+                 {kProjectBwdBindVMeans, grads.means}, {kProjectBwdBindVLogScales, grads.log_scales},
+                 {kProjectBwdBindVQuats, grads.quats}, {kProjectBwdBindVOpacities, grads.opacity_logits},
+                 {kProjectBwdBindVSh0, sh_band(grads, 0)}, {kProjectBwdBindVSh1, sh_band(grads, 1)},
+                 {kProjectBwdBindVSh2, sh_band(grads, 2)}, {kProjectBwdBindVSh3, sh_band(grads, 3)},
+                 {kProjectBwdBindGrad2d, grad2d_norm_}, {kProjectBwdBindPosePartial, pose_partial_},
+                 {kProjectBwdBindProjC, st.proj_color_}, {kProjectBwdBindDColor, st.proj_dcolor_}},
                 pp, cmd_.linear_groups(groups));
   ReducePC rp{groups, 0, 0, 0};
-  cmd_.dispatch("splat/pose_reduce", {pose_partial_, pose_}, rp, gpu::Groups{1, 1, 1});
+  cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, pose_}},
+                rp, gpu::Groups{1, 1, 1});
   cmd_.mark("project backward");
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);

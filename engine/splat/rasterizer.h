@@ -63,11 +63,20 @@ class RenderState {
   size_t count_ = 0;
 };
 
+// The compositing kernels a Rasterizer runs.
+struct RasterKernels {
+  bool block = false;           // a block of pixels per invocation (CPU drivers), else one pixel
+  bool subgroup_reduce = true;  // backward: subgroupAdd before the shared add (GPUs), else per-lane adds
+  // The device's choice, with the overrides of the context's options (raster_kernel, subgroup_reduce).
+  static RasterKernels for_context(const gpu::Context& ctx);
+};
+
 // The kernels and what renders share: the sort's and the backward pass's scratch, the
 // screen-space gradient norms and the pose gradient of the last backward.
 class Rasterizer {
  public:
   explicit Rasterizer(gpu::Context& ctx);
+  Rasterizer(gpu::Context& ctx, const RasterKernels& kernels);
 
   // Renders into `state`; returns after the GPU finished. One scalar (the intersection count)
   // is read back between the projection and the sort to size the intersection buffers.
@@ -98,7 +107,7 @@ class Rasterizer {
   gpu::Buffer isect_grad_;  // per-intersection gradient planes of the backward pass
   gpu::Buffer grad2d_norm_, pose_partial_, pose_;
   bool subgroup_reduce_ = false;  // backward: subgroupAdd before the shared add
-  std::string block_suffix_;      // "" (one pixel per invocation) or "_block" (see the constructor)
+  std::string block_suffix_;      // "" (one pixel per invocation) or "_block" (RasterKernels::block)
   std::vector<std::pair<std::string, double>> stage_ms_;
 };
 

@@ -24,7 +24,8 @@ ImageModel::ImageModel(gpu::Context& ctx, uint32_t frames, size_t values, LossSp
 
 void ImageModel::colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y) {
   shaderio::ColourPC pc{uint32_t(values_), op, 0, 0};
-  cmd.dispatch("train/colour", {x, g, y}, pc, cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kColourGroupSize)));
+  cmd.dispatch("train/colour", {{shaderio::kColourBindX, x}, {shaderio::kColourBindG, g}, {shaderio::kColourBindY, y}},
+               pc, cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kColourGroupSize)));
 }
 
 void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders) {
@@ -35,7 +36,8 @@ void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer
   if (frames_ > 1)
     for (uint32_t i = 0; i < frames_; ++i) {
       shaderio::AccumulatePC pc{uint32_t(values_), 1.0f / float(frames_), i > 0 ? 1u : 0u, 0};
-      cmd.dispatch("train/accumulate", {linear_[i], mean_}, pc,
+      cmd.dispatch("train/accumulate", {{shaderio::kTrainAccumulateBindX, linear_[i]},
+                                        {shaderio::kTrainAccumulateBindY, mean_}}, pc,
                    cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kAccumulateGroupSize)));
     }
   const gpu::Buffer& m = frames_ > 1 ? mean_ : linear_[0];

@@ -5,14 +5,14 @@
 #include "densify/densify_layout.h"
 #include "common/dispatch.glsl"
 #include "densify/densify_common.glsl"
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) readonly buffer Grad2d { float grad2d_norm[]; };
-layout(std430, binding = 1) readonly buffer Means { float means[]; };
-layout(std430, binding = 2) readonly buffer LogScales { float log_scales[]; };
-layout(std430, binding = 3) readonly buffer Quats { vec4 quats[]; };
-layout(std430, binding = 4) buffer GradSum { float grad_sum[]; };
-layout(std430, binding = 5) buffer VisCount { uint vis_count[]; };
-layout(std430, binding = 6) buffer MaxRadius { float max_radius[]; };
+layout(local_size_x = kDensifyGroupSize) in;
+layout(std430, binding = kDensifyAccumulateBindGrad2d) readonly buffer Grad2d { float grad2d_norm[]; };
+layout(std430, binding = kDensifyAccumulateBindMeans) readonly buffer Means { float means[]; };
+layout(std430, binding = kDensifyAccumulateBindLogScales) readonly buffer LogScales { float log_scales[]; };
+layout(std430, binding = kDensifyAccumulateBindQuats) readonly buffer Quats { vec4 quats[]; };
+layout(std430, binding = kDensifyAccumulateBindGradSum) buffer GradSum { float grad_sum[]; };
+layout(std430, binding = kDensifyAccumulateBindVisCount) buffer VisCount { uint vis_count[]; };
+layout(std430, binding = kDensifyAccumulateBindMaxRadius) buffer MaxRadius { float max_radius[]; };
 layout(push_constant) uniform PC { AccumulatePC pc; };
 
 // Screen radius ceil(3 sqrt(lambda_max)) of the dilated EWA covariance (Inria's rule), or -1

@@ -4,10 +4,10 @@
 #include "densify/densify_layout.h"
 #include "common/dispatch.glsl"
 #include "densify/densify_common.glsl"
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) readonly buffer Ids { uint sorted_ids[]; };
-layout(std430, binding = 1) readonly buffer Decision { uint decision[]; };
-layout(std430, binding = 2) writeonly buffer Extra { uint sorted_extra[]; };
+layout(local_size_x = kDensifyGroupSize) in;
+layout(std430, binding = kCapExtraBindIds) readonly buffer Ids { uint sorted_ids[]; };
+layout(std430, binding = kCapExtraBindDecision) readonly buffer Decision { uint decision[]; };
+layout(std430, binding = kCapExtraBindExtra) writeonly buffer Extra { uint sorted_extra[]; };
 layout(push_constant) uniform PC { CapPC pc; };
 
 void main() {

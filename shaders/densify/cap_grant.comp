@@ -5,13 +5,13 @@
 #include "densify/densify_layout.h"
 #include "common/dispatch.glsl"
 #include "densify/densify_common.glsl"
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) readonly buffer Ids { uint sorted_ids[]; };
-layout(std430, binding = 1) readonly buffer Extra { uint sorted_extra[]; };
-layout(std430, binding = 2) readonly buffer ExtraScan { uint extra_offsets[]; };
-layout(std430, binding = 3) readonly buffer BaseScan { uint base_offsets[]; };
-layout(std430, binding = 4) buffer Decision { uint decision[]; };
-layout(std430, binding = 5) writeonly buffer OutCount { uint out_count[]; };
+layout(local_size_x = kDensifyGroupSize) in;
+layout(std430, binding = kCapGrantBindIds) readonly buffer Ids { uint sorted_ids[]; };
+layout(std430, binding = kCapGrantBindExtra) readonly buffer Extra { uint sorted_extra[]; };
+layout(std430, binding = kCapGrantBindExtraScan) readonly buffer ExtraScan { uint extra_offsets[]; };
+layout(std430, binding = kCapGrantBindBaseScan) readonly buffer BaseScan { uint base_offsets[]; };
+layout(std430, binding = kCapGrantBindDecision) buffer Decision { uint decision[]; };
+layout(std430, binding = kCapGrantBindOutCount) writeonly buffer OutCount { uint out_count[]; };
 layout(push_constant) uniform PC { CapPC pc; };
 
 void main() {

@@ -5,16 +5,16 @@
 #include "densify/densify_layout.h"
 #include "common/dispatch.glsl"
 #include "densify/densify_common.glsl"
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) readonly buffer LogScales { float log_scales[]; };
-layout(std430, binding = 1) readonly buffer Opacity { float opacity_logits[]; };
-layout(std430, binding = 2) readonly buffer GradSum { float grad_sum[]; };
-layout(std430, binding = 3) readonly buffer VisCount { uint vis_count[]; };
-layout(std430, binding = 4) readonly buffer MaxRadius { float max_radius[]; };
-layout(std430, binding = 5) writeonly buffer Decision { uint decision[]; };
-layout(std430, binding = 6) writeonly buffer OutCount { uint out_count[]; };
-layout(std430, binding = 7) writeonly buffer Keys { uint sort_keys[]; };
-layout(std430, binding = 8) writeonly buffer Ids { uint sort_ids[]; };
+layout(local_size_x = kDensifyGroupSize) in;
+layout(std430, binding = kDecideBindLogScales) readonly buffer LogScales { float log_scales[]; };
+layout(std430, binding = kDecideBindOpacity) readonly buffer Opacity { float opacity_logits[]; };
+layout(std430, binding = kDecideBindGradSum) readonly buffer GradSum { float grad_sum[]; };
+layout(std430, binding = kDecideBindVisCount) readonly buffer VisCount { uint vis_count[]; };
+layout(std430, binding = kDecideBindMaxRadius) readonly buffer MaxRadius { float max_radius[]; };
+layout(std430, binding = kDecideBindDecision) writeonly buffer Decision { uint decision[]; };
+layout(std430, binding = kDecideBindOutCount) writeonly buffer OutCount { uint out_count[]; };
+layout(std430, binding = kDecideBindKeys) writeonly buffer Keys { uint sort_keys[]; };
+layout(std430, binding = kDecideBindIds) writeonly buffer Ids { uint sort_ids[]; };
 layout(push_constant) uniform PC { DecidePC pc; };
 
 void main() {

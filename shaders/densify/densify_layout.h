@@ -76,5 +76,53 @@ struct ResetPC {
   uint pad0, pad1;
 };
 
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// densify/accumulate
+EVF_BIND(kDensifyAccumulateBindGrad2d, 0u, Grad2d)
+EVF_BIND(kDensifyAccumulateBindMeans, 1u, Means)
+EVF_BIND(kDensifyAccumulateBindLogScales, 2u, LogScales)
+EVF_BIND(kDensifyAccumulateBindQuats, 3u, Quats)
+EVF_BIND(kDensifyAccumulateBindGradSum, 4u, GradSum)
+EVF_BIND(kDensifyAccumulateBindVisCount, 5u, VisCount)
+EVF_BIND(kDensifyAccumulateBindMaxRadius, 6u, MaxRadius)
+// densify/cap_extra
+EVF_BIND(kCapExtraBindIds, 0u, Ids)
+EVF_BIND(kCapExtraBindDecision, 1u, Decision)
+EVF_BIND(kCapExtraBindExtra, 2u, Extra)
+// densify/cap_grant
+EVF_BIND(kCapGrantBindIds, 0u, Ids)
+EVF_BIND(kCapGrantBindExtra, 1u, Extra)
+EVF_BIND(kCapGrantBindExtraScan, 2u, ExtraScan)
+EVF_BIND(kCapGrantBindBaseScan, 3u, BaseScan)
+EVF_BIND(kCapGrantBindDecision, 4u, Decision)
+EVF_BIND(kCapGrantBindOutCount, 5u, OutCount)
+// densify/decide
+EVF_BIND(kDecideBindLogScales, 0u, LogScales)
+EVF_BIND(kDecideBindOpacity, 1u, Opacity)
+EVF_BIND(kDecideBindGradSum, 2u, GradSum)
+EVF_BIND(kDecideBindVisCount, 3u, VisCount)
+EVF_BIND(kDecideBindMaxRadius, 4u, MaxRadius)
+EVF_BIND(kDecideBindDecision, 5u, Decision)
+EVF_BIND(kDecideBindOutCount, 6u, OutCount)
+EVF_BIND(kDecideBindKeys, 7u, Keys)
+EVF_BIND(kDecideBindIds, 8u, Ids)
+// densify/geometry
+EVF_BIND(kDensifyGeometryBindMeans, 0u, Means)
+EVF_BIND(kDensifyGeometryBindLogScales, 1u, LogScales)
+EVF_BIND(kDensifyGeometryBindQuats, 2u, Quats)
+EVF_BIND(kDensifyGeometryBindParamSrc, 3u, ParamSrc)
+EVF_BIND(kDensifyGeometryBindCode, 4u, Code)
+EVF_BIND(kDensifyGeometryBindNewMeans, 5u, NewMeans)
+EVF_BIND(kDensifyGeometryBindNewLogScales, 6u, NewLogScales)
+// densify/index
+EVF_BIND(kDensifyIndexBindDecision, 0u, Decision)
+EVF_BIND(kDensifyIndexBindOffsets, 1u, Offsets)
+EVF_BIND(kDensifyIndexBindParamSrc, 2u, ParamSrc)
+EVF_BIND(kDensifyIndexBindStateSrc, 3u, StateSrc)
+EVF_BIND(kDensifyIndexBindCode, 4u, Code)
+// densify/opacity_reset
+EVF_BIND(kOpacityResetBindOpacity, 0u, Opacity)
+EVF_BIND(kOpacityResetBindMask, 1u, Mask)
+
 EVF_NAMESPACE_END
 #endif

@@ -6,14 +6,14 @@
 #include "densify/densify_layout.h"
 #include "common/dispatch.glsl"
 #include "densify/densify_common.glsl"
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) readonly buffer Means { float means[]; };
-layout(std430, binding = 1) readonly buffer LogScales { float log_scales[]; };
-layout(std430, binding = 2) readonly buffer Quats { vec4 quats[]; };
-layout(std430, binding = 3) readonly buffer ParamSrc { uint param_src[]; };
-layout(std430, binding = 4) readonly buffer Code { uint row_code[]; };
-layout(std430, binding = 5) writeonly buffer NewMeans { float new_means[]; };
-layout(std430, binding = 6) writeonly buffer NewLogScales { float new_log_scales[]; };
+layout(local_size_x = kDensifyGroupSize) in;
+layout(std430, binding = kDensifyGeometryBindMeans) readonly buffer Means { float means[]; };
+layout(std430, binding = kDensifyGeometryBindLogScales) readonly buffer LogScales { float log_scales[]; };
+layout(std430, binding = kDensifyGeometryBindQuats) readonly buffer Quats { vec4 quats[]; };
+layout(std430, binding = kDensifyGeometryBindParamSrc) readonly buffer ParamSrc { uint param_src[]; };
+layout(std430, binding = kDensifyGeometryBindCode) readonly buffer Code { uint row_code[]; };
+layout(std430, binding = kDensifyGeometryBindNewMeans) writeonly buffer NewMeans { float new_means[]; };
+layout(std430, binding = kDensifyGeometryBindNewLogScales) writeonly buffer NewLogScales { float new_log_scales[]; };
 layout(push_constant) uniform PC { EmitPC pc; };
 
 void main() {

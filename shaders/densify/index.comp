@@ -5,12 +5,12 @@
 #include "densify/densify_layout.h"
 #include "common/dispatch.glsl"
 #include "densify/densify_common.glsl"
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) readonly buffer Decision { uint decision[]; };
-layout(std430, binding = 1) readonly buffer Offsets { uint offsets[]; };
-layout(std430, binding = 2) writeonly buffer ParamSrc { uint param_src[]; };
-layout(std430, binding = 3) writeonly buffer StateSrc { uint state_src[]; };
-layout(std430, binding = 4) writeonly buffer Code { uint row_code[]; };
+layout(local_size_x = kDensifyGroupSize) in;
+layout(std430, binding = kDensifyIndexBindDecision) readonly buffer Decision { uint decision[]; };
+layout(std430, binding = kDensifyIndexBindOffsets) readonly buffer Offsets { uint offsets[]; };
+layout(std430, binding = kDensifyIndexBindParamSrc) writeonly buffer ParamSrc { uint param_src[]; };
+layout(std430, binding = kDensifyIndexBindStateSrc) writeonly buffer StateSrc { uint state_src[]; };
+layout(std430, binding = kDensifyIndexBindCode) writeonly buffer Code { uint row_code[]; };
 layout(push_constant) uniform PC { EmitPC pc; };
 
 void put(uint r, uint src, uint state, uint code) {

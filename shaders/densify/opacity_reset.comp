@@ -3,9 +3,9 @@
 #extension GL_GOOGLE_include_directive : require
 #include "densify/densify_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) buffer Opacity { float opacity_logits[]; };
-layout(std430, binding = 1) writeonly buffer Mask { uint mask[]; };
+layout(local_size_x = kDensifyGroupSize) in;
+layout(std430, binding = kOpacityResetBindOpacity) buffer Opacity { float opacity_logits[]; };
+layout(std430, binding = kOpacityResetBindMask) writeonly buffer Mask { uint mask[]; };
 layout(push_constant) uniform PC { ResetPC pc; };
 
 void main() {

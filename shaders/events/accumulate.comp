@@ -4,9 +4,9 @@
 #extension GL_GOOGLE_include_directive : require
 #include "events/events_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Packed { uint packed_events[]; };
-layout(std430, binding = 1) buffer Counts { uint counts[]; };
+layout(local_size_x = kEventGroupSize) in;
+layout(std430, binding = kEventAccumulateBindPacked) readonly buffer Packed { uint packed_events[]; };
+layout(std430, binding = kEventAccumulateBindCounts) buffer Counts { uint counts[]; };
 layout(push_constant) uniform PC { EventAccumulatePC pc; };
 
 void main() {

@@ -27,5 +27,10 @@ struct EventAccumulatePC {
   uint pad0, pad1, pad2;
 };
 
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// events/accumulate
+EVF_BIND(kEventAccumulateBindPacked, 0u, Packed)
+EVF_BIND(kEventAccumulateBindCounts, 1u, Counts)
+
 EVF_NAMESPACE_END
 #endif

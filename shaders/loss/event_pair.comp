@@ -4,12 +4,12 @@
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Counts { uint event_counts[]; };
-layout(std430, binding = 1) readonly buffer FrameS { float frame_s[]; };  // planar RGB at t_s
-layout(std430, binding = 2) readonly buffer FrameJ { float frame_j[]; };  // planar RGB at t_j
-layout(std430, binding = 3) writeonly buffer Scratch { float scratch[]; };  // [E][D], H*W each
-layout(std430, binding = 4) writeonly buffer Partials { vec4 partials[]; };
+layout(local_size_x = kLossGroupSize) in;
+layout(std430, binding = kEventPairBindCounts) readonly buffer Counts { uint event_counts[]; };
+layout(std430, binding = kEventPairBindFrameS) readonly buffer FrameS { float frame_s[]; };     // planar RGB at t_s
+layout(std430, binding = kEventPairBindFrameJ) readonly buffer FrameJ { float frame_j[]; };     // planar RGB at t_j
+layout(std430, binding = kEventPairBindScratch) writeonly buffer Scratch { float scratch[]; };  // [E][D], H*W each
+layout(std430, binding = kEventPairBindPartials) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant) uniform PC { EventPairPC pc; };
 #include "loss/ssim_math.glsl"
 #include "loss/event_math.glsl"

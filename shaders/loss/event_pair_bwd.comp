@@ -5,14 +5,14 @@
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer FrameS { float frame_s[]; };
-layout(std430, binding = 1) readonly buffer FrameJ { float frame_j[]; };
-layout(std430, binding = 2) readonly buffer Scratch { float scratch[]; };
-layout(std430, binding = 3) readonly buffer Sums { float sums[]; };
-layout(std430, binding = 4) buffer GradS { float grad_s[]; };
-layout(std430, binding = 5) buffer GradJ { float grad_j[]; };
-layout(std430, binding = 6) buffer Values { float values[]; };
+layout(local_size_x = kLossGroupSize) in;
+layout(std430, binding = kEventPairBwdBindFrameS) readonly buffer FrameS { float frame_s[]; };
+layout(std430, binding = kEventPairBwdBindFrameJ) readonly buffer FrameJ { float frame_j[]; };
+layout(std430, binding = kEventPairBwdBindScratch) readonly buffer Scratch { float scratch[]; };
+layout(std430, binding = kEventPairBwdBindSums) readonly buffer Sums { float sums[]; };
+layout(std430, binding = kEventPairBwdBindGradS) buffer GradS { float grad_s[]; };
+layout(std430, binding = kEventPairBwdBindGradJ) buffer GradJ { float grad_j[]; };
+layout(std430, binding = kEventPairBwdBindValues) buffer Values { float values[]; };
 layout(push_constant) uniform PC { EventPairPC pc; };
 #include "loss/event_math.glsl"
 

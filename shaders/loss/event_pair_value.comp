@@ -4,8 +4,8 @@
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 layout(local_size_x = 1) in;
-layout(std430, binding = 0) readonly buffer Sums { float sums[]; };
-layout(std430, binding = 1) buffer Values { float values[]; };
+layout(std430, binding = kEventPairValueBindSums) readonly buffer Sums { float sums[]; };
+layout(std430, binding = kEventPairValueBindValues) buffer Values { float values[]; };
 layout(push_constant) uniform PC { EventPairPC pc; };
 #include "loss/event_math.glsl"
 

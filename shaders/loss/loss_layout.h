@@ -100,5 +100,50 @@ struct EventPairPC {
   uint pad0, pad1, pad2;
 };
 
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// loss/event_pair
+EVF_BIND(kEventPairBindCounts, 0u, Counts)
+EVF_BIND(kEventPairBindFrameS, 1u, FrameS)
+EVF_BIND(kEventPairBindFrameJ, 2u, FrameJ)
+EVF_BIND(kEventPairBindScratch, 3u, Scratch)
+EVF_BIND(kEventPairBindPartials, 4u, Partials)
+// loss/event_pair_bwd
+EVF_BIND(kEventPairBwdBindFrameS, 0u, FrameS)
+EVF_BIND(kEventPairBwdBindFrameJ, 1u, FrameJ)
+EVF_BIND(kEventPairBwdBindScratch, 2u, Scratch)
+EVF_BIND(kEventPairBwdBindSums, 3u, Sums)
+EVF_BIND(kEventPairBwdBindGradS, 4u, GradS)
+EVF_BIND(kEventPairBwdBindGradJ, 5u, GradJ)
+EVF_BIND(kEventPairBwdBindValues, 6u, Values)
+// loss/event_pair_value
+EVF_BIND(kEventPairValueBindSums, 0u, Sums)
+EVF_BIND(kEventPairValueBindValues, 1u, Values)
+// loss/pixel
+EVF_BIND(kPixelLossBindA, 0u, A)
+EVF_BIND(kPixelLossBindB, 1u, B)
+EVF_BIND(kPixelLossBindGrad, 2u, Grad)
+EVF_BIND(kPixelLossBindPartials, 3u, Partials)
+// loss/reduce
+EVF_BIND(kReduceBindPartials, 0u, Partials)
+EVF_BIND(kReduceBindOut, 1u, Out)
+// loss/ssim_bwd_h
+EVF_BIND(kSsimBwdHBindD, 0u, D)
+EVF_BIND(kSsimBwdHBindH, 1u, H)
+// loss/ssim_bwd_v
+EVF_BIND(kSsimBwdVBindA, 0u, A)
+EVF_BIND(kSsimBwdVBindB, 1u, B)
+EVF_BIND(kSsimBwdVBindH, 2u, H)
+EVF_BIND(kSsimBwdVBindGrad, 3u, Grad)
+// loss/ssim_h
+EVF_BIND(kSsimHBindA, 0u, A)
+EVF_BIND(kSsimHBindB, 1u, B)
+EVF_BIND(kSsimHBindH, 2u, H)
+// loss/ssim_v
+EVF_BIND(kSsimVBindA, 0u, A)
+EVF_BIND(kSsimVBindB, 1u, B)
+EVF_BIND(kSsimVBindH, 2u, H)
+EVF_BIND(kSsimVBindD, 3u, D)
+EVF_BIND(kSsimVBindPartials, 4u, Partials)
+
 EVF_NAMESPACE_END
 #endif

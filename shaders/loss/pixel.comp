@@ -5,11 +5,11 @@
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer A { float img_a[]; };
-layout(std430, binding = 1) readonly buffer B { float img_b[]; };
-layout(std430, binding = 2) buffer Grad { float grad[]; };
-layout(std430, binding = 3) writeonly buffer Partials { vec4 partials[]; };
+layout(local_size_x = kLossGroupSize) in;
+layout(std430, binding = kPixelLossBindA) readonly buffer A { float img_a[]; };
+layout(std430, binding = kPixelLossBindB) readonly buffer B { float img_b[]; };
+layout(std430, binding = kPixelLossBindGrad) buffer Grad { float grad[]; };
+layout(std430, binding = kPixelLossBindPartials) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant) uniform PC { PixelPC pc; };
 
 void main() {

@@ -4,9 +4,9 @@
 // out[dst + j] = dot(coeff_j, s) + offset_j, optionally -10 log10(.) (PSNR).
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Partials { vec4 partials[]; };
-layout(std430, binding = 1) buffer Out { float values[]; };
+layout(local_size_x = kReduceGroupSize) in;
+layout(std430, binding = kReduceBindPartials) readonly buffer Partials { vec4 partials[]; };
+layout(std430, binding = kReduceBindOut) buffer Out { float values[]; };
 layout(push_constant) uniform PC { ReducePC pc; };
 shared vec4 red[kReduceGroupSize];
 

@@ -7,9 +7,9 @@
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer D { float dmap[]; };
-layout(std430, binding = 1) writeonly buffer H { float hmap[]; };
+layout(local_size_x = kLossGroupSize) in;
+layout(std430, binding = kSsimBwdHBindD) readonly buffer D { float dmap[]; };
+layout(std430, binding = kSsimBwdHBindH) writeonly buffer H { float hmap[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
 const int kCols = int(kSsimStrip);

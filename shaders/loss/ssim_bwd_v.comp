@@ -8,11 +8,11 @@
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer A { float img_a[]; };
-layout(std430, binding = 1) readonly buffer B { float img_b[]; };
-layout(std430, binding = 2) readonly buffer H { float hmap[]; };
-layout(std430, binding = 3) buffer Grad { float grad[]; };
+layout(local_size_x = kLossGroupSize) in;
+layout(std430, binding = kSsimBwdVBindA) readonly buffer A { float img_a[]; };
+layout(std430, binding = kSsimBwdVBindB) readonly buffer B { float img_b[]; };
+layout(std430, binding = kSsimBwdVBindH) readonly buffer H { float hmap[]; };
+layout(std430, binding = kSsimBwdVBindGrad) buffer Grad { float grad[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
 const int kRows = int(kSsimStrip);

@@ -6,10 +6,10 @@
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer A { float img_a[]; };
-layout(std430, binding = 1) readonly buffer B { float img_b[]; };
-layout(std430, binding = 2) writeonly buffer H { float hmap[]; };
+layout(local_size_x = kLossGroupSize) in;
+layout(std430, binding = kSsimHBindA) readonly buffer A { float img_a[]; };
+layout(std430, binding = kSsimHBindB) readonly buffer B { float img_b[]; };
+layout(std430, binding = kSsimHBindH) writeonly buffer H { float hmap[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
 const int kCols = int(kSsimStrip);

@@ -8,12 +8,12 @@
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer A { float img_a[]; };
-layout(std430, binding = 1) readonly buffer B { float img_b[]; };
-layout(std430, binding = 2) readonly buffer H { float hmap[]; };
-layout(std430, binding = 3) writeonly buffer D { float dmap[]; };
-layout(std430, binding = 4) writeonly buffer Partials { vec4 partials[]; };
+layout(local_size_x = kLossGroupSize) in;
+layout(std430, binding = kSsimVBindA) readonly buffer A { float img_a[]; };
+layout(std430, binding = kSsimVBindB) readonly buffer B { float img_b[]; };
+layout(std430, binding = kSsimVBindH) readonly buffer H { float hmap[]; };
+layout(std430, binding = kSsimVBindD) writeonly buffer D { float dmap[]; };
+layout(std430, binding = kSsimVBindPartials) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
 const int kRows = int(kSsimStrip);

@@ -3,11 +3,11 @@
 #extension GL_GOOGLE_include_directive : require
 #include "optim/optim_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) buffer Param { float param[]; };
-layout(std430, binding = 1) readonly buffer Grad { float grad[]; };
-layout(std430, binding = 2) buffer M { float exp_avg[]; };
-layout(std430, binding = 3) buffer V { float exp_avg_sq[]; };
+layout(local_size_x = kOptimGroupSize) in;
+layout(std430, binding = kAdamBindParam) buffer Param { float param[]; };
+layout(std430, binding = kAdamBindGrad) readonly buffer Grad { float grad[]; };
+layout(std430, binding = kAdamBindM) buffer M { float exp_avg[]; };
+layout(std430, binding = kAdamBindV) buffer V { float exp_avg_sq[]; };
 layout(push_constant) uniform PC { AdamPC pc; };
 
 void main() {

@@ -3,10 +3,10 @@
 #extension GL_GOOGLE_include_directive : require
 #include "optim/optim_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Src { float src[]; };
-layout(std430, binding = 1) writeonly buffer Dst { float dst[]; };
-layout(std430, binding = 2) readonly buffer Index { uint index[]; };
+layout(local_size_x = kOptimGroupSize) in;
+layout(std430, binding = kOptimGatherBindSrc) readonly buffer Src { float src[]; };
+layout(std430, binding = kOptimGatherBindDst) writeonly buffer Dst { float dst[]; };
+layout(std430, binding = kOptimGatherBindIndex) readonly buffer Index { uint index[]; };
 layout(push_constant) uniform PC { RowsPC pc; };
 
 void main() {

@@ -34,5 +34,20 @@ struct RowsPC {
   uint total_rows;  // reset: rows in the moment buffers
 };
 
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// optim/adam
+EVF_BIND(kAdamBindParam, 0u, Param)
+EVF_BIND(kAdamBindGrad, 1u, Grad)
+EVF_BIND(kAdamBindM, 2u, M)
+EVF_BIND(kAdamBindV, 3u, V)
+// optim/gather
+EVF_BIND(kOptimGatherBindSrc, 0u, Src)
+EVF_BIND(kOptimGatherBindDst, 1u, Dst)
+EVF_BIND(kOptimGatherBindIndex, 2u, Index)
+// optim/reset
+EVF_BIND(kOptimResetBindM, 0u, M)
+EVF_BIND(kOptimResetBindV, 1u, V)
+EVF_BIND(kOptimResetBindSelect, 2u, Select)
+
 EVF_NAMESPACE_END
 #endif

@@ -3,10 +3,10 @@
 #extension GL_GOOGLE_include_directive : require
 #include "optim/optim_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) writeonly buffer M { float exp_avg[]; };
-layout(std430, binding = 1) writeonly buffer V { float exp_avg_sq[]; };
-layout(std430, binding = 2) readonly buffer Select { uint select_rows[]; };
+layout(local_size_x = kOptimGroupSize) in;
+layout(std430, binding = kOptimResetBindM) writeonly buffer M { float exp_avg[]; };
+layout(std430, binding = kOptimResetBindV) writeonly buffer V { float exp_avg_sq[]; };
+layout(std430, binding = kOptimResetBindSelect) readonly buffer Select { uint select_rows[]; };
 layout(push_constant) uniform PC { RowsPC pc; };
 
 void main() {

@@ -3,9 +3,9 @@
 #extension GL_GOOGLE_include_directive : require
 #include "scan/scan_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) buffer Values { uint values[]; };
-layout(std430, binding = 1) readonly buffer Offsets { uint block_offsets[]; };
+layout(local_size_x = kScanGroupSize) in;
+layout(std430, binding = kScanAddBindValues) buffer Values { uint values[]; };
+layout(std430, binding = kScanAddBindOffsets) readonly buffer Offsets { uint block_offsets[]; };
 layout(push_constant) uniform PC { ScanPC pc; };
 void main() {
   uint block = evf_linear_group();

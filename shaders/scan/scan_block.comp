@@ -4,12 +4,12 @@
 #extension GL_GOOGLE_include_directive : require
 #include "scan/scan_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer In { uint values_in[]; };
-layout(std430, binding = 1) writeonly buffer Out { uint values_out[]; };
-layout(std430, binding = 2) writeonly buffer Sums { uint block_sums[]; };
+layout(local_size_x = kScanGroupSize) in;
+layout(std430, binding = kScanBlockBindIn) readonly buffer In { uint values_in[]; };
+layout(std430, binding = kScanBlockBindOut) writeonly buffer Out { uint values_out[]; };
+layout(std430, binding = kScanBlockBindSums) writeonly buffer Sums { uint block_sums[]; };
 layout(push_constant) uniform PC { ScanPC pc; };
-shared uint partial[2][256];
+shared uint partial[2][kScanGroupSize];
 
 void main() {
   uint block = evf_linear_group();
@@ -23,7 +23,7 @@ void main() {
   partial[0][lid] = sum;
   barrier();
   uint src = 0;
-  for (uint off = 1; off < 256; off <<= 1) {
+  for (uint off = 1; off < kScanGroupSize; off <<= 1) {
     uint x = partial[src][lid];
     if (lid >= off) x += partial[src][lid - off];
     partial[1 - src][lid] = x;

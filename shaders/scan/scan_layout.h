@@ -13,5 +13,15 @@ struct ScanPC {
   uint n_in;    // elements read: in[i] for i < n_in, zero beyond
   uint pad0, pad1;
 };
+
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// scan/scan_add
+EVF_BIND(kScanAddBindValues, 0u, Values)
+EVF_BIND(kScanAddBindOffsets, 1u, Offsets)
+// scan/scan_block
+EVF_BIND(kScanBlockBindIn, 0u, In)
+EVF_BIND(kScanBlockBindOut, 1u, Out)
+EVF_BIND(kScanBlockBindSums, 2u, Sums)
+
 EVF_NAMESPACE_END
 #endif

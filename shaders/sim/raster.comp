@@ -6,12 +6,12 @@
 #include "sim/sim_layout.h"
 #include "common/dispatch.glsl"
 #include "sim/raster_common.glsl"
-layout(local_size_x = 16, local_size_y = 16) in;
-layout(std430, binding = 0) readonly buffer CamVerts { vec4 cam[]; };
-layout(std430, binding = 1) readonly buffer Boxes { uvec4 boxes[]; };
-layout(std430, binding = 2) readonly buffer Offsets { uint offsets[]; };  // n + 1 (exclusive scan)
-layout(std430, binding = 3) buffer Depth { uint depth[]; };
-layout(std430, binding = 4) buffer Ids { uint ids[]; };
+layout(local_size_x = kSimTile, local_size_y = kSimTile) in;
+layout(std430, binding = kSimRasterBindCamVerts) readonly buffer CamVerts { vec4 cam[]; };
+layout(std430, binding = kSimRasterBindBoxes) readonly buffer Boxes { uvec4 boxes[]; };
+layout(std430, binding = kSimRasterBindOffsets) readonly buffer Offsets { uint offsets[]; };  // n + 1 (exclusive scan)
+layout(std430, binding = kSimRasterBindDepth) buffer Depth { uint depth[]; };
+layout(std430, binding = kSimRasterBindIds) buffer Ids { uint ids[]; };
 layout(push_constant) uniform PC { SimPC pc; };
 shared uint s_tri;
 

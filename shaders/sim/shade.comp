@@ -7,13 +7,13 @@
 #include "sim/sim_layout.h"
 #include "common/dispatch.glsl"
 #include "sim/raster_common.glsl"
-layout(local_size_x = 64) in;
-layout(std430, binding = 0) readonly buffer Tris { SimTriangle tris[]; };
-layout(std430, binding = 1) readonly buffer CamVerts { vec4 cam[]; };
-layout(std430, binding = 2) readonly buffer Ids { uint ids[]; };
-layout(std430, binding = 3) readonly buffer Materials { SimMaterial materials[]; };
-layout(std430, binding = 4) readonly buffer Texels { uint texels[]; };
-layout(std430, binding = 5) writeonly buffer Out { vec4 image[]; };
+layout(local_size_x = kSimShadeGroupSize) in;
+layout(std430, binding = kSimShadeBindTris) readonly buffer Tris { SimTriangle tris[]; };
+layout(std430, binding = kSimShadeBindCamVerts) readonly buffer CamVerts { vec4 cam[]; };
+layout(std430, binding = kSimShadeBindIds) readonly buffer Ids { uint ids[]; };
+layout(std430, binding = kSimShadeBindMaterials) readonly buffer Materials { SimMaterial materials[]; };
+layout(std430, binding = kSimShadeBindTexels) readonly buffer Texels { uint texels[]; };
+layout(std430, binding = kSimShadeBindOut) writeonly buffer Out { vec4 image[]; };
 layout(push_constant) uniform PC { SimPC pc; };
 
 float srgb_decode(float c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }

@@ -44,5 +44,26 @@ struct SimPC {
   uvec4 dims;   // width, height, triangle count, raster mode (0 depth, 1 id)
   vec4 misc;    // x: near plane, y: texture supersampling (1 or 4 samples per pixel)
 };
+
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// sim/raster
+EVF_BIND(kSimRasterBindCamVerts, 0u, CamVerts)
+EVF_BIND(kSimRasterBindBoxes, 1u, Boxes)
+EVF_BIND(kSimRasterBindOffsets, 2u, Offsets)
+EVF_BIND(kSimRasterBindDepth, 3u, Depth)
+EVF_BIND(kSimRasterBindIds, 4u, Ids)
+// sim/shade
+EVF_BIND(kSimShadeBindTris, 0u, Tris)
+EVF_BIND(kSimShadeBindCamVerts, 1u, CamVerts)
+EVF_BIND(kSimShadeBindIds, 2u, Ids)
+EVF_BIND(kSimShadeBindMaterials, 3u, Materials)
+EVF_BIND(kSimShadeBindTexels, 4u, Texels)
+EVF_BIND(kSimShadeBindOut, 5u, Out)
+// sim/tri_setup
+EVF_BIND(kSimTriSetupBindTris, 0u, Tris)
+EVF_BIND(kSimTriSetupBindCamVerts, 1u, CamVerts)
+EVF_BIND(kSimTriSetupBindBoxes, 2u, Boxes)
+EVF_BIND(kSimTriSetupBindCounts, 3u, Counts)
+
 EVF_NAMESPACE_END
 #endif

@@ -4,11 +4,11 @@
 #extension GL_GOOGLE_include_directive : require
 #include "sim/sim_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 64) in;
-layout(std430, binding = 0) readonly buffer Tris { SimTriangle tris[]; };
-layout(std430, binding = 1) writeonly buffer CamVerts { vec4 cam[]; };     // 3 per triangle
-layout(std430, binding = 2) writeonly buffer Boxes { uvec4 boxes[]; };     // x0 y0 x1 y1 (inclusive)
-layout(std430, binding = 3) writeonly buffer Counts { uint counts[]; };
+layout(local_size_x = kSimSetupGroupSize) in;
+layout(std430, binding = kSimTriSetupBindTris) readonly buffer Tris { SimTriangle tris[]; };
+layout(std430, binding = kSimTriSetupBindCamVerts) writeonly buffer CamVerts { vec4 cam[]; };  // 3 per triangle
+layout(std430, binding = kSimTriSetupBindBoxes) writeonly buffer Boxes { uvec4 boxes[]; };     // x0 y0 x1 y1 (inclusive)
+layout(std430, binding = kSimTriSetupBindCounts) writeonly buffer Counts { uint counts[]; };
 layout(push_constant) uniform PC { SimPC pc; };
 
 vec3 to_cam(vec3 p) { return vec3(dot(pc.r0.xyz, p) + pc.r0.w, dot(pc.r1.xyz, p) + pc.r1.w, dot(pc.r2.xyz, p) + pc.r2.w); }

@@ -6,9 +6,9 @@
 #extension GL_GOOGLE_include_directive : require
 #include "sort/sort_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Keys { uint keys[]; };
-layout(std430, binding = 1) writeonly buffer Counts { uint counts[]; };
+layout(local_size_x = kSortGroupSize) in;
+layout(std430, binding = kRadixCountBindKeys) readonly buffer Keys { uint keys[]; };
+layout(std430, binding = kRadixCountBindCounts) writeonly buffer Counts { uint counts[]; };
 layout(push_constant) uniform PC { SortPC pc; };
 shared uint hist[16];
 

@@ -8,16 +8,16 @@
 #extension GL_GOOGLE_include_directive : require
 #include "sort/sort_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer KeysIn { uint keys_in[]; };
-layout(std430, binding = 1) readonly buffer ValuesIn { uint values_in[]; };
-layout(std430, binding = 2) writeonly buffer KeysOut { uint keys_out[]; };
-layout(std430, binding = 3) writeonly buffer ValuesOut { uint values_out[]; };
-layout(std430, binding = 4) readonly buffer Offsets { uint global_offset[]; };  // scanned counts
+layout(local_size_x = kSortGroupSize) in;
+layout(std430, binding = kRadixScatterBindKeysIn) readonly buffer KeysIn { uint keys_in[]; };
+layout(std430, binding = kRadixScatterBindValuesIn) readonly buffer ValuesIn { uint values_in[]; };
+layout(std430, binding = kRadixScatterBindKeysOut) writeonly buffer KeysOut { uint keys_out[]; };
+layout(std430, binding = kRadixScatterBindValuesOut) writeonly buffer ValuesOut { uint values_out[]; };
+layout(std430, binding = kRadixScatterBindOffsets) readonly buffer Offsets { uint global_offset[]; };  // scanned counts
 layout(push_constant) uniform PC { SortPC pc; };
 
-shared uint table[16 * 256];   // [digit][invocation], then its exclusive scan
-shared uint partial[2][256];
+shared uint table[16 * kSortGroupSize];   // [digit][invocation], then its exclusive scan
+shared uint partial[2][kSortGroupSize];
 
 void main() {
   uint block = evf_linear_group();
@@ -29,7 +29,7 @@ void main() {
     uint i = base + k;
     if (i < pc.n) local[(keys_in[i] >> pc.shift) & 15u] += 1;
   }
-  for (uint d = 0; d < 16; ++d) table[d * 256 + lid] = local[d];
+  for (uint d = 0; d < 16; ++d) table[d * kSortGroupSize + lid] = local[d];
   barrier();
   // Scan of the 4096-entry table: invocation lid sums entries [lid*16, lid*16+16).
   uint sum = 0;
@@ -37,7 +37,7 @@ void main() {
   partial[0][lid] = sum;
   barrier();
   uint src = 0;
-  for (uint off = 1; off < 256; off <<= 1) {
+  for (uint off = 1; off < kSortGroupSize; off <<= 1) {
     uint x = partial[src][lid];
     if (lid >= off) x += partial[src][lid - off];
     partial[1 - src][lid] = x;
@@ -54,7 +54,7 @@ void main() {
   // Position of pair: offset of (digit, block) + rank among the block's pairs of that digit.
   uint dest[16];
   for (uint d = 0; d < 16; ++d)
-    dest[d] = global_offset[d * pc.num_blocks + block] + table[d * 256 + lid] - table[d * 256];
+    dest[d] = global_offset[d * pc.num_blocks + block] + table[d * kSortGroupSize + lid] - table[d * kSortGroupSize];
   for (uint k = 0; k < pc.items; ++k) {
     uint i = base + k;
     if (i < pc.n) {

@@ -16,5 +16,17 @@ struct SortPC {
   uint num_blocks;  // ceil(n / (kSortGroupSize * items))
   uint items;       // consecutive elements per invocation
 };
+
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// sort/radix_count
+EVF_BIND(kRadixCountBindKeys, 0u, Keys)
+EVF_BIND(kRadixCountBindCounts, 1u, Counts)
+// sort/radix_scatter
+EVF_BIND(kRadixScatterBindKeysIn, 0u, KeysIn)
+EVF_BIND(kRadixScatterBindValuesIn, 1u, ValuesIn)
+EVF_BIND(kRadixScatterBindKeysOut, 2u, KeysOut)
+EVF_BIND(kRadixScatterBindValuesOut, 3u, ValuesOut)
+EVF_BIND(kRadixScatterBindOffsets, 4u, Offsets)
+
 EVF_NAMESPACE_END
 #endif

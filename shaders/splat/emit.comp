@@ -6,18 +6,18 @@
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) readonly buffer ProjA { vec4 proj_mean_conic[]; };
-layout(std430, binding = 1) readonly buffer ProjB { vec4 proj_misc[]; };
-layout(std430, binding = 2) readonly buffer Rect { uvec4 tile_rect[]; };
-layout(std430, binding = 3) readonly buffer Offsets { uint isect_offset[]; };   // [N+1]
-layout(std430, binding = 4) writeonly buffer Keys { uint keys[]; };
-layout(std430, binding = 5) writeonly buffer Values { uint slot_from_isect[]; };
-layout(std430, binding = 6) writeonly buffer Gid { uint gaussian_id_from_slot[]; };
+layout(local_size_x = kProjectGroupSize) in;
+layout(std430, binding = kEmitBindProjA) readonly buffer ProjA { vec4 proj_mean_conic[]; };
+layout(std430, binding = kEmitBindProjB) readonly buffer ProjB { vec4 proj_misc[]; };
+layout(std430, binding = kEmitBindRect) readonly buffer Rect { uvec4 tile_rect[]; };
+layout(std430, binding = kEmitBindOffsets) readonly buffer Offsets { uint isect_offset[]; };   // [N+1]
+layout(std430, binding = kEmitBindKeys) writeonly buffer Keys { uint keys[]; };
+layout(std430, binding = kEmitBindValues) writeonly buffer Values { uint slot_from_isect[]; };
+layout(std430, binding = kEmitBindGid) writeonly buffer Gid { uint gaussian_id_from_slot[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
 
 void main() {
-  uint g = evf_linear_invocation(128);
+  uint g = evf_linear_invocation(kProjectGroupSize);
   if (g >= pc.num_gaussians) return;
   uint begin = isect_offset[g], end = isect_offset[g + 1];
   if (begin == end) return;

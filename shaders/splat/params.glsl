@@ -1,14 +1,17 @@
-// The Gaussian parameter buffers (bindings 0..7), shared by project and project_bwd.
+// The Gaussian parameter buffers (bindings 0..7), shared by project and project_bwd (which
+// defines EVF_PARAMS_NO_SH: it declares only bindings 0..3).
 // SH coefficients are split by band so that no single binding exceeds the device's storage
 // range sooner than needed: band l holds (2l+1) coefficients x 3 channels per Gaussian.
-layout(std430, binding = 0) readonly buffer Means { float means[]; };                 // [N][3]
-layout(std430, binding = 1) readonly buffer LogScales { float log_scales[]; };        // [N][3]
-layout(std430, binding = 2) readonly buffer Quats { float quats[]; };                 // [N][4] wxyz
-layout(std430, binding = 3) readonly buffer Opacities { float opacity_logits[]; };    // [N]
-layout(std430, binding = 4) readonly buffer Sh0 { float sh0[]; };                     // [N][1][3]
-layout(std430, binding = 5) readonly buffer Sh1 { float sh1[]; };                     // [N][3][3]
-layout(std430, binding = 6) readonly buffer Sh2 { float sh2[]; };                     // [N][5][3]
-layout(std430, binding = 7) readonly buffer Sh3 { float sh3[]; };                     // [N][7][3]
+layout(std430, binding = kParamBindMeans) readonly buffer Means { float means[]; };                   // [N][3]
+layout(std430, binding = kParamBindLogScales) readonly buffer LogScales { float log_scales[]; };      // [N][3]
+layout(std430, binding = kParamBindQuats) readonly buffer Quats { float quats[]; };                   // [N][4] wxyz
+layout(std430, binding = kParamBindOpacities) readonly buffer Opacities { float opacity_logits[]; };  // [N]
+#ifndef EVF_PARAMS_NO_SH  // project_bwd reads the colours project computed, not the bands
+layout(std430, binding = kParamBindSh0) readonly buffer Sh0 { float sh0[]; };  // [N][1][3]
+layout(std430, binding = kParamBindSh1) readonly buffer Sh1 { float sh1[]; };  // [N][3][3]
+layout(std430, binding = kParamBindSh2) readonly buffer Sh2 { float sh2[]; };  // [N][5][3]
+layout(std430, binding = kParamBindSh3) readonly buffer Sh3 { float sh3[]; };  // [N][7][3]
+#endif
 
 // Every access below uses constant indices and no data-dependent branch: CPU drivers (lavapipe)
 // run both sides of an if and turn each buffer access into a loop over the SIMD lanes, so a
@@ -17,6 +20,7 @@ vec3 load_mean(uint g) { return vec3(means[3 * g], means[3 * g + 1], means[3 * g
 vec3 load_log_scale(uint g) { return vec3(log_scales[3 * g], log_scales[3 * g + 1], log_scales[3 * g + 2]); }
 vec4 load_quat(uint g) { return vec4(quats[4 * g], quats[4 * g + 1], quats[4 * g + 2], quats[4 * g + 3]); }
 
+#ifndef EVF_PARAMS_NO_SH
 // All 16 SH coefficients of Gaussian g; bands above `degree` (the buffers' degree) are zero.
 void load_sh_all(uint g, uint degree, out vec3 c[16]) {
   c[0] = vec3(sh0[3 * g], sh0[3 * g + 1], sh0[3 * g + 2]);
@@ -46,6 +50,7 @@ void load_sh_all(uint g, uint degree, out vec3 c[16]) {
     c[15] = vec3(sh3[i + 18], sh3[i + 19], sh3[i + 20]);
   }
 }
+#endif
 
 // base + sum_k Y[k] c[k], summed in order k = 0..15, written out (constant indices).
 vec3 sh_eval(vec3 base, float Y[16], vec3 c[16]) {

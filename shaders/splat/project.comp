@@ -6,22 +6,22 @@
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
-layout(local_size_x = 128) in;
+layout(local_size_x = kProjectGroupSize) in;
 #include "splat/params.glsl"
-layout(std430, binding = 8) writeonly buffer ProjA { vec4 proj_mean_conic[]; };  // mean.xy, conic.xy
-layout(std430, binding = 9) writeonly buffer ProjB { vec4 proj_misc[]; };        // conic.z, opacity, depth, q_max
-layout(std430, binding = 10) writeonly buffer ProjC { vec4 proj_color[]; };      // rgb, 0
-layout(std430, binding = 11) writeonly buffer Rect { uvec4 tile_rect[]; };       // tile x0, y0, x1, y1 (exclusive)
-layout(std430, binding = 12) writeonly buffer Count { uint tiles_touched[]; };
+layout(std430, binding = kProjectBindProjA) writeonly buffer ProjA { vec4 proj_mean_conic[]; };  // mean.xy, conic.xy
+layout(std430, binding = kProjectBindProjB) writeonly buffer ProjB { vec4 proj_misc[]; };        // conic.z, opacity, depth, q_max
+layout(std430, binding = kProjectBindProjC) writeonly buffer ProjC { vec4 proj_color[]; };       // rgb, 0
+layout(std430, binding = kProjectBindRect) writeonly buffer Rect { uvec4 tile_rect[]; };         // tile x0, y0, x1, y1 (exclusive)
+layout(std430, binding = kProjectBindCount) writeonly buffer Count { uint tiles_touched[]; };
 // d(raw colour channel c)/d(view direction), [N][3 channels][3], for project_bwd (SH degree >= 1;
 // a placeholder buffer at degree 0, never written). project_bwd then needs no SH coefficients.
-layout(std430, binding = 13) writeonly buffer DColor { float proj_dcolor[]; };
+layout(std430, binding = kProjectBindDColor) writeonly buffer DColor { float proj_dcolor[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
 
 // Culling selects zeros at the end instead of returning early: on CPU drivers (lavapipe) an
 // early return is a lane mask, and each of several culling exits would run its own stores.
 void main() {
-  uint g = evf_linear_invocation(128);
+  uint g = evf_linear_invocation(kProjectGroupSize);
   if (g >= pc.num_gaussians) return;
   Camera cam = camera_from(pc.cam);
   vec3 mean = load_mean(g);

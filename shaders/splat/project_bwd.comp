@@ -8,36 +8,37 @@
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
-layout(local_size_x = 128) in;
+layout(local_size_x = kProjectGroupSize) in;
+#define EVF_PARAMS_NO_SH
 #include "splat/params.glsl"
-layout(std430, binding = 8) readonly buffer Offsets { uint isect_offset[]; };
-layout(std430, binding = 9) readonly buffer Gid { uint gaussian_id_from_slot[]; };
-layout(std430, binding = 10) readonly buffer G0 { float g_mean_x[]; };
-layout(std430, binding = 11) readonly buffer G1 { float g_mean_y[]; };
-layout(std430, binding = 12) readonly buffer G2 { float g_conic_x[]; };
-layout(std430, binding = 13) readonly buffer G3 { float g_conic_y[]; };
-layout(std430, binding = 14) readonly buffer G4 { float g_conic_z[]; };
-layout(std430, binding = 15) readonly buffer G5 { float g_opacity[]; };
-layout(std430, binding = 16) readonly buffer G6 { float g_red[]; };
-layout(std430, binding = 17) readonly buffer G7 { float g_green[]; };
-layout(std430, binding = 18) readonly buffer G8 { float g_blue[]; };
-layout(std430, binding = 19) buffer VMeans { float v_means[]; };
-layout(std430, binding = 20) buffer VLogScales { float v_log_scales[]; };
-layout(std430, binding = 21) buffer VQuats { float v_quats[]; };
-layout(std430, binding = 22) buffer VOpacities { float v_opacity_logits[]; };
-layout(std430, binding = 23) buffer VSh0 { float v_sh0[]; };
-layout(std430, binding = 24) buffer VSh1 { float v_sh1[]; };
-layout(std430, binding = 25) buffer VSh2 { float v_sh2[]; };
-layout(std430, binding = 26) buffer VSh3 { float v_sh3[]; };
-layout(std430, binding = 27) buffer Grad2d { float grad2d_norm[]; };
-layout(std430, binding = 28) writeonly buffer PosePartial { float pose_partial[]; };  // [groups][6]
+layout(std430, binding = kProjectBwdBindOffsets) readonly buffer Offsets { uint isect_offset[]; };
+layout(std430, binding = kProjectBwdBindGid) readonly buffer Gid { uint gaussian_id_from_slot[]; };
+layout(std430, binding = kProjectBwdBindG0) readonly buffer G0 { float g_mean_x[]; };
+layout(std430, binding = kProjectBwdBindG1) readonly buffer G1 { float g_mean_y[]; };
+layout(std430, binding = kProjectBwdBindG2) readonly buffer G2 { float g_conic_x[]; };
+layout(std430, binding = kProjectBwdBindG3) readonly buffer G3 { float g_conic_y[]; };
+layout(std430, binding = kProjectBwdBindG4) readonly buffer G4 { float g_conic_z[]; };
+layout(std430, binding = kProjectBwdBindG5) readonly buffer G5 { float g_opacity[]; };
+layout(std430, binding = kProjectBwdBindG6) readonly buffer G6 { float g_red[]; };
+layout(std430, binding = kProjectBwdBindG7) readonly buffer G7 { float g_green[]; };
+layout(std430, binding = kProjectBwdBindG8) readonly buffer G8 { float g_blue[]; };
+layout(std430, binding = kProjectBwdBindVMeans) buffer VMeans { float v_means[]; };
+layout(std430, binding = kProjectBwdBindVLogScales) buffer VLogScales { float v_log_scales[]; };
+layout(std430, binding = kProjectBwdBindVQuats) buffer VQuats { float v_quats[]; };
+layout(std430, binding = kProjectBwdBindVOpacities) buffer VOpacities { float v_opacity_logits[]; };
+layout(std430, binding = kProjectBwdBindVSh0) buffer VSh0 { float v_sh0[]; };
+layout(std430, binding = kProjectBwdBindVSh1) buffer VSh1 { float v_sh1[]; };
+layout(std430, binding = kProjectBwdBindVSh2) buffer VSh2 { float v_sh2[]; };
+layout(std430, binding = kProjectBwdBindVSh3) buffer VSh3 { float v_sh3[]; };
+layout(std430, binding = kProjectBwdBindGrad2d) buffer Grad2d { float grad2d_norm[]; };
+layout(std430, binding = kProjectBwdBindPosePartial) writeonly buffer PosePartial { float pose_partial[]; };  // [groups][6]
 // From the forward (project.comp): the clamped colour max(raw, 0) (raw > 0 exactly where it is
 // > 0) and d(raw)/d(direction), so that no SH coefficient is read here.
-layout(std430, binding = 29) readonly buffer ProjC { vec4 proj_color[]; };
-layout(std430, binding = 30) readonly buffer DColor { float proj_dcolor[]; };
+layout(std430, binding = kProjectBwdBindProjC) readonly buffer ProjC { vec4 proj_color[]; };
+layout(std430, binding = kProjectBwdBindDColor) readonly buffer DColor { float proj_dcolor[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
 
-shared float red[6][128];
+shared float red[6][kProjectGroupSize];
 
 // EVF_ACCUMULATE (the "_acc" build, kFlagAccumulate): add to the gradient buffers (several
 // renders of one step, e.g. the virtual frames of an exposure) instead of overwriting them. A
@@ -70,7 +71,7 @@ void store_sh_all(uint g, uint degree, vec3 v[16]) {
 }
 
 void main() {
-  uint g = evf_linear_invocation(128);
+  uint g = evf_linear_invocation(kProjectGroupSize);
   uint lid = gl_LocalInvocationIndex;
   float pose[6] = float[6](0, 0, 0, 0, 0, 0);
   if (g < pc.num_gaussians) {
@@ -184,7 +185,7 @@ void main() {
   // this loop has zero trips for all vectors but the first.
   for (uint k = 0; k < 6; ++k) red[k][lid] = pose[k];
   barrier();
-  uint len = lid < 6u ? 128u : 0u;
+  uint len = lid < 6u ? kProjectGroupSize : 0u;
   float sum = 0.0;
   for (uint i = 0; i < len; ++i) sum += red[lid][i];
   if (lid < 6) pose_partial[evf_linear_group() * 6 + lid] = sum;

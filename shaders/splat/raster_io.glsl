@@ -1,11 +1,11 @@
 // Buffers shared by rasterize and rasterize_bwd (bindings 0..5), and the batch of Gaussians a
 // tile's workgroup holds in shared memory.
-layout(std430, binding = 0) readonly buffer Ranges { uvec2 tile_range[]; };
-layout(std430, binding = 1) readonly buffer Slots { uint slot_from_isect[]; };     // sorted
-layout(std430, binding = 2) readonly buffer Gid { uint gaussian_id_from_slot[]; };
-layout(std430, binding = 3) readonly buffer ProjA { vec4 proj_mean_conic[]; };
-layout(std430, binding = 4) readonly buffer ProjB { vec4 proj_misc[]; };
-layout(std430, binding = 5) readonly buffer ProjC { vec4 proj_color[]; };
+layout(std430, binding = kRasterBindRanges) readonly buffer Ranges { uvec2 tile_range[]; };
+layout(std430, binding = kRasterBindSlots) readonly buffer Slots { uint slot_from_isect[]; };     // sorted
+layout(std430, binding = kRasterBindGid) readonly buffer Gid { uint gaussian_id_from_slot[]; };
+layout(std430, binding = kRasterBindProjA) readonly buffer ProjA { vec4 proj_mean_conic[]; };
+layout(std430, binding = kRasterBindProjB) readonly buffer ProjB { vec4 proj_misc[]; };
+layout(std430, binding = kRasterBindProjC) readonly buffer ProjC { vec4 proj_color[]; };
 
 #ifndef EVF_BLOCK_BATCH
 shared vec4 batch_mean_conic[256];  // mean.xy, conic.xy

@@ -7,13 +7,13 @@
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
-layout(local_size_x = 16, local_size_y = 16) in;
+layout(local_size_x = kTileSize, local_size_y = kTileSize) in;
 #include "splat/raster_io.glsl"
-layout(std430, binding = 6) writeonly buffer OutRgb { float out_rgb[]; };      // [3][H][W]
-layout(std430, binding = 7) writeonly buffer OutAlpha { float out_alpha[]; };  // [H][W]
-layout(std430, binding = 8) writeonly buffer OutDepth { float out_depth[]; };  // [H][W]
-layout(std430, binding = 9) writeonly buffer OutT { float final_T[]; };        // [H][W]
-layout(std430, binding = 10) writeonly buffer OutLast { uint last_isect[]; };  // [H][W] one past the last blended
+layout(std430, binding = kRasterizeBindOutRgb) writeonly buffer OutRgb { float out_rgb[]; };        // [3][H][W]
+layout(std430, binding = kRasterizeBindOutAlpha) writeonly buffer OutAlpha { float out_alpha[]; };  // [H][W]
+layout(std430, binding = kRasterizeBindOutDepth) writeonly buffer OutDepth { float out_depth[]; };  // [H][W]
+layout(std430, binding = kRasterizeBindOutT) writeonly buffer OutT { float final_T[]; };            // [H][W]
+layout(std430, binding = kRasterizeBindOutLast) writeonly buffer OutLast { uint last_isect[]; };    // [H][W] one past the last blended
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint done_count;
 

@@ -37,11 +37,11 @@ layout(local_size_x = EVF_THREADS) in;
 #define EVF_BATCH 64
 #endif
 #include "splat/raster_io.glsl"
-layout(std430, binding = 6) writeonly buffer OutRgb { float out_rgb[]; };      // [3][H][W]
-layout(std430, binding = 7) writeonly buffer OutAlpha { float out_alpha[]; };  // [H][W]
-layout(std430, binding = 8) writeonly buffer OutDepth { float out_depth[]; };  // [H][W]
-layout(std430, binding = 9) writeonly buffer OutT { float final_T[]; };        // [H][W]
-layout(std430, binding = 10) writeonly buffer OutLast { uint last_isect[]; };  // [H][W] one past the last blended
+layout(std430, binding = kRasterizeBindOutRgb) writeonly buffer OutRgb { float out_rgb[]; };        // [3][H][W]
+layout(std430, binding = kRasterizeBindOutAlpha) writeonly buffer OutAlpha { float out_alpha[]; };  // [H][W]
+layout(std430, binding = kRasterizeBindOutDepth) writeonly buffer OutDepth { float out_depth[]; };  // [H][W]
+layout(std430, binding = kRasterizeBindOutT) writeonly buffer OutT { float final_T[]; };            // [H][W]
+layout(std430, binding = kRasterizeBindOutLast) writeonly buffer OutLast { uint last_isect[]; };    // [H][W] one past the last blended
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint done_count;
 

@@ -15,22 +15,22 @@
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
-layout(local_size_x = 16, local_size_y = 16) in;
+layout(local_size_x = kTileSize, local_size_y = kTileSize) in;
 #include "splat/raster_io.glsl"
-layout(std430, binding = 6) readonly buffer InT { float final_T[]; };
-layout(std430, binding = 7) readonly buffer InLast { uint last_isect[]; };
-layout(std430, binding = 8) readonly buffer VRgb { float v_rgb[]; };      // [3][H][W]
-layout(std430, binding = 9) readonly buffer VAlpha { float v_alpha[]; };  // [H][W]
+layout(std430, binding = kRasterizeBwdBindInT) readonly buffer InT { float final_T[]; };
+layout(std430, binding = kRasterizeBwdBindInLast) readonly buffer InLast { uint last_isect[]; };
+layout(std430, binding = kRasterizeBwdBindVRgb) readonly buffer VRgb { float v_rgb[]; };        // [3][H][W]
+layout(std430, binding = kRasterizeBwdBindVAlpha) readonly buffer VAlpha { float v_alpha[]; };  // [H][W]
 // Per-slot gradients, one plane per quantity: v_mean2d.xy, v_conic.xyz, v_opacity, v_rgb.
-layout(std430, binding = 10) writeonly buffer G0 { float g_mean_x[]; };
-layout(std430, binding = 11) writeonly buffer G1 { float g_mean_y[]; };
-layout(std430, binding = 12) writeonly buffer G2 { float g_conic_x[]; };
-layout(std430, binding = 13) writeonly buffer G3 { float g_conic_y[]; };
-layout(std430, binding = 14) writeonly buffer G4 { float g_conic_z[]; };
-layout(std430, binding = 15) writeonly buffer G5 { float g_opacity[]; };
-layout(std430, binding = 16) writeonly buffer G6 { float g_red[]; };
-layout(std430, binding = 17) writeonly buffer G7 { float g_green[]; };
-layout(std430, binding = 18) writeonly buffer G8 { float g_blue[]; };
+layout(std430, binding = kRasterizeBwdBindG0) writeonly buffer G0 { float g_mean_x[]; };
+layout(std430, binding = kRasterizeBwdBindG1) writeonly buffer G1 { float g_mean_y[]; };
+layout(std430, binding = kRasterizeBwdBindG2) writeonly buffer G2 { float g_conic_x[]; };
+layout(std430, binding = kRasterizeBwdBindG3) writeonly buffer G3 { float g_conic_y[]; };
+layout(std430, binding = kRasterizeBwdBindG4) writeonly buffer G4 { float g_conic_z[]; };
+layout(std430, binding = kRasterizeBwdBindG5) writeonly buffer G5 { float g_opacity[]; };
+layout(std430, binding = kRasterizeBwdBindG6) writeonly buffer G6 { float g_red[]; };
+layout(std430, binding = kRasterizeBwdBindG7) writeonly buffer G7 { float g_green[]; };
+layout(std430, binding = kRasterizeBwdBindG8) writeonly buffer G8 { float g_blue[]; };
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint tile_last;
 

@@ -10,6 +10,7 @@ EVF_CONST(uint, kTileSize, 16u)
 EVF_CONST(uint, kTilePixels, 256u)
 EVF_CONST(uint, kProjectGroupSize, 128u)
 EVF_CONST(uint, kIsectGroupSize, 256u)
+EVF_CONST(uint, kPoseReduceGroupSize, 256u)
 EVF_CONST(uint, kFlagAntialiased, 1u)
 EVF_CONST(uint, kFlagAccumulate, 2u)   // set when backward accumulates (the shader is the project_bwd_acc build)
 
@@ -41,6 +42,89 @@ struct ReducePC {
   uint count;        // number of 6-vectors to sum
   uint pad0, pad1, pad2;
 };
+
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// splat/emit
+EVF_BIND(kEmitBindProjA, 0u, ProjA)
+EVF_BIND(kEmitBindProjB, 1u, ProjB)
+EVF_BIND(kEmitBindRect, 2u, Rect)
+EVF_BIND(kEmitBindOffsets, 3u, Offsets)
+EVF_BIND(kEmitBindKeys, 4u, Keys)
+EVF_BIND(kEmitBindValues, 5u, Values)
+EVF_BIND(kEmitBindGid, 6u, Gid)
+// splat/project, splat/project_bwd
+EVF_BIND(kParamBindMeans, 0u, Means)
+EVF_BIND(kParamBindLogScales, 1u, LogScales)
+EVF_BIND(kParamBindQuats, 2u, Quats)
+EVF_BIND(kParamBindOpacities, 3u, Opacities)
+EVF_BIND(kParamBindSh0, 4u, Sh0)
+EVF_BIND(kParamBindSh1, 5u, Sh1)
+EVF_BIND(kParamBindSh2, 6u, Sh2)
+EVF_BIND(kParamBindSh3, 7u, Sh3)
+// splat/pose_reduce
+EVF_BIND(kPoseReduceBindPartials, 0u, Partials)
+EVF_BIND(kPoseReduceBindPose, 1u, Pose)
+// splat/project
+EVF_BIND(kProjectBindProjA, 8u, ProjA)
+EVF_BIND(kProjectBindProjB, 9u, ProjB)
+EVF_BIND(kProjectBindProjC, 10u, ProjC)
+EVF_BIND(kProjectBindRect, 11u, Rect)
+EVF_BIND(kProjectBindCount, 12u, Count)
+EVF_BIND(kProjectBindDColor, 13u, DColor)
+// splat/project_bwd
+EVF_BIND(kProjectBwdBindOffsets, 8u, Offsets)
+EVF_BIND(kProjectBwdBindGid, 9u, Gid)
+EVF_BIND(kProjectBwdBindG0, 10u, G0)
+EVF_BIND(kProjectBwdBindG1, 11u, G1)
+EVF_BIND(kProjectBwdBindG2, 12u, G2)
+EVF_BIND(kProjectBwdBindG3, 13u, G3)
+EVF_BIND(kProjectBwdBindG4, 14u, G4)
+EVF_BIND(kProjectBwdBindG5, 15u, G5)
+EVF_BIND(kProjectBwdBindG6, 16u, G6)
+EVF_BIND(kProjectBwdBindG7, 17u, G7)
+EVF_BIND(kProjectBwdBindG8, 18u, G8)
+EVF_BIND(kProjectBwdBindVMeans, 19u, VMeans)
+EVF_BIND(kProjectBwdBindVLogScales, 20u, VLogScales)
+EVF_BIND(kProjectBwdBindVQuats, 21u, VQuats)
+EVF_BIND(kProjectBwdBindVOpacities, 22u, VOpacities)
+EVF_BIND(kProjectBwdBindVSh0, 23u, VSh0)
+EVF_BIND(kProjectBwdBindVSh1, 24u, VSh1)
+EVF_BIND(kProjectBwdBindVSh2, 25u, VSh2)
+EVF_BIND(kProjectBwdBindVSh3, 26u, VSh3)
+EVF_BIND(kProjectBwdBindGrad2d, 27u, Grad2d)
+EVF_BIND(kProjectBwdBindPosePartial, 28u, PosePartial)
+EVF_BIND(kProjectBwdBindProjC, 29u, ProjC)
+EVF_BIND(kProjectBwdBindDColor, 30u, DColor)
+// splat/rasterize, splat/rasterize_block, splat/rasterize_bwd, splat/rasterize_bwd_block
+EVF_BIND(kRasterBindRanges, 0u, Ranges)
+EVF_BIND(kRasterBindSlots, 1u, Slots)
+EVF_BIND(kRasterBindGid, 2u, Gid)
+EVF_BIND(kRasterBindProjA, 3u, ProjA)
+EVF_BIND(kRasterBindProjB, 4u, ProjB)
+EVF_BIND(kRasterBindProjC, 5u, ProjC)
+// splat/rasterize, splat/rasterize_block
+EVF_BIND(kRasterizeBindOutRgb, 6u, OutRgb)
+EVF_BIND(kRasterizeBindOutAlpha, 7u, OutAlpha)
+EVF_BIND(kRasterizeBindOutDepth, 8u, OutDepth)
+EVF_BIND(kRasterizeBindOutT, 9u, OutT)
+EVF_BIND(kRasterizeBindOutLast, 10u, OutLast)
+// splat/rasterize_bwd, splat/rasterize_bwd_block
+EVF_BIND(kRasterizeBwdBindInT, 6u, InT)
+EVF_BIND(kRasterizeBwdBindInLast, 7u, InLast)
+EVF_BIND(kRasterizeBwdBindVRgb, 8u, VRgb)
+EVF_BIND(kRasterizeBwdBindVAlpha, 9u, VAlpha)
+EVF_BIND(kRasterizeBwdBindG0, 10u, G0)
+EVF_BIND(kRasterizeBwdBindG1, 11u, G1)
+EVF_BIND(kRasterizeBwdBindG2, 12u, G2)
+EVF_BIND(kRasterizeBwdBindG3, 13u, G3)
+EVF_BIND(kRasterizeBwdBindG4, 14u, G4)
+EVF_BIND(kRasterizeBwdBindG5, 15u, G5)
+EVF_BIND(kRasterizeBwdBindG6, 16u, G6)
+EVF_BIND(kRasterizeBwdBindG7, 17u, G7)
+EVF_BIND(kRasterizeBwdBindG8, 18u, G8)
+// splat/tile_ranges
+EVF_BIND(kTileRangesBindKeys, 0u, Keys)
+EVF_BIND(kTileRangesBindRanges, 1u, Ranges)
 
 EVF_NAMESPACE_END
 #endif

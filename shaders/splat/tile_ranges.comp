@@ -4,12 +4,12 @@
 #extension GL_GOOGLE_include_directive : require
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Keys { uint keys[]; };
-layout(std430, binding = 1) buffer Ranges { uvec2 tile_range[]; };
+layout(local_size_x = kIsectGroupSize) in;
+layout(std430, binding = kTileRangesBindKeys) readonly buffer Keys { uint keys[]; };
+layout(std430, binding = kTileRangesBindRanges) buffer Ranges { uvec2 tile_range[]; };
 layout(push_constant) uniform PC { RasterPC pc; };
 void main() {
-  uint i = evf_linear_invocation(256);
+  uint i = evf_linear_invocation(kIsectGroupSize);
   if (i >= pc.num_isects) return;
   uint num_tiles = pc.tiles_x * pc.tiles_y;
   uint tile = keys[i] >> pc.depth_bits;

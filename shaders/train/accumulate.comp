@@ -4,12 +4,12 @@
 #extension GL_GOOGLE_include_directive : require
 #include "train/train_layout.h"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer X { float x[]; };
-layout(std430, binding = 1) buffer Y { float y[]; };
+layout(local_size_x = kAccumulateGroupSize) in;
+layout(std430, binding = kTrainAccumulateBindX) readonly buffer X { float x[]; };
+layout(std430, binding = kTrainAccumulateBindY) buffer Y { float y[]; };
 layout(push_constant) uniform PC { AccumulatePC pc; };
 void main() {
-  uint i = evf_linear_invocation(256);
+  uint i = evf_linear_invocation(kAccumulateGroupSize);
   if (i >= pc.n) return;
   y[i] = (pc.accumulate != 0u ? y[i] : 0.0) + pc.scale * x[i];
 }

@@ -10,9 +10,9 @@
 #include "common/dispatch.glsl"
 #include "common/srgb.glsl"
 layout(local_size_x = kColourGroupSize) in;
-layout(std430, binding = kColourBindingX) readonly buffer X { float x[]; };
-layout(std430, binding = kColourBindingG) readonly buffer G { float g[]; };
-layout(std430, binding = kColourBindingY) writeonly buffer Y { float y[]; };
+layout(std430, binding = kColourBindX) readonly buffer X { float x[]; };
+layout(std430, binding = kColourBindG) readonly buffer G { float g[]; };
+layout(std430, binding = kColourBindY) writeonly buffer Y { float y[]; };
 layout(push_constant) uniform PC { ColourPC pc; };
 void main() {
   uint i = evf_linear_invocation(kColourGroupSize);

@@ -12,9 +12,9 @@ struct AccumulatePC {
 };
 // Colour conversions of the image model (train/colour.comp): bindings, ops.
 EVF_CONST(uint, kColourGroupSize, 256u)
-EVF_CONST(uint, kColourBindingX, 0u)
-EVF_CONST(uint, kColourBindingG, 1u)
-EVF_CONST(uint, kColourBindingY, 2u)
+EVF_BIND(kColourBindX, 0u, X)
+EVF_BIND(kColourBindG, 1u, G)
+EVF_BIND(kColourBindY, 2u, Y)
 EVF_CONST(uint, kColourDecode, 0u)
 EVF_CONST(uint, kColourEncode, 1u)
 EVF_CONST(uint, kColourDecodeBwd, 2u)
@@ -24,5 +24,11 @@ struct ColourPC {
   uint op;
   uint pad0, pad1;
 };
+
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// train/accumulate
+EVF_BIND(kTrainAccumulateBindX, 0u, X)
+EVF_BIND(kTrainAccumulateBindY, 1u, Y)
+
 EVF_NAMESPACE_END
 #endif

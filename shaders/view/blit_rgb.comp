@@ -5,9 +5,9 @@
 #include "view/view_layout.h"
 #include "view/srgb8.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Rgb { float rgb[]; };
-layout(std430, binding = 1) buffer Canvas { uint canvas[]; };
+layout(local_size_x = kViewGroupSize) in;
+layout(std430, binding = kBlitRgbBindRgb) readonly buffer Rgb { float rgb[]; };
+layout(std430, binding = kBlitRgbBindCanvas) buffer Canvas { uint canvas[]; };
 layout(push_constant) uniform PCBlock { BlitPC pc; };
 
 void main() {

@@ -4,8 +4,8 @@
 #include "view/view_layout.h"
 #include "view/srgb8.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) buffer Canvas { uint canvas[]; };
+layout(local_size_x = kViewGroupSize) in;
+layout(std430, binding = kFillRectBindCanvas) buffer Canvas { uint canvas[]; };
 layout(push_constant) uniform PCBlock { FillPC pc; };
 
 void main() {

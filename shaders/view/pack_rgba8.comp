@@ -6,9 +6,9 @@
 #include "view/view_layout.h"
 #include "view/srgb8.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Rgb { float rgb[]; };
-layout(std430, binding = 1) writeonly buffer Packed { uint packed_px[]; };
+layout(local_size_x = kViewGroupSize) in;
+layout(std430, binding = kPackRgba8BindRgb) readonly buffer Rgb { float rgb[]; };
+layout(std430, binding = kPackRgba8BindPacked) writeonly buffer Packed { uint packed_px[]; };
 layout(push_constant) uniform PCBlock { PackPC pc; };
 
 void main() {

@@ -7,10 +7,10 @@
 #include "view/view_layout.h"
 #include "view/srgb8.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Font { uint font[]; };
-layout(std430, binding = 1) readonly buffer Glyphs { Glyph glyphs[]; };
-layout(std430, binding = 2) buffer Canvas { uint canvas[]; };
+layout(local_size_x = kViewGroupSize) in;
+layout(std430, binding = kTextBindFont) readonly buffer Font { uint font[]; };
+layout(std430, binding = kTextBindGlyphs) readonly buffer Glyphs { Glyph glyphs[]; };
+layout(std430, binding = kTextBindCanvas) buffer Canvas { uint canvas[]; };
 layout(push_constant) uniform PCBlock { TextPC pc; };
 
 void main() {

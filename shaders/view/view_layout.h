@@ -71,5 +71,20 @@ struct TextPC {
   uint draw_bg;
   uint bgr;
 };
+
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// view/blit_rgb
+EVF_BIND(kBlitRgbBindRgb, 0u, Rgb)
+EVF_BIND(kBlitRgbBindCanvas, 1u, Canvas)
+// view/fill_rect
+EVF_BIND(kFillRectBindCanvas, 0u, Canvas)
+// view/pack_rgba8
+EVF_BIND(kPackRgba8BindRgb, 0u, Rgb)
+EVF_BIND(kPackRgba8BindPacked, 1u, Packed)
+// view/text
+EVF_BIND(kTextBindFont, 0u, Font)
+EVF_BIND(kTextBindGlyphs, 1u, Glyphs)
+EVF_BIND(kTextBindCanvas, 2u, Canvas)
+
 EVF_NAMESPACE_END
 #endif
