@@ -64,22 +64,25 @@ static int bench_raster(ArgParser& p) {
     walls.push_back(wall);
   }
   if (json) {
-    std::printf("{\"bench\": \"raster\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": %zu, "
-                "\"sh_degree\": %d, \"intersections\": %u, \"repeats\": %d, \"stages_ms\": {",
-                ctx.caps().name.c_str(), W, H, N, degree, rs.num_intersections(), repeats);
+    std::printf(
+        "{\"bench\": \"raster\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": %zu, "
+        "\"sh_degree\": %d, \"intersections\": %u, \"repeats\": %d, \"stages_ms\": {",
+        ctx.caps().name.c_str(), W, H, N, degree, rs.num_intersections(), repeats);
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
     // Minima too: on a machine shared with other work the fastest repeat is the least disturbed.
     std::printf("}, \"stages_min_ms\": {");
     for (size_t i = 0; i < order.size(); ++i)
-      std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), *std::min_element(stages[order[i]].begin(), stages[order[i]].end()));
+      std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(),
+                  *std::min_element(stages[order[i]].begin(), stages[order[i]].end()));
     std::printf("}, \"gpu_total_ms\": %.3f, \"gpu_total_min_ms\": %.3f, \"wall_ms\": %.3f}\n", median(totals),
                 *std::min_element(totals.begin(), totals.end()), median(walls));
   } else {
     std::printf("raster bench on %s: %ux%u, %zu Gaussians (SH %d), %u intersections, median of %d\n",
                 ctx.caps().name.c_str(), W, H, N, degree, rs.num_intersections(), repeats);
     for (auto& name : order) std::printf("  %-20s %9.2f ms\n", name.c_str(), median(stages[name]));
-    std::printf("  %-20s %9.2f ms\n  %-20s %9.2f ms\n", "total (GPU)", median(totals), "wall (with host)", median(walls));
+    std::printf("  %-20s %9.2f ms\n  %-20s %9.2f ms\n", "total (GPU)", median(totals), "wall (with host)",
+                median(walls));
   }
   return 0;
 }
@@ -106,15 +109,17 @@ static int bench_train(ArgParser& p) {
   gpu::Context ctx(o);
   // A dataset folder (blurry views + events: every method), or sharp views rendered from a
   // synthetic cloud (plain only: it has no exposures or events).
-  io::Dataset data = data_dir.empty() ? render_synthetic_dataset(ctx, W, H, views, 0, 20000) : io::load_dataset(data_dir);
+  io::Dataset data =
+      data_dir.empty() ? render_synthetic_dataset(ctx, W, H, views, 0, 20000) : io::load_dataset(data_dir);
   W = data.train.at(0).camera.width, H = data.train.at(0).camera.height;
   TrainConfig cfg;
   cfg.apply_method(method);
-  if (data_dir.empty() && method != "plain") throw std::invalid_argument("bench train: --method " + method + " needs --data DIR");
+  if (data_dir.empty() && method != "plain")
+    throw std::invalid_argument("bench train: --method " + method + " needs --data DIR");
   cfg.init_gaussians = N;
-  cfg.densify = false;           // a fixed count: the steps are comparable
-  cfg.event_from = 0;            // the event term (when the method has one) is on in every timed step
-  cfg.event_flip_until = 1;      // and so is the direction check
+  cfg.densify = false;       // a fixed count: the steps are comparable
+  cfg.event_from = 0;        // the event term (when the method has one) is on in every timed step
+  cfg.event_flip_until = 1;  // and so is the direction check
   for (auto& [k, v] : overrides) cfg.set(k, v);
   cfg.iterations = std::max<uint32_t>(cfg.iterations, uint32_t(steps) + 1);  // the warm-up step and the timed ones
   Trainer t(ctx, data, cfg);
@@ -136,19 +141,23 @@ static int bench_train(ArgParser& p) {
   }
   const double m = median(total);
   if (json) {
-    std::printf("{\"bench\": \"train\", \"method\": \"%s\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": %u, \"steps\": %d, "
-                "\"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, \"rasterize_backward\": %.2f, "
-                "\"optimizer\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
-                method.c_str(), ctx.caps().name.c_str(), W, H, N, steps, 1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), m);
+    std::printf(
+        "{\"bench\": \"train\", \"method\": \"%s\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": "
+        "%u, \"steps\": %d, "
+        "\"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, \"rasterize_backward\": %.2f, "
+        "\"optimizer\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
+        method.c_str(), ctx.caps().name.c_str(), W, H, N, steps, 1000.0 / m, median(fwd), median(loss), median(bwd),
+        median(opt), m);
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
     std::printf("}}\n");
   } else {
     std::printf("train bench (%s) on %s: %ux%u, %u Gaussians, one view per step, median of %d steps\n", method.c_str(),
                 ctx.caps().name.c_str(), W, H, N, steps);
-    std::printf("  rasterize forward   %9.2f ms\n  loss terms          %9.2f ms\n  rasterize backward  %9.2f ms\n"
-                "  optimizer (Adam)    %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
-                median(fwd), median(loss), median(bwd), median(opt), m, 1000.0 / m);
+    std::printf(
+        "  rasterize forward   %9.2f ms\n  loss terms          %9.2f ms\n  rasterize backward  %9.2f ms\n"
+        "  optimizer (Adam)    %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
+        median(fwd), median(loss), median(bwd), median(opt), m, 1000.0 / m);
     std::printf("  rasterizer stages:");
     for (auto& name : order) std::printf(" %s %.1f,", name.c_str(), median(stages[name]));
     std::printf(" ms\n");
@@ -160,13 +169,15 @@ static int run_bench(const Args& a) {
   ArgParser p(a);
   auto pos = p.positional();
   if (p.flag("--help") || pos.empty()) {
-    std::printf("usage: evflow bench raster [--width 346] [--height 260] [--gaussians 100000] [--sh-degree 3]\n"
-                "                           [--repeats 10] [--warmup 2] [--antialiased] [--json] [--device N|name]\n"
-                "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians).\n"
-                "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--views 8] [--json]\n"
-                "                          [--data DIR --method plain|edi|blur-only|blur+events] [key=value ...]\n"
-                "  Training steps (render, loss terms, backward, Adam): it/s and the split per part. With --data,\n"
-                "  the steps train that dataset with the method (blur modes: 2N+1 renders per step).\n");
+    std::printf(
+        "usage: evflow bench raster [--width 346] [--height 260] [--gaussians 100000] [--sh-degree 3]\n"
+        "                           [--repeats 10] [--warmup 2] [--antialiased] [--json] [--device N|name]\n"
+        "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians).\n"
+        "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--views 8] "
+        "[--json]\n"
+        "                          [--data DIR --method plain|edi|blur-only|blur+events] [key=value ...]\n"
+        "  Training steps (render, loss terms, backward, Adam): it/s and the split per part. With --data,\n"
+        "  the steps train that dataset with the method (blur modes: 2N+1 renders per step).\n");
     return pos.empty() ? 2 : 0;
   }
   p.args.erase(std::find(p.args.begin(), p.args.end(), pos[0]));

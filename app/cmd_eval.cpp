@@ -5,12 +5,12 @@
 #include <cstdio>
 #include <sstream>
 
+#include "camera/trajectory.h"
 #include "cli.h"
 #include "io/atomic_file.h"
 #include "metrics/srgb_metrics.h"
 #include "run_files.h"
 #include "splat/rasterizer.h"
-#include "camera/trajectory.h"
 #include "train/pose_refine.h"
 #include "train/trainer.h"
 
@@ -21,12 +21,13 @@ namespace fs = std::filesystem;
 static int run_eval(const Args& a) {
   ArgParser p(a);
   if (p.flag("--help")) {
-    std::printf("usage: evflow eval RUN [--data DIR] [--refine-iters N] [--device N|name]\n"
-                "  Renders every training view (deblur score, vs the sharp mid-exposure image) and every novel view,\n"
-                "  and writes PSNR/SSIM per view and mean to RUN/eval.json and RUN/eval.md, scored on 8-bit sRGB\n"
-                "  images as a saved PNG holds them; the scored renders go to RUN/eval/<set>/<view>.png.\n"
-                "  Novel views are scored at the given poses ('novel') and after N Adam steps of test-pose\n"
-                "  refinement with the Gaussians frozen ('novel_refined'; default N = 60, 0 skips it).\n");
+    std::printf(
+        "usage: evflow eval RUN [--data DIR] [--refine-iters N] [--device N|name]\n"
+        "  Renders every training view (deblur score, vs the sharp mid-exposure image) and every novel view,\n"
+        "  and writes PSNR/SSIM per view and mean to RUN/eval.json and RUN/eval.md, scored on 8-bit sRGB\n"
+        "  images as a saved PNG holds them; the scored renders go to RUN/eval/<set>/<view>.png.\n"
+        "  Novel views are scored at the given poses ('novel') and after N Adam steps of test-pose\n"
+        "  refinement with the Gaussians frozen ('novel_refined'; default N = 60, 0 skips it).\n");
     return 0;
   }
   std::string data_override = p.value("--data");
@@ -39,7 +40,11 @@ static int run_eval(const Args& a) {
   RunFolder run = RunFolder::open(pos[0]);
   io::Dataset data = io::load_dataset(data_override.empty() ? run.data_dir() : data_override);
   TrainConfig cfg;
-  cfg.apply_json([&] { auto c = run.config; c.erase("data"); return c; }());
+  cfg.apply_json([&] {
+    auto c = run.config;
+    c.erase("data");
+    return c;
+  }());
   gpu::Context ctx(o);
   GaussianBuffers params(ctx, run.checkpoint.cloud.size(), run.checkpoint.cloud.sh_degree, "p_");
   params.upload(run.checkpoint.cloud);
@@ -71,8 +76,9 @@ static int run_eval(const Args& a) {
       if (!v.sharp_mid) continue;
       const io::Image& gt = *v.sharp_mid;
       if (gt.width != v.camera.width || gt.height != v.camera.height)
-        throw std::runtime_error("view '" + v.name + "': ground truth is " + std::to_string(gt.width) + "x" + std::to_string(gt.height) +
-                                 ", camera " + std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
+        throw std::runtime_error("view '" + v.name + "': ground truth is " + std::to_string(gt.width) + "x" +
+                                 std::to_string(gt.height) + ", camera " + std::to_string(v.camera.width) + "x" +
+                                 std::to_string(v.camera.height));
       // Renders are sRGB (splat colours are); the ground truth is linear in memory.
       auto planar = io::planar_rgb(gt);
       const metrics::Image8 gt8 = metrics::encode_linear(planar, gt.width, gt.height, 3);

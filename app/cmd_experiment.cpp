@@ -46,7 +46,8 @@ double run_command(const std::string& cmd, const fs::path& log) {
   std::printf("  $ %s\n", cmd.c_str());
   std::fflush(stdout);
   const int rc = std::system((cmd + " >> " + quote(log.string()) + " 2>&1").c_str());
-  if (rc != 0) throw std::runtime_error("command failed (exit " + std::to_string(rc) + "), see " + log.string() + ": " + cmd);
+  if (rc != 0)
+    throw std::runtime_error("command failed (exit " + std::to_string(rc) + "), see " + log.string() + ": " + cmd);
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -62,7 +63,8 @@ static int run_experiment(const Args& a) {
     std::printf(
         "usage: evflow experiment --out DIR [--scenes %s] [--blur-px 6,4,9]\n"
         "         [--width 173] [--height 130] [--methods plain,edi,blur-only,blur+events] [--preset fast]\n"
-        "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device N|name]\n"
+        "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device "
+        "N|name]\n"
         "         [--no-baseline-pose-refine] [key=value ...]\n"
         "  Simulates each built-in scene (blur size per scene; recorded poses perturbed like poses estimated\n"
         "  from blurry images), trains every method on it with the preset\n"
@@ -87,7 +89,8 @@ static int run_experiment(const Args& a) {
   const auto methods = split(value_or("--methods", "plain,edi,blur-only,blur+events"));
   const std::string preset = value_or("--preset", "fast");
   const std::string refine = value_or("--refine-iters", "30");
-  const std::string noise_rot = value_or("--pose-noise-rot", "0.4"), noise_trans = value_or("--pose-noise-trans", "0.01");
+  const std::string noise_rot = value_or("--pose-noise-rot", "0.4"),
+                    noise_trans = value_or("--pose-noise-trans", "0.01");
   const std::string device = p.value("--device");
   const std::string sim_seed = p.value("--sim-seed");
   const bool baseline_pose_refine = !p.flag("--no-baseline-pose-refine");
@@ -104,7 +107,8 @@ static int run_experiment(const Args& a) {
     throw std::invalid_argument("--blur-px needs one value per scene (" + std::to_string(scenes.size()) + ")");
   for (auto& m : methods) {
     auto all = TrainConfig::methods();
-    if (std::find(all.begin(), all.end(), m) == all.end()) throw std::invalid_argument("experiment: unknown method '" + m + "'");
+    if (std::find(all.begin(), all.end(), m) == all.end())
+      throw std::invalid_argument("experiment: unknown method '" + m + "'");
   }
   {  // validate the overrides before hours of work
     TrainConfig probe = TrainConfig::preset_named(preset);
@@ -116,7 +120,8 @@ static int run_experiment(const Args& a) {
   const fs::path log = fs::path(out) / "experiment.log";
   nlohmann::json table = nlohmann::json::array();
   std::ostringstream md;
-  md << "| scene | blur px | method | deblur PSNR | deblur SSIM | novel PSNR | novel SSIM | novel PSNR (refined) | train s |\n"
+  md << "| scene | blur px | method | deblur PSNR | deblur SSIM | novel PSNR | novel SSIM | novel PSNR (refined) | "
+        "train s |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
   // A scene's simulation seed follows the scene, not its place in --scenes; unknown scenes are
   // refused here, before any work.
@@ -143,9 +148,10 @@ static int run_experiment(const Args& a) {
     const fs::path data = fs::path(out) / labels[si] / "data";
     if (!fs::exists(data / "dataset.json")) {
       std::printf("[%s] simulate\n", labels[si].c_str());
-      run_command(quote(self) + " simulate --scene " + quote(scenes[si]) + " --out " + quote(data.string()) + " --width " + width +
-                      " --height " + height + " --blur-px " + quote(blur[si]) + " --pose-noise-rot " + quote(noise_rot) +
-                      " --pose-noise-trans " + quote(noise_trans) + " --seed " + seeds[si] + dev,
+      run_command(quote(self) + " simulate --scene " + quote(scenes[si]) + " --out " + quote(data.string()) +
+                      " --width " + width + " --height " + height + " --blur-px " + quote(blur[si]) +
+                      " --pose-noise-rot " + quote(noise_rot) + " --pose-noise-trans " + quote(noise_trans) +
+                      " --seed " + seeds[si] + dev,
                   log);
     }
     for (auto& m : methods) {
@@ -153,47 +159,64 @@ static int run_experiment(const Args& a) {
       double secs = -1;
       if (!fs::exists(run / "eval.json")) {
         std::printf("[%s] %s\n", labels[si].c_str(), m.c_str());
-        std::string cmd = quote(self) + " train " + quote(data.string()) + " --out " + quote(run.string()) + " --preset " +
-                          quote(preset) + " method=" + quote(m);
+        std::string cmd = quote(self) + " train " + quote(data.string()) + " --out " + quote(run.string()) +
+                          " --preset " + quote(preset) + " method=" + quote(m);
         if (baseline_pose_refine && (m == "plain" || m == "edi")) cmd += " pose_refine=true";  // before the overrides
         for (auto& kv : overrides) cmd.append(" ").append(quote(kv));
         cmd.append(dev);
         secs = run_command(cmd, log);
         run_command(quote(self) + " eval " + quote(run.string()) + " --refine-iters " + quote(refine) + dev, log);
-        io::write_file_atomic(run / "train_seconds.txt", [&](const fs::path& tmp) { std::ofstream(tmp) << secs << "\n"; });
+        io::write_file_atomic(run / "train_seconds.txt",
+                              [&](const fs::path& tmp) { std::ofstream(tmp) << secs << "\n"; });
       } else if (fs::exists(run / "train_seconds.txt")) {
         std::ifstream(run / "train_seconds.txt") >> secs;
       }
       nlohmann::json e;
       std::ifstream f(run / "eval.json");
-      try { f >> e; } catch (const std::exception& ex) { throw std::runtime_error((run / "eval.json").string() + ": " + ex.what()); }
+      try {
+        f >> e;
+      } catch (const std::exception& ex) { throw std::runtime_error((run / "eval.json").string() + ": " + ex.what()); }
       auto get = [&](const char* set, const char* key) {
         return e.contains(set) ? e[set][key].get<double>() : std::nan("");
       };
-      nlohmann::json row = {{"scene", labels[si]}, {"blur_px", std::stod(blur[si])}, {"method", m},
-                            {"deblur_psnr", get("deblur", "mean_psnr")}, {"deblur_ssim", get("deblur", "mean_ssim")},
-                            {"novel_psnr", get("novel", "mean_psnr")}, {"novel_ssim", get("novel", "mean_ssim")},
-                            {"novel_refined_psnr", get("novel_refined", "mean_psnr")}, {"train_seconds", secs}};
+      nlohmann::json row = {{"scene", labels[si]},
+                            {"blur_px", std::stod(blur[si])},
+                            {"method", m},
+                            {"deblur_psnr", get("deblur", "mean_psnr")},
+                            {"deblur_ssim", get("deblur", "mean_ssim")},
+                            {"novel_psnr", get("novel", "mean_psnr")},
+                            {"novel_ssim", get("novel", "mean_ssim")},
+                            {"novel_refined_psnr", get("novel_refined", "mean_psnr")},
+                            {"train_seconds", secs}};
       table.push_back(row);
       char line[320];
-      std::snprintf(line, sizeof line, "| %s | %s | %s | %.2f | %.4f | %.2f | %.4f | %.2f | %.0f |\n", labels[si].c_str(),
-                    blur[si].c_str(), m.c_str(), row["deblur_psnr"].get<double>(), row["deblur_ssim"].get<double>(),
-                    row["novel_psnr"].get<double>(), row["novel_ssim"].get<double>(), row["novel_refined_psnr"].get<double>(), secs);
+      std::snprintf(line, sizeof line, "| %s | %s | %s | %.2f | %.4f | %.2f | %.4f | %.2f | %.0f |\n",
+                    labels[si].c_str(), blur[si].c_str(), m.c_str(), row["deblur_psnr"].get<double>(),
+                    row["deblur_ssim"].get<double>(), row["novel_psnr"].get<double>(), row["novel_ssim"].get<double>(),
+                    row["novel_refined_psnr"].get<double>(), secs);
       md << line;
       std::printf("%s", line);
       // Rewritten after every run, so a partial experiment has its table too.
-      io::write_file_atomic(fs::path(out) / "experiment.md", [&](const fs::path& tmp) { std::ofstream(tmp) << md.str(); });
-      nlohmann::json j = {{"preset", preset}, {"overrides", overrides}, {"width", width}, {"height", height},
-                          {"pose_noise_rot_deg", std::stod(noise_rot)}, {"pose_noise_trans", std::stod(noise_trans)},
-                          {"baseline_pose_refine", baseline_pose_refine}, {"runs", table}};
-      io::write_file_atomic(fs::path(out) / "experiment.json", [&](const fs::path& tmp) { std::ofstream(tmp) << j.dump(2) << "\n"; });
+      io::write_file_atomic(fs::path(out) / "experiment.md",
+                            [&](const fs::path& tmp) { std::ofstream(tmp) << md.str(); });
+      nlohmann::json j = {{"preset", preset},
+                          {"overrides", overrides},
+                          {"width", width},
+                          {"height", height},
+                          {"pose_noise_rot_deg", std::stod(noise_rot)},
+                          {"pose_noise_trans", std::stod(noise_trans)},
+                          {"baseline_pose_refine", baseline_pose_refine},
+                          {"runs", table}};
+      io::write_file_atomic(fs::path(out) / "experiment.json",
+                            [&](const fs::path& tmp) { std::ofstream(tmp) << j.dump(2) << "\n"; });
     }
   }
   std::printf("\n%s", md.str().c_str());
   return 0;
 }
 
-static Command reg("experiment", "train and score plain / edi / blur-only / blur+events on simulated scenes (one table)",
+static Command reg("experiment",
+                   "train and score plain / edi / blur-only / blur+events on simulated scenes (one table)",
                    run_experiment);
 
 }  // namespace evflow::app

@@ -11,20 +11,25 @@ namespace evflow::app {
 static int run_export(const Args& a) {
   ArgParser p(a);
   if (p.flag("--help")) {
-    std::printf("usage: evflow export RUN|file.ply|file.glb [--gltf out.glb|out.gltf] [--ply out.ply] [--linear-color]\n"
-                "  glTF 2.0 with KHR_gaussian_splatting, or the Inria PLY layout (docs/export.md).\n");
+    std::printf(
+        "usage: evflow export RUN|file.ply|file.glb [--gltf out.glb|out.gltf] [--ply out.ply] [--linear-color]\n"
+        "  glTF 2.0 with KHR_gaussian_splatting, or the Inria PLY layout (docs/export.md).\n");
     return 0;
   }
   std::string gltf = p.value("--gltf"), ply = p.value("--ply");
   bool linear = p.flag("--linear-color");
   p.reject_unknown();
   auto pos = p.positional();
-  if (pos.size() != 1 || (gltf.empty() && ply.empty())) throw std::invalid_argument("usage: evflow export SOURCE --gltf F and/or --ply F");
+  if (pos.size() != 1 || (gltf.empty() && ply.empty()))
+    throw std::invalid_argument("usage: evflow export SOURCE --gltf F and/or --ply F");
   std::filesystem::path src = pos[0];
   GaussianCloud cloud;
-  if (std::filesystem::is_directory(src)) cloud = RunFolder::open(src).checkpoint.cloud;
-  else if (src.extension() == ".ply") cloud = io::read_ply(src);
-  else cloud = io::read_gltf_splats(src);
+  if (std::filesystem::is_directory(src))
+    cloud = RunFolder::open(src).checkpoint.cloud;
+  else if (src.extension() == ".ply")
+    cloud = io::read_ply(src);
+  else
+    cloud = io::read_gltf_splats(src);
   if (!gltf.empty()) {
     io::GltfExportOptions o;
     if (linear) o.color_space = io::GltfColorSpace::lin_rec709_display;

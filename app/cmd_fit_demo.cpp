@@ -19,7 +19,10 @@ namespace {
 struct HostAdam {
   std::vector<float> m, v;
   void step(std::vector<float>& p, const std::vector<float>& g, float lr, int t) {
-    if (m.size() != p.size()) { m.assign(p.size(), 0.f); v.assign(p.size(), 0.f); }
+    if (m.size() != p.size()) {
+      m.assign(p.size(), 0.f);
+      v.assign(p.size(), 0.f);
+    }
     const float b1 = 0.9f, b2 = 0.999f;
     const float c1 = 1.f - std::pow(b1, float(t)), c2 = 1.f - std::pow(b2, float(t));
     for (size_t i = 0; i < p.size(); ++i) {
@@ -35,8 +38,9 @@ struct HostAdam {
 static int run_fit_demo(const Args& a) {
   ArgParser p(a);
   if (p.flag("--help")) {
-    std::printf("usage: evflow fit-demo [--out DIR] [--steps 300] [--width 160] [--height 120] [--gaussians 3000]\n"
-                "                       [--views 4] [--device N|name]\n");
+    std::printf(
+        "usage: evflow fit-demo [--out DIR] [--steps 300] [--width 160] [--height 120] [--gaussians 3000]\n"
+        "                       [--views 4] [--device N|name]\n");
     return 0;
   }
   const std::string out = p.value("--out", "runs/fit-demo");
@@ -47,13 +51,15 @@ static int run_fit_demo(const Args& a) {
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   gpu::Context ctx(o);
-  std::printf("fit-demo on %s: %zu Gaussians, %d views of %ux%u, %d steps\n", ctx.caps().name.c_str(), N, views, W, H, steps);
+  std::printf("fit-demo on %s: %zu Gaussians, %d views of %ux%u, %d steps\n", ctx.caps().name.c_str(), N, views, W, H,
+              steps);
 
   // Views on an arc looking at the scene centre (depth ~6).
   std::vector<Camera> cams;
   for (int v = 0; v < views; ++v) {
     double ang = (v - 0.5 * (views - 1)) * 0.08;
-    cams.push_back(Camera::look_at(W, H, 60.0, {6 * std::sin(ang), 0.2 * v, 6 - 6 * std::cos(ang)}, {0, 0, 6}, {0, -1, 0}));
+    cams.push_back(
+        Camera::look_at(W, H, 60.0, {6 * std::sin(ang), 0.2 * v, 6 - 6 * std::cos(ang)}, {0, 0, 6}, {0, -1, 0}));
   }
   GaussianCloud truth = synthetic_cloud(7, N, 1, cams[0]);
   GaussianCloud fit = synthetic_cloud(8, N, 1, cams[0]);
@@ -82,9 +88,11 @@ static int run_fit_demo(const Args& a) {
       auto img = rs.outputs().rgb.read<float>(3 * hw);
       for (size_t i = 0; i < img.size(); ++i) mse += double(img[i] - targets[v][i]) * (img[i] - targets[v][i]);
       if (save) {
-        io::write_png(std::filesystem::path(out) / (tag + "_view" + std::to_string(v) + ".png"), io::image_from_render(img, W, H));
+        io::write_png(std::filesystem::path(out) / (tag + "_view" + std::to_string(v) + ".png"),
+                      io::image_from_render(img, W, H));
         if (tag == "before")
-          io::write_png(std::filesystem::path(out) / ("target_view" + std::to_string(v) + ".png"), io::image_from_render(targets[v], W, H));
+          io::write_png(std::filesystem::path(out) / ("target_view" + std::to_string(v) + ".png"),
+                        io::image_from_render(targets[v], W, H));
       }
     }
     mse /= double(cams.size() * 3 * hw);

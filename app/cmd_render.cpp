@@ -47,7 +47,8 @@ std::vector<Shot> orbit_shots(const GaussianCloud& cloud, uint32_t w, uint32_t h
 std::vector<Shot> view_shots(const io::Dataset& data, const RunFolder* run) {
   std::vector<Shot> out;
   for (size_t i = 0; i < data.train.size(); ++i)
-    out.push_back({"train_" + data.train[i].name, run ? run->learned_camera(data.train[i], i, 0.5) : data.train[i].camera});
+    out.push_back(
+        {"train_" + data.train[i].name, run ? run->learned_camera(data.train[i], i, 0.5) : data.train[i].camera});
   for (auto& v : data.novel) out.push_back({"novel_" + v.name, v.camera});
   return out;
 }
@@ -55,8 +56,8 @@ std::vector<Shot> view_shots(const io::Dataset& data, const RunFolder* run) {
 // The 2N+1 virtual poses of each training view's learned exposure trajectory.
 std::vector<Shot> exposure_shots(const io::Dataset& data, const RunFolder& run, const TrainConfig& cfg) {
   if (cfg.mode != TrainMode::Blur)
-    throw std::invalid_argument("--path exposure: the run in '" + run.dir.string() + "' is mode=" + mode_name(cfg.mode) +
-                                ", it learned no exposure trajectories");
+    throw std::invalid_argument("--path exposure: the run in '" + run.dir.string() +
+                                "' is mode=" + mode_name(cfg.mode) + ", it learned no exposure trajectories");
   const std::vector<double> us = ExposureTrajectory::virtual_times(int(cfg.virtual_frames));
   std::vector<Shot> out;
   for (size_t i = 0; i < data.train.size(); ++i)
@@ -84,7 +85,8 @@ void print_help() {
 
 std::array<float, 3> parse_background(const std::string& v) {
   float r, g, b;
-  if (std::sscanf(v.c_str(), "%f,%f,%f", &r, &g, &b) != 3) throw std::invalid_argument("--background expects r,g,b, got '" + v + "'");
+  if (std::sscanf(v.c_str(), "%f,%f,%f", &r, &g, &b) != 3)
+    throw std::invalid_argument("--background expects r,g,b, got '" + v + "'");
   return {r, g, b};
 }
 
@@ -115,7 +117,12 @@ static int run_render(const Args& a) {
   std::unique_ptr<RunFolder> run = is_run ? std::make_unique<RunFolder>(RunFolder::open(src)) : nullptr;
   const GaussianCloud cloud = run ? run->checkpoint.cloud : load_splats(src);
   TrainConfig cfg;
-  if (run) cfg.apply_json([&] { auto c = run->config; c.erase("data"); return c; }());
+  if (run)
+    cfg.apply_json([&] {
+      auto c = run->config;
+      c.erase("data");
+      return c;
+    }());
   auto dataset = [&] {
     const std::string d = !data_dir.empty() ? data_dir : run ? run->data_dir() : "";
     if (d.empty()) throw std::invalid_argument("--path " + path + " needs a dataset: give --data DIR");
@@ -138,7 +145,8 @@ static int run_render(const Args& a) {
   }
 
   RenderSettings s;
-  s.background = background.empty() ? (run ? cfg.background : std::array<float, 3>{0, 0, 0}) : parse_background(background);
+  s.background =
+      background.empty() ? (run ? cfg.background : std::array<float, 3>{0, 0, 0}) : parse_background(background);
   s.antialiased = run && cfg.antialiased;
   s.sh_degree = sh_degree;
   gpu::Context ctx(o);
@@ -150,14 +158,16 @@ static int run_render(const Args& a) {
   for (const Shot& shot : shots) {
     r.forward(params, shot.camera, s, state);
     const size_t n = size_t(shot.camera.width) * shot.camera.height * 3;
-    metrics::write_png(fs::path(out_dir) / (shot.name + ".png"),
-                       metrics::quantise_srgb(state.outputs().rgb.read<float>(n), shot.camera.width, shot.camera.height, 3));
+    metrics::write_png(
+        fs::path(out_dir) / (shot.name + ".png"),
+        metrics::quantise_srgb(state.outputs().rgb.read<float>(n), shot.camera.width, shot.camera.height, 3));
   }
-  std::printf("rendered %zu image%s of %zu Gaussians into %s\n", shots.size(), shots.size() == 1 ? "" : "s", cloud.size(),
-              out_dir.c_str());
+  std::printf("rendered %zu image%s of %zu Gaussians into %s\n", shots.size(), shots.size() == 1 ? "" : "s",
+              cloud.size(), out_dir.c_str());
   return 0;
 }
 
-static Command reg("render", "render splats (run, .ply, .glb) from a camera file, an orbit, the views or the exposures", run_render);
+static Command reg("render", "render splats (run, .ply, .glb) from a camera file, an orbit, the views or the exposures",
+                   run_render);
 
 }  // namespace evflow::app

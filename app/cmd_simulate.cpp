@@ -82,10 +82,14 @@ static int run_simulate(const Args& a) {
   sp.pose_noise_trans = p.number("--pose-noise-trans", 0);
   sp.seed = uint64_t(p.integer("--seed", 1));
   const std::string preset = p.value("--events", "default");
-  if (preset == "default") sp.events = events::EventModelParams::defaults();
-  else if (preset == "noisy") sp.events = events::EventModelParams::noisy();
-  else if (preset == "ideal") sp.events = events::EventModelParams::ideal();
-  else throw std::invalid_argument("--events must be default, noisy or ideal");
+  if (preset == "default")
+    sp.events = events::EventModelParams::defaults();
+  else if (preset == "noisy")
+    sp.events = events::EventModelParams::noisy();
+  else if (preset == "ideal")
+    sp.events = events::EventModelParams::ideal();
+  else
+    throw std::invalid_argument("--events must be default, noisy or ideal");
   if (p.flag("--cfa")) sp.events.color = events::ColorMode::RGGB;
   sp.events.theta_pos = p.number("--theta-pos", sp.events.theta_pos);
   sp.events.theta_neg = p.number("--theta-neg", sp.events.theta_neg);
@@ -107,7 +111,8 @@ static int run_simulate(const Args& a) {
   const auto start = std::chrono::steady_clock::now();
   auto builtin = sim::builtin_scene_names();
   const bool is_builtin = scene_path.empty() || std::find(builtin.begin(), builtin.end(), scene_path) != builtin.end();
-  sim::Scene scene = is_builtin ? sim::make_builtin_scene(scene_path.empty() ? "default" : scene_path) : sim::load_gltf(scene_path);
+  sim::Scene scene =
+      is_builtin ? sim::make_builtin_scene(scene_path.empty() ? "default" : scene_path) : sim::load_gltf(scene_path);
   gpu::Context ctx(o);
   std::printf("simulate: scene %s (%zu triangles, %zu textures), %ux%u, %d training + %d novel views, device %s\n",
               scene.source.c_str(), scene.triangle_count(), scene.textures.size(), sp.width, sp.height, sp.train_views,
@@ -128,15 +133,18 @@ static int run_simulate(const Args& a) {
   res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   sim::write_simulation(res, dir);
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("simulate: wrote %s\n  time %.1f s (simulation %.1f s), %zu events, %zu sub-frames, mean blur %.2f px, "
-              "max sub-frame step %.3f px\n  vs the sharp frames, 8-bit sRGB: EDI (nominal thresholds) PSNR %.2f dB / SSIM %.4f, "
-              "blurry %.2f dB / %.4f (gain %.2f dB)\n",
-              out.c_str(), total, res.stats.seconds, res.stats.events, res.stats.subframes, res.stats.mean_blur_px,
-              res.stats.max_step_px, res.stats.psnr_edi, res.stats.ssim_edi, res.stats.psnr_blurry, res.stats.ssim_blurry,
-              res.stats.psnr_edi - res.stats.psnr_blurry);
+  std::printf(
+      "simulate: wrote %s\n  time %.1f s (simulation %.1f s), %zu events, %zu sub-frames, mean blur %.2f px, "
+      "max sub-frame step %.3f px\n  vs the sharp frames, 8-bit sRGB: EDI (nominal thresholds) PSNR %.2f dB / SSIM "
+      "%.4f, "
+      "blurry %.2f dB / %.4f (gain %.2f dB)\n",
+      out.c_str(), total, res.stats.seconds, res.stats.events, res.stats.subframes, res.stats.mean_blur_px,
+      res.stats.max_step_px, res.stats.psnr_edi, res.stats.ssim_edi, res.stats.psnr_blurry, res.stats.ssim_blurry,
+      res.stats.psnr_edi - res.stats.psnr_blurry);
   return 0;
 }
 
-static Command reg("simulate", "render a blurry event-camera dataset from a glTF scene (or the default scene)", run_simulate);
+static Command reg("simulate", "render a blurry event-camera dataset from a glTF scene (or the default scene)",
+                   run_simulate);
 
 }  // namespace evflow::app

@@ -46,14 +46,24 @@ template <typename T>
 static ViewOption view_option(const char* name, const char* arg, T TrainViewOptions::*m, const char* doc,
                               const char* allowed = "", std::function<bool(const T&)> valid = nullptr) {
   ViewOption o{name, arg, nullptr, nullptr, doc, allowed, nullptr};
-  if constexpr (std::is_same_v<T, bool>) o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = p.flag(name); };
-  else if constexpr (std::is_same_v<T, std::string>) o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = p.value(name); };
-  else if constexpr (std::is_integral_v<T>) o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = T(p.integer(name, v.*m)); };
-  else o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = p.number(name, v.*m); };
+  if constexpr (std::is_same_v<T, bool>)
+    o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = p.flag(name); };
+  else if constexpr (std::is_same_v<T, std::string>)
+    o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = p.value(name); };
+  else if constexpr (std::is_integral_v<T>)
+    o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = T(p.integer(name, v.*m)); };
+  else
+    o.read = [=](ArgParser& p, TrainViewOptions& v) { v.*m = p.number(name, v.*m); };
   o.shown = [=](const TrainViewOptions& v) {
-    if constexpr (std::is_same_v<T, bool>) return std::string(v.*m ? "on" : "off");
-    else if constexpr (std::is_same_v<T, std::string>) return v.*m;
-    else { char b[32]; std::snprintf(b, sizeof b, "%g", double(v.*m)); return std::string(b); }
+    if constexpr (std::is_same_v<T, bool>)
+      return std::string(v.*m ? "on" : "off");
+    else if constexpr (std::is_same_v<T, std::string>)
+      return v.*m;
+    else {
+      char b[32];
+      std::snprintf(b, sizeof b, "%g", double(v.*m));
+      return std::string(b);
+    }
   };
   if (valid) o.valid = [=](const TrainViewOptions& v) { return valid(v.*m); };
   return o;
@@ -72,17 +82,22 @@ static const std::vector<ViewOption>& view_options() {
       view_option<double>("--view-refresh", "S", &O::refresh_s,
                           "while training runs, re-render the training-view panels at most every S seconds", ">= 0",
                           [](const double& s) { return s >= 0; }),
-      view_option<int>("--view-index", "V", &O::view, "training view shown first, 0-based, checked against the dataset"),
+      view_option<int>("--view-index", "V", &O::view,
+                       "training view shown first, 0-based, checked against the dataset"),
       view_option<bool>("--view-paused", "", &O::start_paused, "start paused (look first, then Space)"),
-      view_option<bool>("--view-hold", "", &O::hold, "after the last step keep the window open (state \"DONE\") until it is closed"),
+      view_option<bool>("--view-hold", "", &O::hold,
+                        "after the last step keep the window open (state \"DONE\") until it is closed"),
       view_option<bool>("--view-vsync", "", &O::vsync, "present with vsync (FIFO)"),
-      view_option<int>("--view-frames", "N", &O::frames, "close the viewer after N presented frames (training goes on); 0: never",
-                       ">= 0", [](const int& n) { return n >= 0; }),
-      view_option<std::string>("--view-screenshot", "F.png", &O::screenshot, "the last presented frame, written when the viewer closes"),
-      view_option<std::string>("--view-report", "F.json", &O::report,
-                               "written when the viewer closes: per frame {frame, step, paused, view, content_step, ms}, the "
-                               "panels' tile rectangles (with source sizes), the free-camera rectangle, the shown view's PSNR and "
-                               "event counts, viewer and training wall seconds"),
+      view_option<int>("--view-frames", "N", &O::frames,
+                       "close the viewer after N presented frames (training goes on); 0: never", ">= 0",
+                       [](const int& n) { return n >= 0; }),
+      view_option<std::string>("--view-screenshot", "F.png", &O::screenshot,
+                               "the last presented frame, written when the viewer closes"),
+      view_option<std::string>(
+          "--view-report", "F.json", &O::report,
+          "written when the viewer closes: per frame {frame, step, paused, view, content_step, ms}, the "
+          "panels' tile rectangles (with source sizes), the free-camera rectangle, the shown view's PSNR and "
+          "event counts, viewer and training wall seconds"),
       view_option<std::string>("--view-script", "\"F:KEY,...\"", &O::script,
                                "testing: presses KEY (space, n, right, left, 1-9, o, r) just before frame F is drawn"),
   };
@@ -127,7 +142,10 @@ static std::string view_options_markdown() {
 // The keys with their defaults, one line per settings group, wrapped.
 static void print_keys_brief() {
   std::string group, line;
-  auto flush = [&] { if (!line.empty()) std::printf("%s\n", line.c_str()); line.clear(); };
+  auto flush = [&] {
+    if (!line.empty()) std::printf("%s\n", line.c_str());
+    line.clear();
+  };
   for (const SettingDoc& r : TrainConfig::describe()) {
     if (r.group != group) {
       flush();
@@ -152,18 +170,20 @@ static int run_train(const Args& a) {
     return 0;
   }
   if (p.flag("--help")) {
-    std::printf("usage: evflow train DATA --out RUN [--config FILE.json] [--preset fast|paper] [--resume] [--device N|name] [key=value ...]\n"
-                "  DATA: a dataset folder (our layout, E3NeRF Real-World-Challenge or EBAD-NeRF; docs/datasets.md).\n"
-                "  RUN: output folder: config.json, train.log, curve.csv, checkpoint.ckpt.\n"
-                "  keys with their defaults (--keys: the tables of docs/training.md, each key's meaning):\n");
+    std::printf(
+        "usage: evflow train DATA --out RUN [--config FILE.json] [--preset fast|paper] [--resume] [--device N|name] "
+        "[key=value ...]\n"
+        "  DATA: a dataset folder (our layout, E3NeRF Real-World-Challenge or EBAD-NeRF; docs/datasets.md).\n"
+        "  RUN: output folder: config.json, train.log, curve.csv, checkpoint.ckpt.\n"
+        "  keys with their defaults (--keys: the tables of docs/training.md, each key's meaning):\n");
     print_keys_brief();
     std::printf(
-                "  --view: watch training live in a window (docs/viewer.md): the splats from a free camera, and for\n"
-                "    one training view its blurry input, the mid-exposure render, the virtual frames along the\n"
-                "    exposure and the events; overlay with step, loss, PSNR, Gaussians, it/s.\n"
-                "    keys: Space pause/resume, N single step (pauses first), Right/] and Left/[ next/previous view,\n"
-                "    1-4 toggle panels, O overlay, R reset camera, Esc close the viewer (training goes on);\n"
-                "    mouse: left-drag orbit, wheel zoom; W/A/S/D/Q/E fly. Its options (--view-options: as a table):\n");
+        "  --view: watch training live in a window (docs/viewer.md): the splats from a free camera, and for\n"
+        "    one training view its blurry input, the mid-exposure render, the virtual frames along the\n"
+        "    exposure and the events; overlay with step, loss, PSNR, Gaussians, it/s.\n"
+        "    keys: Space pause/resume, N single step (pauses first), Right/] and Left/[ next/previous view,\n"
+        "    1-4 toggle panels, O overlay, R reset camera, Esc close the viewer (training goes on);\n"
+        "    mouse: left-drag orbit, wheel zoom; W/A/S/D/Q/E fly. Its options (--view-options: as a table):\n");
     for (const ViewOption& v : view_options())
       std::printf("    %-26s %s%s\n", (std::string(v.name) + (*v.arg ? " " : "") + v.arg).c_str(), v.doc,
                   view_option_limits(v).c_str());
@@ -187,7 +207,9 @@ static int run_train(const Args& a) {
     std::ifstream f(config_file);
     if (!f) throw std::runtime_error(config_file + ": cannot open config");
     nlohmann::json j;
-    try { f >> j; } catch (const std::exception& e) { throw std::runtime_error(config_file + ": " + e.what()); }
+    try {
+      f >> j;
+    } catch (const std::exception& e) { throw std::runtime_error(config_file + ": " + e.what()); }
     cfg.apply_json(j);
   }
   if (!preset.empty()) cfg.set("preset", preset);
@@ -208,8 +230,11 @@ static int run_train(const Args& a) {
   // With --view the context comes from the window (presentation on) and outlives the trainer.
   std::unique_ptr<viewer::Display> display;
   std::unique_ptr<gpu::Context> own_ctx;
-  if (view) display = std::make_unique<viewer::Display>("evflow train --view", vo.width, vo.height, "evflow train", o, vo.vsync);
-  else own_ctx = std::make_unique<gpu::Context>(o);
+  if (view)
+    display =
+        std::make_unique<viewer::Display>("evflow train --view", vo.width, vo.height, "evflow train", o, vo.vsync);
+  else
+    own_ctx = std::make_unique<gpu::Context>(o);
   gpu::Context& ctx = display ? display->context() : *own_ctx;
 
   const fs::path ckpt_path = fs::path(out) / "checkpoint.ckpt";
@@ -227,8 +252,8 @@ static int run_train(const Args& a) {
     curve << "\n";
   }
   const bool tty = isatty(fileno(stdout));
-  std::printf("training %zu views (%s) on %s, %u Gaussians, %u iterations, preset %s\n", data.train.size(), data.layout.c_str(),
-              ctx.caps().name.c_str(), cfg.init_gaussians, cfg.iterations, cfg.preset.c_str());
+  std::printf("training %zu views (%s) on %s, %u Gaussians, %u iterations, preset %s\n", data.train.size(),
+              data.layout.c_str(), ctx.caps().name.c_str(), cfg.init_gaussians, cfg.iterations, cfg.preset.c_str());
   std::signal(SIGINT, on_sigint);
   std::unique_ptr<viewer::TrainView> tv;
   if (display) tv = std::make_unique<viewer::TrainView>(*display, *trainer, data, vo, &g_interrupted);
@@ -254,14 +279,16 @@ static int run_train(const Args& a) {
           << "): trajectory reversed in time (the events scored the reversed order lower)\n";
     const double eta = (cfg.iterations - st.step) * ema_ms / 1000.0;
     if (tty) {
-      std::printf("\r[%5.1f%%] step %u/%u  %.1f it/s  ETA %.0fs  loss %.4f  Gaussians %zu ", 100.0 * st.step / cfg.iterations, st.step,
-                  cfg.iterations, 1000.0 / ema_ms, eta, ema_loss, trainer->params().count);
+      std::printf("\r[%5.1f%%] step %u/%u  %.1f it/s  ETA %.0fs  loss %.4f  Gaussians %zu ",
+                  100.0 * st.step / cfg.iterations, st.step, cfg.iterations, 1000.0 / ema_ms, eta, ema_loss,
+                  trainer->params().count);
       std::fflush(stdout);
     }
     if (st.step % cfg.log_every == 0 || st.step == cfg.iterations) {
       char line[256];
       std::snprintf(line, sizeof line, "step %u/%u  %.2f it/s  ETA %.0fs  loss %.5f  Gaussians %zu  flips %u", st.step,
-                    cfg.iterations, 1000.0 / ema_ms, eta, ema_loss, trainer->params().count, trainer->trajectory_flips());
+                    cfg.iterations, 1000.0 / ema_ms, eta, ema_loss, trainer->params().count,
+                    trainer->trajectory_flips());
       log << line << "\n";
       log.flush();
       if (!tty) std::printf("%s\n", line);
@@ -275,8 +302,10 @@ static int run_train(const Args& a) {
   if (done_steps > 0)
     std::printf("training wall time %.2f s for %u steps: %.3f it/s%s\n", wall, done_steps, done_steps / wall,
                 tv ? " (viewer on)" : "");
-  if (g_interrupted) std::printf("interrupted at step %u: checkpoint saved; continue with --resume\n", trainer->current_step());
-  else std::printf("done: %u steps, checkpoint %s\n", trainer->current_step(), ckpt_path.c_str());
+  if (g_interrupted)
+    std::printf("interrupted at step %u: checkpoint saved; continue with --resume\n", trainer->current_step());
+  else
+    std::printf("done: %u steps, checkpoint %s\n", trainer->current_step(), ckpt_path.c_str());
   int status = g_interrupted ? 130 : 0;
   if (tv) {
     if (!g_interrupted) tv->after_training();

@@ -13,13 +13,14 @@ namespace evflow::app {
 static int run_view(const Args& a) {
   ArgParser p(a);
   if (p.flag("--help")) {
-    std::printf("usage: evflow view RUN|file.ply|file.glb [--width 800] [--height 600] [--fps-cap 30] [--vsync]\n"
-                "                   [--frames N] [--screenshot out.png] [--device D]\n"
-                "  A window showing the splats from an orbit camera (docs/viewer.md): left-drag rotates about\n"
-                "  the cloud's centre, the wheel zooms, W/A/S/D/Q/E fly, Esc quits. --frames N exits after N\n"
-                "  presented frames; --screenshot writes the last one as PNG. Exits 3 if the validation layer\n"
-                "  (EVF_VALIDATION=1) reported anything. --resize-to WxH (testing) resizes the window after two\n"
-                "  frames; the run then ends only once a frame of the new size was presented.\n");
+    std::printf(
+        "usage: evflow view RUN|file.ply|file.glb [--width 800] [--height 600] [--fps-cap 30] [--vsync]\n"
+        "                   [--frames N] [--screenshot out.png] [--device D]\n"
+        "  A window showing the splats from an orbit camera (docs/viewer.md): left-drag rotates about\n"
+        "  the cloud's centre, the wheel zooms, W/A/S/D/Q/E fly, Esc quits. --frames N exits after N\n"
+        "  presented frames; --screenshot writes the last one as PNG. Exits 3 if the validation layer\n"
+        "  (EVF_VALIDATION=1) reported anything. --resize-to WxH (testing) resizes the window after two\n"
+        "  frames; the run then ends only once a frame of the new size was presented.\n");
     return 0;
   }
   viewer::ViewerOptions o;

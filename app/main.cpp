@@ -14,7 +14,10 @@ std::map<std::string, CommandInfo>& commands() {
 
 bool ArgParser::flag(const std::string& name) {
   for (size_t i = 0; i < args.size(); ++i)
-    if (args[i] == name) { args.erase(args.begin() + i); return true; }
+    if (args[i] == name) {
+      args.erase(args.begin() + i);
+      return true;
+    }
   return false;
 }
 
@@ -38,25 +41,35 @@ std::string ArgParser::value(const std::string& name, const std::string& def) {
 long long ArgParser::integer(const std::string& name, long long def) {
   std::string v = value(name);
   if (v.empty()) return def;
-  try { size_t pos; long long r = std::stoll(v, &pos); if (pos != v.size()) throw 1; return r; }
-  catch (...) { throw std::invalid_argument(name + " expects an integer, got '" + v + "'"); }
+  try {
+    size_t pos;
+    long long r = std::stoll(v, &pos);
+    if (pos != v.size()) throw 1;
+    return r;
+  } catch (...) { throw std::invalid_argument(name + " expects an integer, got '" + v + "'"); }
 }
 
 double ArgParser::number(const std::string& name, double def) {
   std::string v = value(name);
   if (v.empty()) return def;
-  try { size_t pos; double r = std::stod(v, &pos); if (pos != v.size()) throw 1; return r; }
-  catch (...) { throw std::invalid_argument(name + " expects a number, got '" + v + "'"); }
+  try {
+    size_t pos;
+    double r = std::stod(v, &pos);
+    if (pos != v.size()) throw 1;
+    return r;
+  } catch (...) { throw std::invalid_argument(name + " expects a number, got '" + v + "'"); }
 }
 
 std::vector<std::string> ArgParser::positional() const {
   std::vector<std::string> out;
-  for (auto& a : args) if (a.rfind("--", 0) != 0) out.push_back(a);
+  for (auto& a : args)
+    if (a.rfind("--", 0) != 0) out.push_back(a);
   return out;
 }
 
 void ArgParser::reject_unknown() const {
-  for (auto& a : args) if (a.rfind("--", 0) == 0) throw std::invalid_argument("unknown option " + a);
+  for (auto& a : args)
+    if (a.rfind("--", 0) == 0) throw std::invalid_argument("unknown option " + a);
 }
 
 gpu::ContextOptions context_options(ArgParser& p) {
@@ -69,8 +82,9 @@ gpu::ContextOptions context_options(ArgParser& p) {
 }  // namespace evflow::app
 
 static void usage() {
-  std::printf("evflow — sharp 3D Gaussian splats from motion-blurred images and events\n\n"
-              "usage: evflow <command> [options]   (evflow <command> --help for its options)\n\ncommands:\n");
+  std::printf(
+      "evflow — sharp 3D Gaussian splats from motion-blurred images and events\n\n"
+      "usage: evflow <command> [options]   (evflow <command> --help for its options)\n\ncommands:\n");
   for (auto& [name, info] : evflow::app::commands()) std::printf("  %-10s %s\n", name.c_str(), info.summary.c_str());
 }
 

@@ -21,8 +21,12 @@ struct RunFolder {
     RunFolder r;
     r.dir = dir;
     std::ifstream f(dir / "config.json");
-    if (!f) throw std::runtime_error((dir / "config.json").string() + ": missing (is '" + dir.string() + "' a training run?)");
-    try { f >> r.config; } catch (const std::exception& e) { throw std::runtime_error((dir / "config.json").string() + ": " + e.what()); }
+    if (!f)
+      throw std::runtime_error((dir / "config.json").string() + ": missing (is '" + dir.string() +
+                               "' a training run?)");
+    try {
+      f >> r.config;
+    } catch (const std::exception& e) { throw std::runtime_error((dir / "config.json").string() + ": " + e.what()); }
     // Runs from before splat colours became sRGB hold linear colours: they would render too dark.
     if (!r.config.is_object() || !r.config.contains("loss_space"))
       throw std::runtime_error((dir / "config.json").string() +

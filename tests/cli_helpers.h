@@ -9,6 +9,8 @@
 #include <sstream>
 #include <string>
 
+#include <sys/wait.h>
+
 #include "io/image.h"
 
 namespace evflow::test {
@@ -18,7 +20,9 @@ inline std::filesystem::path evflow_binary() {
   return std::filesystem::read_symlink("/proc/self/exe").parent_path().parent_path() / "evflow";
 }
 
-inline bool on_path(const std::string& prog) { return std::system(("command -v " + prog + " >/dev/null 2>&1").c_str()) == 0; }
+inline bool on_path(const std::string& prog) {
+  return std::system(("command -v " + prog + " >/dev/null 2>&1").c_str()) == 0;
+}
 
 // Single-quoted for sh.
 inline std::string quote(const std::string& s) {
@@ -32,6 +36,17 @@ inline std::string slurp(const std::filesystem::path& p) {
   std::stringstream ss;
   ss << f.rdbuf();
   return ss.str();
+}
+
+// Runs the evflow binary with `args` in `dir` (10 minutes at most); returns its exit status,
+// its output (stdout and stderr) in `out`.
+inline int run_evflow(const std::filesystem::path& dir, const std::string& args, std::string& out) {
+  const std::filesystem::path log = dir / "run.log";
+  const std::string cmd = "cd " + quote(dir.string()) + " && timeout 600 " + quote(evflow_binary().string()) + " " +
+                          args + " > " + quote(log.string()) + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  out = slurp(log);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 // The text of a docs/ file between "<!-- begin: COMMAND -->" and "<!-- end: COMMAND -->" (the

@@ -7,8 +7,8 @@
 #include <numeric>
 #include <random>
 
-#include "densify/density_control.h"
 #include "densify/densify_layout.h"
+#include "densify/density_control.h"
 #include "gpu_fixture.h"
 
 using namespace evflow;
@@ -19,10 +19,10 @@ namespace {
 constexpr float kLogDiv = 0.47000362924573558f;  // log(1.6)
 
 struct Spec {
-  float x, z;        // position (y = 0)
-  float scale;       // isotropic-ish: scales (s, 0.5 s, 0.25 s)
+  float x, z;   // position (y = 0)
+  float scale;  // isotropic-ish: scales (s, 0.5 s, 0.25 s)
   float opacity;
-  float grad[3];     // grad2d norm per accumulation pass
+  float grad[3];  // grad2d norm per accumulation pass
 };
 
 float logit_of(double p) { return float(std::log(p / (1 - p))); }
@@ -37,7 +37,8 @@ GaussianCloud make_cloud(const std::vector<Spec>& specs) {
     c.log_scales[3 * i + 1] = std::log(s.scale);  // the largest
     c.log_scales[3 * i + 2] = std::log(0.5f * s.scale);
     // A distinct rotation per Gaussian (unnormalised).
-    c.quats[4 * i] = 1.0f, c.quats[4 * i + 1] = 0.1f * float(i % 5), c.quats[4 * i + 2] = -0.2f, c.quats[4 * i + 3] = 0.05f * float(i);
+    c.quats[4 * i] = 1.0f, c.quats[4 * i + 1] = 0.1f * float(i % 5), c.quats[4 * i + 2] = -0.2f,
+                c.quats[4 * i + 3] = 0.05f * float(i);
     c.opacity_logits[i] = logit_of(s.opacity);
     for (int k = 0; k < 4; ++k)
       for (int ch = 0; ch < 3; ++ch) c.sh[(i * 4 + k) * 3 + ch] = float(i) + 0.1f * float(k) + 0.01f * float(ch);
@@ -273,10 +274,10 @@ TEST_CASE("densify: prune / clone / split decisions follow the rules, every buff
       REQUIRE(b->sh[1].size() >= m * 36ull);
     }
     const uint32_t widths[6] = {3, 3, 4, 1, 3, 9};
-    const gpu::Buffer* pbuf[6] = {&s.params->means, &s.params->log_scales, &s.params->quats, &s.params->opacity_logits,
-                                  &s.params->sh[0], &s.params->sh[1]};
-    const gpu::Buffer* gbuf[6] = {&s.grads->means, &s.grads->log_scales, &s.grads->quats, &s.grads->opacity_logits,
-                                  &s.grads->sh[0], &s.grads->sh[1]};
+    const gpu::Buffer* pbuf[6] = {&s.params->means,          &s.params->log_scales, &s.params->quats,
+                                  &s.params->opacity_logits, &s.params->sh[0],      &s.params->sh[1]};
+    const gpu::Buffer* gbuf[6] = {&s.grads->means,          &s.grads->log_scales, &s.grads->quats,
+                                  &s.grads->opacity_logits, &s.grads->sh[0],      &s.grads->sh[1]};
     for (size_t gi = 0; gi < 6; ++gi) {
       REQUIRE(s.adam->group(gi).count == m * widths[gi]);
       REQUIRE(s.adam->group(gi).param == pbuf[gi]);
@@ -419,8 +420,8 @@ TEST_CASE("densify: the cap grows the highest-gradient candidates only", "[densi
   for (uint32_t i = 0; i < n; ++i) {
     Spec& s = specs[i];
     s.x = U(rng) - 0.5f, s.z = 5.0f;
-    s.scale = U(rng) < 0.5f ? 0.005f : 0.05f;        // clone or split
-    s.opacity = U(rng) < 0.1f ? 0.001f : 0.5f;       // 10% pruned
+    s.scale = U(rng) < 0.5f ? 0.005f : 0.05f;   // clone or split
+    s.opacity = U(rng) < 0.1f ? 0.001f : 0.5f;  // 10% pruned
     const float g = U(rng) < 0.6f ? 2.1e-4f + 1e-3f * U(rng) : 1e-4f * U(rng);
     s.grad[0] = g, s.grad[1] = s.grad[2] = 0;
   }
@@ -450,7 +451,8 @@ TEST_CASE("densify: the cap grows the highest-gradient candidates only", "[densi
         cand.push_back(i);
       }
     }
-    std::stable_sort(cand.begin(), cand.end(), [&](uint32_t a, uint32_t b) { return specs[a].grad[0] > specs[b].grad[0]; });
+    std::stable_sort(cand.begin(), cand.end(),
+                     [&](uint32_t a, uint32_t b) { return specs[a].grad[0] > specs[b].grad[0]; });
     const uint32_t budget = cap > base_total ? cap - base_total : 0;
     std::vector<uint32_t> grown(n, 0);
     uint32_t run = 0, total = base_total;

@@ -23,8 +23,8 @@ struct Scene {
     for (uint32_t y = 0; y < h; ++y)
       for (uint32_t x = 0; x < w; ++x) {
         const double u = x + 0.5 - v * t + 0.8 * y;
-        const double edges = std::tanh(3.0 * std::sin(0.35 * u));           // sharp-ish stripes
-        const double tex = std::sin(1.3 * u) * std::cos(0.5 * y);            // fine texture
+        const double edges = std::tanh(3.0 * std::sin(0.35 * u));         // sharp-ish stripes
+        const double tex = std::sin(1.3 * u) * std::cos(0.5 * y);         // fine texture
         img[size_t(y) * w + x] = float(0.45 + 0.3 * edges + 0.12 * tex);  // in [0.03, 0.87]
       }
     return img;
@@ -122,8 +122,9 @@ TEST_CASE("EDI: recovers the mid-exposure frame of simulated events", "[events]"
   REQUIRE(c.events.size() > 1000);
   auto I = edi_deblur(c.blurry.data(), 1, c.events, 0.0, sc.T, EdiThresholds{ideal.theta_pos, ideal.theta_neg, {}, {}});
   const double p_blur = psnr(c.blurry, sharp_mid), p_edi = psnr(I, sharp_mid);
-  std::printf("[EDI] %ux%u, %.0f px motion in %.0f ms, %zu events (exact thresholds, no noise): blurry %.2f dB, EDI %.2f dB\n",
-              sc.w, sc.h, sc.shift_px, sc.T * 1e3, c.events.size(), p_blur, p_edi);
+  std::printf(
+      "[EDI] %ux%u, %.0f px motion in %.0f ms, %zu events (exact thresholds, no noise): blurry %.2f dB, EDI %.2f dB\n",
+      sc.w, sc.h, sc.shift_px, sc.T * 1e3, c.events.size(), p_blur, p_edi);
   CHECK(p_edi >= p_blur + 6.0);
 
   // EDI at other times of the exposure, against the sharp frame at that time.
@@ -141,9 +142,10 @@ TEST_CASE("EDI: recovers the mid-exposure frame of simulated events", "[events]"
   auto Id = edi_deblur(d.blurry.data(), 1, d.events, 0.0, sc.T, EdiThresholds{def.theta_pos, def.theta_neg, {}, {}});
   auto Io = edi_deblur(d.blurry.data(), 1, d.events, 0.0, sc.T, EdiThresholds{0, 0, d.th_pos, d.th_neg});
   const double p_def = psnr(Id, sharp_mid), p_oracle = psnr(Io, sharp_mid);
-  std::printf("[EDI] default noise (sigma 0.03, refractory 0.5 ms), %zu events: blurry %.2f dB, EDI %.2f dB "
-              "(with the true per-pixel thresholds %.2f dB)\n",
-              d.events.size(), psnr(d.blurry, sharp_mid), p_def, p_oracle);
+  std::printf(
+      "[EDI] default noise (sigma 0.03, refractory 0.5 ms), %zu events: blurry %.2f dB, EDI %.2f dB "
+      "(with the true per-pixel thresholds %.2f dB)\n",
+      d.events.size(), psnr(d.blurry, sharp_mid), p_def, p_oracle);
   // The mismatch and the dead time cost EDI little here; the sensor's own thresholds do better
   // than the nominal ones.
   CHECK(p_def >= psnr(d.blurry, sharp_mid) + 6.0);
@@ -158,16 +160,20 @@ TEST_CASE("EDI: recovers the mid-exposure frame of simulated events", "[events]"
   quiet_params.shot_rate_hz = 0;
   const size_t quiet = capture(sc, quiet_params, steps, 3).events.size();
   const double shot_expected = noisy.shot_rate_hz * sc.w * sc.h * sc.T;
-  auto In = edi_deblur(n.blurry.data(), 1, n.events, 0.0, sc.T, EdiThresholds{noisy.theta_pos, noisy.theta_neg, {}, {}});
+  auto In =
+      edi_deblur(n.blurry.data(), 1, n.events, 0.0, sc.T, EdiThresholds{noisy.theta_pos, noisy.theta_neg, {}, {}});
   const double p_noisy = psnr(In, sharp_mid);
   // Pixels EDI brings closer to the sharp frame than the blurry image is.
   size_t closer = 0;
-  for (size_t i = 0; i < In.size(); ++i) closer += std::abs(In[i] - sharp_mid[i]) < std::abs(n.blurry[i] - sharp_mid[i]);
-  std::printf("[EDI] noisy preset (sigma 0.05, 5 Hz shot, 0.1 Hz leak), %zu events (%.0f shot noise, %.0f expected): "
-              "blurry %.2f dB, EDI %.2f dB, %.0f%% of the pixels closer to the sharp frame\n",
-              n.events.size(), double(n.events.size()) - double(quiet), shot_expected, psnr(n.blurry, sharp_mid), p_noisy,
-              100.0 * closer / In.size());
-  CHECK(double(n.events.size()) - double(quiet) == Approx(shot_expected).margin(4 * std::sqrt(shot_expected)));  // Poisson, 4 sigma
+  for (size_t i = 0; i < In.size(); ++i)
+    closer += std::abs(In[i] - sharp_mid[i]) < std::abs(n.blurry[i] - sharp_mid[i]);
+  std::printf(
+      "[EDI] noisy preset (sigma 0.05, 5 Hz shot, 0.1 Hz leak), %zu events (%.0f shot noise, %.0f expected): "
+      "blurry %.2f dB, EDI %.2f dB, %.0f%% of the pixels closer to the sharp frame\n",
+      n.events.size(), double(n.events.size()) - double(quiet), shot_expected, psnr(n.blurry, sharp_mid), p_noisy,
+      100.0 * closer / In.size());
+  CHECK(double(n.events.size()) - double(quiet) ==
+        Approx(shot_expected).margin(4 * std::sqrt(shot_expected)));  // Poisson, 4 sigma
   CHECK(p_noisy >= psnr(n.blurry, sharp_mid) + 5.0);
   CHECK(p_noisy >= p_edi - 4.0);  // within 4 dB of EDI on exact events
   CHECK(closer >= 0.8 * In.size());

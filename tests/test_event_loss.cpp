@@ -50,8 +50,8 @@ struct Run {
 
 // Records the term on planar RGB frames; gradients start at a known pattern so that "adds into"
 // is checked too.
-Run run_gpu(const EventStream& ev, const std::vector<std::vector<float>>& frames, const EventLossOptions& opt, float weight,
-            uint64_t seed) {
+Run run_gpu(const EventStream& ev, const std::vector<std::vector<float>>& frames, const EventLossOptions& opt,
+            float weight, uint64_t seed) {
   auto& ctx = test::gpu_context();
   const uint32_t F = uint32_t(frames.size());
   const size_t n = frames[0].size();
@@ -209,8 +209,9 @@ TEST_CASE("event loss sign: renders that follow the simulator's events score nea
   test::require_no_validation_messages();
 }
 
-TEST_CASE("event loss: the value-only record matches the full one, and counts are reused only for the same view and times",
-          "[events][loss]") {
+TEST_CASE(
+    "event loss: the value-only record matches the full one, and counts are reused only for the same view and times",
+    "[events][loss]") {
   auto& ctx = test::gpu_context();
   const uint32_t W = 24, H = 16, F = 7;
   auto ev = random_events(W, H, 6000, 21);

@@ -36,7 +36,8 @@ std::vector<float> moving_pattern(uint32_t w, uint32_t h, double t, double speed
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x) {
       const double u = x + 0.5 - speed * t;
-      img[y * w + x] = float(0.5 + 0.3 * std::sin(0.6 * u + 0.4 * y) + 0.15 * std::tanh(std::sin(0.17 * u - 0.3 * y) * 4));
+      img[y * w + x] =
+          float(0.5 + 0.3 * std::sin(0.6 * u + 0.4 * y) + 0.15 * std::tanh(std::sin(0.17 * u - 0.3 * y) * 4));
     }
   return img;
 }
@@ -46,7 +47,8 @@ std::vector<float> moving_pattern(uint32_t w, uint32_t h, double t, double speed
 TEST_CASE("event model: linear log ramp up gives exact crossing times", "[events]") {
   const auto p = EventModelParams::ideal();
   REQUIRE(p.theta_pos == 0.2);
-  auto s = run_log_signal(p, [](double t) { return -2.0 + t; }, linspace(0.0, 1.0, 10));
+  auto s = run_log_signal(
+      p, [](double t) { return -2.0 + t; }, linspace(0.0, 1.0, 10));
   REQUIRE(s.size() == 5);
   for (size_t k = 0; k < 5; ++k) {
     CHECK(s.p[k] == 1);
@@ -74,7 +76,8 @@ TEST_CASE("event model: float linear-intensity frames go through log(eps + I)", 
 
 TEST_CASE("event model: decreasing ramp gives negative events", "[events]") {
   const auto p = EventModelParams::ideal();
-  auto s = run_log_signal(p, [](double t) { return -0.5 - t; }, linspace(0.0, 1.0, 7));
+  auto s = run_log_signal(
+      p, [](double t) { return -0.5 - t; }, linspace(0.0, 1.0, 7));
   REQUIRE(s.size() == 5);
   for (size_t k = 0; k < 5; ++k) {
     CHECK(s.p[k] == -1);
@@ -143,7 +146,7 @@ TEST_CASE("event model: per-pixel threshold statistics and clamping", "[events]"
   };
   auto [mp, sp] = stats(sim.theta_pos_map());
   auto [mn, sn] = stats(sim.theta_neg_map());
-  CHECK(std::abs(mp - 0.2) < 0.001);   // standard error 1.5e-4
+  CHECK(std::abs(mp - 0.2) < 0.001);  // standard error 1.5e-4
   CHECK(std::abs(mn - 0.3) < 0.001);
   CHECK(std::abs(sp - 0.03) < 0.001);  // standard error ~1e-4
   CHECK(std::abs(sn - 0.03) < 0.001);

@@ -1,13 +1,13 @@
 // `evflow experiment`: a scene's simulated data follow the scene, not its place in --scenes.
-#include <catch2/catch.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <catch2/catch.hpp>
 
 #include <filesystem>
 #include <string>
 
-#include "cli_helpers.h"
 #include <nlohmann/json.hpp>
+#include "cli_helpers.h"
 
 #include "io/dataset.h"
 #include "io/image.h"
@@ -18,20 +18,6 @@
 using namespace evflow;
 using namespace evflow::test;
 namespace fs = std::filesystem;
-
-namespace {
-
-// Runs the evflow binary with `args`; returns the exit status, output in `out`.
-int run_evflow(const fs::path& dir, const std::string& args, std::string& out) {
-  const fs::path log = dir / "run.log";
-  const std::string cmd = "cd " + quote(dir.string()) + " && timeout 600 " + quote(evflow_binary().string()) + " " + args +
-                          " > " + quote(log.string()) + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  out = slurp(log);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-}  // namespace
 
 TEST_CASE("experiment: a scene is simulated with its own seed wherever it is listed, bad seeds and scenes refused",
           "[experiment][gpu]") {
@@ -66,8 +52,8 @@ TEST_CASE("experiment: a scene is simulated with its own seed wherever it is lis
 
   // --sim-seed overrides the per-scene seed.
   rc = run_evflow(dir,
-                  "experiment --out exp1 --scenes gallery --blur-px 4 --methods plain --refine-iters 1 --sim-seed 1" + size +
-                      " iterations=4 init_gaussians=200 max_gaussians=400 sh_degree=0",
+                  "experiment --out exp1 --scenes gallery --blur-px 4 --methods plain --refine-iters 1 --sim-seed 1" +
+                      size + " iterations=4 init_gaussians=200 max_gaussians=400 sh_degree=0",
                   out);
   INFO(out);
   REQUIRE(rc == 0);
@@ -82,17 +68,20 @@ TEST_CASE("experiment: a scene is simulated with its own seed wherever it is lis
   fs::remove_all(dir);
 }
 
-TEST_CASE("experiment: a scene file runs end to end under DIR/<file stem>, baselines refine their poses unless told not to",
-          "[experiment][gpu]") {
+TEST_CASE(
+    "experiment: a scene file runs end to end under DIR/<file stem>, baselines refine their poses unless told not to",
+    "[experiment][gpu]") {
   REQUIRE(fs::exists(evflow_binary()));
   const fs::path dir = fs::temp_directory_path() / ("evflow_experiment_file_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir / "scenes");
   sim::write_gltf(sim::make_builtin_scene("gallery"), dir / "scenes" / "some.glb");
-  const std::string tiny = " --width 32 --height 24 --blur-px 4 --refine-iters 1 iterations=6 init_gaussians=200 "
-                           "max_gaussians=400 sh_degree=0 event_from=0";
+  const std::string tiny =
+      " --width 32 --height 24 --blur-px 4 --refine-iters 1 iterations=6 init_gaussians=200 "
+      "max_gaussians=400 sh_degree=0 event_from=0";
   std::string out;
-  int rc = run_evflow(dir, "experiment --out exp --scenes scenes/some.glb --sim-seed 5 --methods plain,blur+events" + tiny, out);
+  int rc = run_evflow(
+      dir, "experiment --out exp --scenes scenes/some.glb --sim-seed 5 --methods plain,blur+events" + tiny, out);
   INFO(out);
   REQUIRE(rc == 0);
   const fs::path exp = dir / "exp" / "some";
@@ -102,8 +91,10 @@ TEST_CASE("experiment: a scene file runs end to end under DIR/<file stem>, basel
   CHECK(slurp(dir / "exp" / "experiment.md").find("| some | 4 | blur+events |") != std::string::npos);
   // The data follow --sim-seed: the same as simulating the file with seed 5.
   auto data_of = [](const fs::path& d) { return slurp(d / "poses_bounds.npy") + slurp(d / "images" / "000.png"); };
-  REQUIRE(run_evflow(dir, "simulate --scene scenes/some.glb --out s5 --seed 5 --width 32 --height 24 --blur-px 4 "
-                          "--pose-noise-rot 0.4 --pose-noise-trans 0.01", out) == 0);
+  REQUIRE(run_evflow(dir,
+                     "simulate --scene scenes/some.glb --out s5 --seed 5 --width 32 --height 24 --blur-px 4 "
+                     "--pose-noise-rot 0.4 --pose-noise-trans 0.01",
+                     out) == 0);
   CHECK(data_of(exp / "data") == data_of(dir / "s5"));
   // Every run was evaluated on 8-bit sRGB images, and eval wrote the renders it scored: re-scoring
   // those PNGs against the sharp frames gives eval.json's figures.
@@ -114,8 +105,9 @@ TEST_CASE("experiment: a scene file runs end to end under DIR/<file stem>, basel
     for (size_t v = 0; v < data.train.size(); ++v) {
       const io::View& view = data.train[v];
       const io::Image png = io::read_image(exp / m / "eval" / "deblur" / (view.name + ".png"));
-      const auto rescored = metrics::score(metrics::encode_linear(io::planar_rgb(png), png.width, png.height, 3),
-                                           metrics::encode_linear(io::planar_rgb(*view.sharp_mid), png.width, png.height, 3));
+      const auto rescored =
+          metrics::score(metrics::encode_linear(io::planar_rgb(png), png.width, png.height, 3),
+                         metrics::encode_linear(io::planar_rgb(*view.sharp_mid), png.width, png.height, 3));
       CHECK(e["deblur"]["views"][v]["view"] == view.name);
       CHECK(e["deblur"]["views"][v]["psnr"].get<double>() == Approx(rescored.psnr).epsilon(1e-12));
       CHECK(e["deblur"]["views"][v]["ssim"].get<double>() == Approx(rescored.ssim).epsilon(1e-12));
@@ -124,8 +116,10 @@ TEST_CASE("experiment: a scene file runs end to end under DIR/<file stem>, basel
   // plain refines its training poses (its checkpoint holds one 6-vector per view); blur+events
   // has its trajectories; with --no-baseline-pose-refine plain does not refine.
   CHECK(slurp(exp / "plain" / "config.json").find("\"pose_refine\": true") != std::string::npos);
-  rc = run_evflow(dir, "experiment --out exp2 --scenes scenes/some.glb --sim-seed 5 --methods plain --no-baseline-pose-refine" + tiny,
-                  out);
+  rc = run_evflow(
+      dir,
+      "experiment --out exp2 --scenes scenes/some.glb --sim-seed 5 --methods plain --no-baseline-pose-refine" + tiny,
+      out);
   REQUIRE(rc == 0);
   CHECK(slurp(dir / "exp2" / "some" / "plain" / "config.json").find("\"pose_refine\": false") != std::string::npos);
   // A scene file without --sim-seed, and a name that is neither, are refused.

@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "io/gltf_splats.h"
-#include "io/ply_splats.h"
 #include "cli_helpers.h"
 #include "gpu_fixture.h"
+#include "io/gltf_splats.h"
+#include "io/ply_splats.h"
 #include "splat/rasterizer.h"
 
 namespace fs = std::filesystem;
@@ -38,7 +38,8 @@ struct TmpDir {
   fs::path path;
   TmpDir() {
     static int counter = 0;
-    path = fs::temp_directory_path() / ("evflow_test_export_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    path = fs::temp_directory_path() /
+           ("evflow_test_export_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
     fs::create_directories(path);
   }
   ~TmpDir() {
@@ -119,12 +120,11 @@ std::vector<uint8_t> join_glb(const Glb& g) {
 }
 
 // Loading must either succeed or throw std::runtime_error naming the file; anything else fails.
-template <typename Reader> void expect_load_or_clean_error(Reader read, const fs::path& p) {
+template <typename Reader>
+void expect_load_or_clean_error(Reader read, const fs::path& p) {
   try {
     read(p);
-  } catch (const std::runtime_error& e) {
-    REQUIRE_THAT(e.what(), Contains(p.string()));
-  }
+  } catch (const std::runtime_error& e) { REQUIRE_THAT(e.what(), Contains(p.string())); }
 }
 
 }  // namespace
@@ -163,7 +163,8 @@ TEST_CASE("PLY round trip reproduces every parameter exactly, SH degrees 0..3", 
                                   "property float scale_2\nproperty float rot_0\nproperty float rot_1\n"
                                   "property float rot_2\nproperty float rot_3\n"));
     REQUIRE((rest == 0) == (header.find("f_rest_0") == std::string::npos));
-    if (rest) REQUIRE_THAT(header, Contains("property float f_rest_" + std::to_string(rest - 1) + "\nproperty float opacity"));
+    if (rest)
+      REQUIRE_THAT(header, Contains("property float f_rest_" + std::to_string(rest - 1) + "\nproperty float opacity"));
     // f_rest is channel-major: the first f_rest of vertex 0 is coefficient 1 of red, f_rest[K-1] is
     // coefficient 1 of green.
     if (degree == 3) {
@@ -217,7 +218,8 @@ double inria_value(const GaussianCloud& c, size_t g, const std::string& name) {
   return 0;  // nx, ny, nz
 }
 
-template <typename T> void append(std::vector<uint8_t>& out, T v) {
+template <typename T>
+void append(std::vector<uint8_t>& out, T v) {
   uint8_t b[sizeof(T)];
   std::memcpy(b, &v, sizeof(T));
   out.insert(out.end(), b, b + sizeof(T));
@@ -244,13 +246,16 @@ TEST_CASE("a hand-written Inria PLY with another property order loads", "[export
   for (const std::string format : {"binary_little_endian", "ascii"}) {
     CAPTURE(format);
     const bool ascii = format == "ascii";
-    std::string header = "ply\r\nformat " + format + " 1.0\ncomment written by hand\nelement camera 2\nproperty int id\n"
+    std::string header = "ply\r\nformat " + format +
+                         " 1.0\ncomment written by hand\nelement camera 2\nproperty int id\n"
                          "property float fov\nelement vertex 2\n";
-    for (const auto& p : props) header += std::string("property ") + (p.is_double ? "double " : "float ") + p.name + "\n";
+    for (const auto& p : props)
+      header += std::string("property ") + (p.is_double ? "double " : "float ") + p.name + "\n";
     header += "property uchar red\nend_header\n";
     std::vector<uint8_t> file(header.begin(), header.end());
     std::string body;
-    if (ascii) body = "7 0.5\n8 1.5\n";
+    if (ascii)
+      body = "7 0.5\n8 1.5\n";
     else
       for (int i = 0; i < 2; ++i) {
         append<int32_t>(file, 7 + i);
@@ -263,11 +268,15 @@ TEST_CASE("a hand-written Inria PLY with another property order loads", "[export
           char buf[64];
           std::snprintf(buf, sizeof buf, "%.9g ", v);
           body += buf;
-        } else if (p.is_double) append<double>(file, v);
-        else append<float>(file, static_cast<float>(v));
+        } else if (p.is_double)
+          append<double>(file, v);
+        else
+          append<float>(file, static_cast<float>(v));
       }
-      if (ascii) body += "200\n";
-      else append<uint8_t>(file, 200);
+      if (ascii)
+        body += "200\n";
+      else
+        append<uint8_t>(file, 200);
     }
     file.insert(file.end(), body.begin(), body.end());
     const fs::path path = dir / ("hand_" + format + ".ply");
@@ -311,7 +320,8 @@ TEST_CASE("malformed PLY files give errors naming the file", "[export]") {
   expect_error("more_vertices.ply", edit_header("element vertex 5", "element vertex 6"), "truncated");
   expect_error("huge_count.ply", edit_header("element vertex 5", "element vertex 99999999999999"), "truncated");
   expect_error("bad_count.ply", edit_header("element vertex 5", "element vertex -5"), "bad count");
-  expect_error("garbage_header.ply", edit_header("format binary_little_endian 1.0", "format binary_little_endian 1.0\nfoo bar"),
+  expect_error("garbage_header.ply",
+               edit_header("format binary_little_endian 1.0", "format binary_little_endian 1.0\nfoo bar"),
                "unexpected keyword 'foo'");
   expect_error("bad_format.ply", edit_header("binary_little_endian", "binary_middle_endian"), "unknown format");
   expect_error("missing_rot.ply", edit_header("property float rot_3\n", ""), "lacks the required properties: rot_3");
@@ -400,8 +410,10 @@ TEST_CASE("glTF round trip reproduces every parameter after activation, SH degre
         // Opacity within float rounding; opacities beyond [1e-6, 1 - 1e-6] come back clamped.
         const bool clamped = std::fabs(x0) > std::log((1 - 1e-6) / 1e-6);
         REQUIRE(std::fabs(sigmoid(x1) - sigmoid(x0)) <= (clamped ? 1.0001e-6 : 1e-7));
-        if (std::fabs(x0) <= 6) REQUIRE(std::fabs(x1 - x0) <= 1e-4);
-        else REQUIRE(std::fabs(x1 - std::copysign(std::log((1 - 1e-6) / 1e-6), x0)) <= 1e-4);  // clamped
+        if (std::fabs(x0) <= 6)
+          REQUIRE(std::fabs(x1 - x0) <= 1e-4);
+        else
+          REQUIRE(std::fabs(x1 - std::copysign(std::log((1 - 1e-6) / 1e-6), x0)) <= 1e-4);  // clamped
       }
     }
 }
@@ -431,8 +443,8 @@ TEST_CASE("the glb holds KHR_gaussian_splatting as specified", "[export]") {
   REQUIRE(ext["kernel"] == "ellipse");
   REQUIRE(ext["colorSpace"] == "srgb_rec709_display");
   const json& attrs = prim["attributes"];
-  std::vector<std::string> expected = {"POSITION", "COLOR_0", "KHR_gaussian_splatting:ROTATION", "KHR_gaussian_splatting:SCALE",
-                                       "KHR_gaussian_splatting:OPACITY"};
+  std::vector<std::string> expected = {"POSITION", "COLOR_0", "KHR_gaussian_splatting:ROTATION",
+                                       "KHR_gaussian_splatting:SCALE", "KHR_gaussian_splatting:OPACITY"};
   for (int l = 0; l <= 3; ++l)
     for (int n = 0; n <= 2 * l; ++n)
       expected.push_back("KHR_gaussian_splatting:SH_DEGREE_" + std::to_string(l) + "_COEF_" + std::to_string(n));
@@ -452,7 +464,7 @@ TEST_CASE("the glb holds KHR_gaussian_splatting as specified", "[export]") {
     CAPTURE(name);
     REQUIRE(attrs.contains(name));
     const std::string type = d["accessors"][attrs[name].get<size_t>()]["type"];
-    REQUIRE(type == (name == "KHR_gaussian_splatting:OPACITY"                                      ? "SCALAR"
+    REQUIRE(type == (name == "KHR_gaussian_splatting:OPACITY"                         ? "SCALAR"
                      : name == "COLOR_0" || name == "KHR_gaussian_splatting:ROTATION" ? "VEC4"
                                                                                       : "VEC3"));
   }
@@ -518,15 +530,23 @@ TEST_CASE("glTF import accepts other tools' encodings", "[export]") {
   const size_t bv = d["bufferViews"].size();
   d["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", at}, {"byteLength", n * 12}, {"byteStride", 12}});
   const size_t acc = d["accessors"].size();
-  d["accessors"].push_back({{"bufferView", bv}, {"componentType", 5122}, {"normalized", true}, {"count", n}, {"type", "VEC4"}});
-  d["accessors"].push_back({{"bufferView", bv}, {"byteOffset", 8}, {"componentType", 5121}, {"count", n}, {"type", "VEC3"}});
-  d["accessors"].push_back({{"bufferView", bv}, {"byteOffset", 11}, {"componentType", 5121}, {"normalized", true}, {"count", n}, {"type", "SCALAR"}});
+  d["accessors"].push_back(
+      {{"bufferView", bv}, {"componentType", 5122}, {"normalized", true}, {"count", n}, {"type", "VEC4"}});
+  d["accessors"].push_back(
+      {{"bufferView", bv}, {"byteOffset", 8}, {"componentType", 5121}, {"count", n}, {"type", "VEC3"}});
+  d["accessors"].push_back({{"bufferView", bv},
+                            {"byteOffset", 11},
+                            {"componentType", 5121},
+                            {"normalized", true},
+                            {"count", n},
+                            {"type", "SCALAR"}});
   attrs["KHR_gaussian_splatting:ROTATION"] = acc;
   attrs["KHR_gaussian_splatting:SCALE"] = acc + 1;
   attrs["KHR_gaussian_splatting:OPACITY"] = acc + 2;
   // A second splat primitive of SH degree 0 (sharing POSITION and DC) is appended to the cloud.
   json second = d["meshes"][0]["primitives"][0];
-  for (int k = 0; k < 3; ++k) second["attributes"].erase("KHR_gaussian_splatting:SH_DEGREE_1_COEF_" + std::to_string(k));
+  for (int k = 0; k < 3; ++k)
+    second["attributes"].erase("KHR_gaussian_splatting:SH_DEGREE_1_COEF_" + std::to_string(k));
   d["meshes"].push_back({{"primitives", json::array({second})}});
   const fs::path q = dir / "b.glb";
   write_bytes(q, join_glb(g));
@@ -538,7 +558,7 @@ TEST_CASE("glTF import accepts other tools' encodings", "[export]") {
     const size_t i = j % n;
     CAPTURE(j);
     REQUIRE(r.means[j * 3] == c.means[i * 3]);
-    REQUIRE(r.quats[j * 4 + 0] == 0.0f);  // w
+    REQUIRE(r.quats[j * 4 + 0] == 0.0f);   // w
     REQUIRE(r.quats[j * 4 + 3] == -1.0f);  // z
     REQUIRE(std::exp(r.log_scales[j * 3 + 0]) == Approx(double(i + 1)).epsilon(1e-6));
     REQUIRE(std::exp(r.log_scales[j * 3 + 2]) == Approx(3.0).epsilon(1e-6));
@@ -583,28 +603,48 @@ TEST_CASE("malformed glTF files give errors naming the file", "[export]") {
   expect_error("short.glb", std::vector<uint8_t>(bytes.begin(), bytes.begin() + 10), "truncated");
   expect_error("random.glb", std::vector<uint8_t>{1, 2, 3, 4, 5, 6, 7, 8, 9}, "not a glTF file");
   expect_error("empty.glb", {}, "not a glTF file");
-  expect_error("version.glb", [&] { auto b = bytes; b[4] = 1; return b; }(), "GLB version 1");
-  expect_error("bad_json.glb", [&] { auto b = bytes; b[20] = '#'; return b; }(), "not valid JSON");
+  expect_error(
+      "version.glb",
+      [&] {
+        auto b = bytes;
+        b[4] = 1;
+        return b;
+      }(),
+      "GLB version 1");
+  expect_error(
+      "bad_json.glb",
+      [&] {
+        auto b = bytes;
+        b[20] = '#';
+        return b;
+      }(),
+      "not valid JSON");
   expect_error("plain_mesh.glb", tampered([&](Glb& g) { g.doc["meshes"][0]["primitives"][0].erase("extensions"); }),
                "no mesh primitive carries KHR_gaussian_splatting");
   expect_error("no_meshes.glb", tampered([&](Glb& g) { g.doc.erase("meshes"); }), "no mesh primitive");
   expect_error("missing_scale.glb", tampered([&](Glb& g) { attrs_of(g).erase("KHR_gaussian_splatting:SCALE"); }),
                "lacks the required attribute KHR_gaussian_splatting:SCALE");
-  expect_error("missing_dc.glb", tampered([&](Glb& g) { attrs_of(g).erase("KHR_gaussian_splatting:SH_DEGREE_0_COEF_0"); }),
+  expect_error("missing_dc.glb",
+               tampered([&](Glb& g) { attrs_of(g).erase("KHR_gaussian_splatting:SH_DEGREE_0_COEF_0"); }),
                "SH_DEGREE_0_COEF_0");
-  expect_error("partial_sh.glb", tampered([&](Glb& g) { attrs_of(g).erase("KHR_gaussian_splatting:SH_DEGREE_2_COEF_3"); }),
+  expect_error("partial_sh.glb",
+               tampered([&](Glb& g) { attrs_of(g).erase("KHR_gaussian_splatting:SH_DEGREE_2_COEF_3"); }),
                "SH degree 2 is partially defined (4 of 5");
   expect_error("sh_gap.glb", tampered([&](Glb& g) {
-                 for (int k = 0; k < 3; ++k) attrs_of(g).erase("KHR_gaussian_splatting:SH_DEGREE_1_COEF_" + std::to_string(k));
+                 for (int k = 0; k < 3; ++k)
+                   attrs_of(g).erase("KHR_gaussian_splatting:SH_DEGREE_1_COEF_" + std::to_string(k));
                }),
                "SH degree 2 is present but degree 1 is not");
-  expect_error("bad_sh_name.glb", tampered([&](Glb& g) { attrs_of(g)["KHR_gaussian_splatting:SH_DEGREE_1_COEF_5"] = 0; }),
+  expect_error("bad_sh_name.glb",
+               tampered([&](Glb& g) { attrs_of(g)["KHR_gaussian_splatting:SH_DEGREE_1_COEF_5"] = 0; }),
                "malformed SH attribute 'KHR_gaussian_splatting:SH_DEGREE_1_COEF_5'");
-  expect_error("sh_degree4.glb", tampered([&](Glb& g) { attrs_of(g)["KHR_gaussian_splatting:SH_DEGREE_4_COEF_0"] = 0; }),
-               "SH degree 4");
+  expect_error("sh_degree4.glb",
+               tampered([&](Glb& g) { attrs_of(g)["KHR_gaussian_splatting:SH_DEGREE_4_COEF_0"] = 0; }), "SH degree 4");
   expect_error("bad_index.glb", tampered([&](Glb& g) { attrs_of(g)["KHR_gaussian_splatting:OPACITY"] = 999; }),
                "accessors[999], which does not exist");
-  expect_error("bad_type.glb", tampered([&](Glb& g) { g.doc["accessors"][attrs_of(g)["KHR_gaussian_splatting:SCALE"].get<int>()]["type"] = "VEC4"; }),
+  expect_error("bad_type.glb", tampered([&](Glb& g) {
+                 g.doc["accessors"][attrs_of(g)["KHR_gaussian_splatting:SCALE"].get<int>()]["type"] = "VEC4";
+               }),
                "expected VEC3");
   expect_error("count.glb", tampered([&](Glb& g) {
                  g.doc["accessors"][attrs_of(g)["KHR_gaussian_splatting:OPACITY"].get<int>()]["count"] = 7;
@@ -617,15 +657,18 @@ TEST_CASE("malformed glTF files give errors naming the file", "[export]") {
   expect_error("view_overrun.glb", tampered([&](Glb& g) { g.doc["bufferViews"][3]["byteOffset"] = 1u << 31; }),
                "runs past the end of buffers[0]");
   expect_error("short_bin.glb", tampered([&](Glb& g) { g.bin.resize(g.bin.size() - 64); }), "truncated");
-  expect_error("nan.glb", tampered([&](Glb& g) {
-                 const float nan = std::numeric_limits<float>::quiet_NaN();
-                 const size_t off = g.doc["bufferViews"][attrs_of(g)["KHR_gaussian_splatting:SH_DEGREE_1_COEF_2"].get<int>()]["byteOffset"];
-                 std::memcpy(g.bin.data() + off + 4, &nan, 4);
-               }),
-               "element 0 component 1 is not finite");
+  expect_error(
+      "nan.glb", tampered([&](Glb& g) {
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        const size_t off =
+            g.doc["bufferViews"][attrs_of(g)["KHR_gaussian_splatting:SH_DEGREE_1_COEF_2"].get<int>()]["byteOffset"];
+        std::memcpy(g.bin.data() + off + 4, &nan, 4);
+      }),
+      "element 0 component 1 is not finite");
   expect_error("neg_scale.glb", tampered([&](Glb& g) {
                  const float neg = -1.0f;
-                 const size_t off = g.doc["bufferViews"][attrs_of(g)["KHR_gaussian_splatting:SCALE"].get<int>()]["byteOffset"];
+                 const size_t off =
+                     g.doc["bufferViews"][attrs_of(g)["KHR_gaussian_splatting:SCALE"].get<int>()]["byteOffset"];
                  std::memcpy(g.bin.data() + off, &neg, 4);
                }),
                "negative");
@@ -633,32 +676,37 @@ TEST_CASE("malformed glTF files give errors naming the file", "[export]") {
                  g.doc["meshes"][0]["primitives"][0]["extensions"]["KHR_gaussian_splatting"]["kernel"] = "cube";
                }),
                "reads only \"ellipse\"");
-  expect_error("mode.glb", tampered([&](Glb& g) { g.doc["meshes"][0]["primitives"][0].erase("mode"); }),
-               "has mode 4");
-  expect_error("required.glb", tampered([&](Glb& g) { g.doc["extensionsRequired"] = {"KHR_spz_gaussian_splats_compression"}; }),
+  expect_error("mode.glb", tampered([&](Glb& g) { g.doc["meshes"][0]["primitives"][0].erase("mode"); }), "has mode 4");
+  expect_error("required.glb",
+               tampered([&](Glb& g) { g.doc["extensionsRequired"] = {"KHR_spz_gaussian_splats_compression"}; }),
                "requires extension");
   expect_error("not_gltf.gltf", std::vector<uint8_t>{'{', '"', 'a', '"', ':', '1', '}'}, "lacks 'asset'");
-  expect_error("bad_b64.gltf", [&] {
-                 json d = base.doc;
-                 d["buffers"][0]["uri"] = "data:application/octet-stream;base64,@@@@";
-                 const std::string s = d.dump();
-                 return std::vector<uint8_t>(s.begin(), s.end());
-               }(),
-               "invalid base64");
-  expect_error("missing_bin.gltf", [&] {
-                 json d = base.doc;
-                 d["buffers"][0]["uri"] = "nowhere.bin";
-                 const std::string s = d.dump();
-                 return std::vector<uint8_t>(s.begin(), s.end());
-               }(),
-               "cannot open external buffer");
+  expect_error(
+      "bad_b64.gltf",
+      [&] {
+        json d = base.doc;
+        d["buffers"][0]["uri"] = "data:application/octet-stream;base64,@@@@";
+        const std::string s = d.dump();
+        return std::vector<uint8_t>(s.begin(), s.end());
+      }(),
+      "invalid base64");
+  expect_error(
+      "missing_bin.gltf",
+      [&] {
+        json d = base.doc;
+        d["buffers"][0]["uri"] = "nowhere.bin";
+        const std::string s = d.dump();
+        return std::vector<uint8_t>(s.begin(), s.end());
+      }(),
+      "cannot open external buffer");
   REQUIRE_THROWS_WITH(read_gltf_splats(dir / "absent.glb"), Contains((dir / "absent.glb").string()));
 
   // Random corruptions and truncations: a clean error or a load, never a crash.
   std::mt19937 rng(5);
   for (int i = 0; i < 300; ++i) {
     std::vector<uint8_t> b;
-    if (i < 100) b.assign(bytes.begin(), bytes.begin() + rng() % bytes.size());
+    if (i < 100)
+      b.assign(bytes.begin(), bytes.begin() + rng() % bytes.size());
     else {
       b = bytes;
       for (int k = 0; k < 3; ++k) b[rng() % b.size()] = uint8_t(rng());
@@ -716,10 +764,11 @@ TEST_CASE("a failing export leaves the existing file untouched", "[export]") {
 TEST_CASE("the Khronos glTF validator accepts our glb", "[export][gltf-validator]") {
   const char* script = std::getenv("EVF_GLTF_VALIDATOR");
   if (!script || !*script)
-    FAIL("EVF_GLTF_VALIDATOR is not set. Set it up with:\n"
-         "  (cd tests/tools && npm ci)\n"
-         "  export EVF_GLTF_VALIDATOR=$PWD/tests/tools/validate_gltf.mjs\n"
-         "(needs node >= 18; see docs/export.md)");
+    FAIL(
+        "EVF_GLTF_VALIDATOR is not set. Set it up with:\n"
+        "  (cd tests/tools && npm ci)\n"
+        "  export EVF_GLTF_VALIDATOR=$PWD/tests/tools/validate_gltf.mjs\n"
+        "(needs node >= 18; see docs/export.md)");
   REQUIRE(fs::is_regular_file(script));
   TmpDir dir;
   for (const std::string name : {"splats.glb", "splats.gltf"}) {
@@ -742,13 +791,14 @@ TEST_CASE("the Khronos glTF validator accepts our glb", "[export][gltf-validator
 // renders the bytes that tool shows (3DGS's image formation: colour = 0.5 + C0 f_dc, alpha
 // capped at 0.99, blended as they are, no transfer function), and the glb EvFlow exports from it
 // says srgb_rec709_display and renders the same.
-TEST_CASE("an Inria PLY from another tool renders its own colours (sRGB splats), through PLY and glTF", "[export][gpu]") {
+TEST_CASE("an Inria PLY from another tool renders its own colours (sRGB splats), through PLY and glTF",
+          "[export][gpu]") {
   TmpDir dir;
   const double c0 = 0.28209479177387814;
   const double colour[3] = {0.2, 0.5, 0.8};
   std::string ply = "ply\nformat ascii 1.0\nelement vertex 1\n";
-  for (const char* p : {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1",
-                        "rot_2", "rot_3"})
+  for (const char* p : {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2",
+                        "rot_0", "rot_1", "rot_2", "rot_3"})
     ply += std::string("property float ") + p + "\n";
   char body[256];
   std::snprintf(body, sizeof body, "end_header\n0 0 5 %.9g %.9g %.9g 10 0 0 0 1 0 0 0\n", (colour[0] - 0.5) / c0,

@@ -38,7 +38,9 @@ TEST_CASE("gpu: dispatches past 65,535 workgroups reach every element", "[gpu]")
   const uint32_t groups = 70000, n = groups * shaderio::kIotaGroupSize - 5;
   gpu::Buffer b(ctx, uint64_t(n) * 4, "iota");
   gpu::Commands cmd(ctx);
-  struct { uint32_t n, offset; } pc{n, 3};
+  struct {
+    uint32_t n, offset;
+  } pc{n, 3};
   auto g = cmd.linear_groups(groups);
   REQUIRE(g.y >= 2);
   cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, b}}, pc, g);
@@ -56,7 +58,9 @@ TEST_CASE("gpu: a binding above the device's storage range is refused with a cle
   if (range >= ctx.caps().max_allocation_size) return;  // nothing to exceed on this device
   gpu::Buffer big(ctx, range + 1024, "too_big");
   gpu::Commands cmd(ctx);
-  struct { uint32_t n, offset; } pc{16, 0};
+  struct {
+    uint32_t n, offset;
+  } pc{16, 0};
   REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, big}}, pc, gpu::Groups{1, 1, 1}),
                       Catch::Contains("too_big") && Catch::Contains("maxStorageBufferRange"));
   test::require_no_validation_messages();
@@ -66,19 +70,21 @@ TEST_CASE("gpu: dispatch binds by name and checks the bindings against the kerne
   auto& ctx = test::gpu_context();
   gpu::Buffer a(ctx, 256, "a"), b(ctx, 256, "b");
   gpu::Commands cmd(ctx);
-  struct { uint32_t n, offset; } pc{16, 0};
+  struct {
+    uint32_t n, offset;
+  } pc{16, 0};
   const gpu::Groups one{1, 1, 1};
   const auto& k = ctx.kernel("common/iota");
   REQUIRE(k.bindings().size() == 1);
   CHECK(k.bindings()[0].index == shaderio::kIotaBindValues.index);
   CHECK(k.bindings()[0].block == "Values");
   // A binding the shader lacks, one bound twice, one missing, one under another block's name.
-  REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, a}, {shaderio::BindSlot{1, "Extra"}, b}},
-                                   pc, one),
-                      Catch::Contains("'common/iota' has no binding 1 (Extra)") && Catch::Contains("declares 0 (Values)"));
-  REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, a}, {shaderio::kIotaBindValues, b}},
-                                   pc, one),
-                      Catch::Contains("binding 0 (Values) is bound twice"));
+  REQUIRE_THROWS_WITH(
+      cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, a}, {shaderio::BindSlot{1, "Extra"}, b}}, pc, one),
+      Catch::Contains("'common/iota' has no binding 1 (Extra)") && Catch::Contains("declares 0 (Values)"));
+  REQUIRE_THROWS_WITH(
+      cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, a}, {shaderio::kIotaBindValues, b}}, pc, one),
+      Catch::Contains("binding 0 (Values) is bound twice"));
   REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {}, pc, one), Catch::Contains("binding 0 (Values) is not bound"));
   REQUIRE_THROWS_WITH(cmd.dispatch("common/iota", {{shaderio::BindSlot{0, "Keys"}, a}}, pc, one),
                       Catch::Contains("binding 0 is block 'Values' in its SPIR-V, the host binds 'Keys'"));

@@ -32,7 +32,8 @@ struct TmpDir {
   fs::path path;
   TmpDir() {
     static int counter = 0;
-    path = fs::temp_directory_path() / ("evflow_test_io_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    path =
+        fs::temp_directory_path() / ("evflow_test_io_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
     fs::remove_all(path);
     fs::create_directories(path);
   }
@@ -91,14 +92,18 @@ void require_same_events(const EventStream& a, const EventStream& b) {
     if (a.t[i] != b.t[i]) FAIL("t[" << i << "] " << a.t[i] << " != " << b.t[i]);
 }
 
-template <typename T> void npy_round_trip(const fs::path& p, std::vector<size_t> shape) {
+template <typename T>
+void npy_round_trip(const fs::path& p, std::vector<size_t> shape) {
   size_t n = 1;
   for (size_t s : shape) n *= s;
   std::vector<T> v(n);
   for (size_t i = 0; i < n; ++i) {
-    if constexpr (std::is_floating_point_v<T>) v[i] = T(i) * T(0.37) - T(3.5);
-    else if constexpr (std::is_signed_v<T>) v[i] = T(int(i % 200) - 100);
-    else v[i] = T(i * 7 % 250);
+    if constexpr (std::is_floating_point_v<T>)
+      v[i] = T(i) * T(0.37) - T(3.5);
+    else if constexpr (std::is_signed_v<T>)
+      v[i] = T(int(i % 200) - 100);
+    else
+      v[i] = T(i * 7 % 250);
   }
   write_npy(p, shape, v);
   NpyArray a = read_npy(p);
@@ -110,7 +115,8 @@ template <typename T> void npy_round_trip(const fs::path& p, std::vector<size_t>
 }
 
 // Writes a raw HDF5 1-D dataset (test helper for foreign layouts).
-template <typename T> void h5_put(hid_t loc, const char* name, hid_t type, const std::vector<T>& v) {
+template <typename T>
+void h5_put(hid_t loc, const char* name, hid_t type, const std::vector<T>& v) {
   hsize_t n = v.size();
   hid_t s = H5Screate_simple(1, &n, nullptr);
   hid_t d = H5Dcreate2(loc, name, type, s, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
@@ -126,15 +132,19 @@ TEST_CASE("atomic writes leave the old file alone on failure", "[io]") {
   const fs::path p = dir / "a.txt";
   write_file_atomic(p, [](const fs::path& tmp) { write_text(tmp, "old"); });
   REQUIRE(read_bytes(p) == "old");
-  REQUIRE_THROWS_WITH(write_file_atomic(p, [](const fs::path& tmp) {
-                        write_text(tmp, "half");
-                        throw std::runtime_error("boom");
-                      }),
+  REQUIRE_THROWS_WITH(write_file_atomic(p,
+                                        [](const fs::path& tmp) {
+                                          write_text(tmp, "half");
+                                          throw std::runtime_error("boom");
+                                        }),
                       "boom");
   REQUIRE(read_bytes(p) == "old");
   REQUIRE_THROWS_WITH(write_file_atomic(p, [](const fs::path&) {}), Contains("a.txt"));
   size_t files = 0;
-  for (auto& e : fs::directory_iterator(dir.path)) { (void)e; ++files; }
+  for (auto& e : fs::directory_iterator(dir.path)) {
+    (void)e;
+    ++files;
+  }
   REQUIRE(files == 1);  // no temporaries left behind
 }
 
@@ -252,9 +262,9 @@ TEST_CASE("LLFF poses_bounds: exact rows, OpenCV cameras", "[io]") {
   TmpDir dir;
   SECTION("axis convention") {
     // A camera at (1, 2, 3) looking down world -z with world +y up (down = -y, right = +x, back = +z).
-    LlffRow r{0, 1, 0, 1, 260,   //
-              -1, 0, 0, 2, 346,  //
-              0, 0, 1, 3, 300,   //
+    LlffRow r{0,   1, 0, 1, 260,  //
+              -1,  0, 0, 2, 346,  //
+              0,   0, 1, 3, 300,  //
               0.5, 20};
     Camera c = llff_row_to_camera(r);
     REQUIRE(c.width == 346);
@@ -387,7 +397,10 @@ TEST_CASE("HDF5 events: DSEC style round trip and foreign layouts", "[io]") {
     };
     std::vector<int64_t> t(n);
     std::vector<uint8_t> p(n);
-    for (size_t i = 0; i < n; ++i) { t[i] = std::llround(ev.t[i] * 1e6); p[i] = ev.p[i] > 0; }
+    for (size_t i = 0; i < n; ++i) {
+      t[i] = std::llround(ev.t[i] * 1e6);
+      p[i] = ev.p[i] > 0;
+    }
     put("x", H5T_NATIVE_UINT16, ev.x.data());
     put("y", H5T_NATIVE_UINT16, ev.y.data());
     put("t", H5T_NATIVE_INT64, t.data());
@@ -448,7 +461,8 @@ TEST_CASE("text events: every time unit and polarity coding round trips exactly"
   EventStream ev = random_events(40, 30, 2000, 11, 123456);
   ev.t[5] = ev.t[4];  // ties are fine
   for (TimeUnit u : {TimeUnit::s, TimeUnit::ms, TimeUnit::us, TimeUnit::ns}) {
-    for (PolarityCoding pc : {PolarityCoding::zero_one, PolarityCoding::minus_one_one, PolarityCoding::one_else_negative}) {
+    for (PolarityCoding pc :
+         {PolarityCoding::zero_one, PolarityCoding::minus_one_one, PolarityCoding::one_else_negative}) {
       const fs::path p = dir / ("ev_" + to_string(u) + ".txt");
       TxtWriteOptions wo;
       wo.unit = u;
@@ -473,7 +487,8 @@ TEST_CASE("text events: every time unit and polarity coding round trips exactly"
     require_same_events(read_events_txt(dir / "odd.txt", ro), odd);
   }
   SECTION("rpg style: header, seconds, comments, no header -> size from max") {
-    write_text(dir / "rpg.txt", "# comment\n240 180\n0.000000000 33 39 1\n0.000011001 158 145 1\n0.000050999 88 143 0\n");
+    write_text(dir / "rpg.txt",
+               "# comment\n240 180\n0.000000000 33 39 1\n0.000011001 158 145 1\n0.000050999 88 143 0\n");
     EventStream r = read_events_txt(dir / "rpg.txt");
     REQUIRE(r.width == 240);
     REQUIRE(r.height == 180);
@@ -598,10 +613,12 @@ TEST_CASE("datasets in our layout round trip", "[io]") {
   write_evflow_dataset(r, dir / "png");
   Dataset q = load_dataset(dir / "png");
   for (size_t i = 0; i < q.train[0].blurry.data.size(); ++i)
-    REQUIRE(std::fabs(linear_to_srgb(q.train[0].blurry.data[i]) - linear_to_srgb(ds.train[0].blurry.data[i])) <= 0.5f / 255.f + 1e-5f);
+    REQUIRE(std::fabs(linear_to_srgb(q.train[0].blurry.data[i]) - linear_to_srgb(ds.train[0].blurry.data[i])) <=
+            0.5f / 255.f + 1e-5f);
   require_same_events(q.events, ds.events);
   REQUIRE(q.manifest["seed"] == 1234);
-  for (const char* f : {"dataset.json", "poses_bounds.npy", "events.h5", "images/view_2.png", "images_gt_novel/novel_1.png"})
+  for (const char* f :
+       {"dataset.json", "poses_bounds.npy", "events.h5", "images/view_2.png", "images_gt_novel/novel_1.png"})
     REQUIRE(fs::exists(dir / "png" / f));
   REQUIRE(read_poses_bounds(dir / "png/poses_bounds.npy").rows.size() == 5);
 
@@ -663,7 +680,8 @@ TEST_CASE("E3NeRF Real-World-Challenge folders", "[io]") {
       char line[96];
       std::snprintf(line, sizeof line, "%.6f %d %d %d\n", t, x, y, p);
       txt += line;
-      all.push(uint16_t(x), uint16_t(y), std::stod(std::string(line).substr(0, std::string(line).find(' '))), p == 1 ? 1 : -1);
+      all.push(uint16_t(x), uint16_t(y), std::stod(std::string(line).substr(0, std::string(line).find(' '))),
+               p == 1 ? 1 : -1);
     }
     write_text(d / "events" / (std::string(name) + ".txt"), txt);
   }
@@ -721,8 +739,10 @@ TEST_CASE("EBAD-NeRF folders: every 8th view is a test view", "[io]") {
     char name[16];
     std::snprintf(name, sizeof name, "r_%02zu.png", i);
     write_image(d / "images" / name, random_image(W, H, 3, uint32_t(i)));
-    if (i % 8) write_image(d / "images_gt_blur" / name, random_image(W, H, 3, uint32_t(100 + i)));
-    else write_image(d / "images_gt_novel" / name, random_image(W, H, 3, uint32_t(200 + i)));
+    if (i % 8)
+      write_image(d / "images_gt_blur" / name, random_image(W, H, 3, uint32_t(100 + i)));
+    else
+      write_image(d / "images_gt_novel" / name, random_image(W, H, 3, uint32_t(200 + i)));
   }
   std::vector<float> counts(N * bins * W * H);
   for (size_t i = 0; i < counts.size(); ++i) counts[i] = float(int(i % 7) - 3);

@@ -76,7 +76,8 @@ RelStats rel_errors(const std::vector<double>& gpu, const std::vector<double>& r
   for (double r : refv) rms += r * r;
   rms = std::sqrt(rms / double(refv.size()));
   std::vector<double> e;
-  for (size_t i = 0; i < gpu.size(); ++i) e.push_back(std::abs(gpu[i] - refv[i]) / std::max(std::abs(refv[i]), 1e-3 * rms));
+  for (size_t i = 0; i < gpu.size(); ++i)
+    e.push_back(std::abs(gpu[i] - refv[i]) / std::max(std::abs(refv[i]), 1e-3 * rms));
   std::sort(e.begin(), e.end());
   return {e[e.size() / 2], e.back()};
 }
@@ -84,7 +85,9 @@ RelStats rel_errors(const std::vector<double>& gpu, const std::vector<double>& r
 struct GpuImages {
   gpu::Buffer a, b, grad;
   GpuImages(gpu::Context& ctx, const ImagePair& p)
-      : a(ctx, p.shape.count() * 4, "pred"), b(ctx, p.shape.count() * 4, "target"), grad(ctx, p.shape.count() * 4, "grad") {
+      : a(ctx, p.shape.count() * 4, "pred"),
+        b(ctx, p.shape.count() * 4, "target"),
+        grad(ctx, p.shape.count() * 4, "grad") {
     a.write(p.a);
     b.write(p.b);
   }
@@ -114,7 +117,8 @@ TEST_CASE("loss: SSIM forward matches the double reference (map and mean, border
     INFO(c << "x" << h << "x" << w << ": SSIM " << v.ssim << " ref " << ref_ssim << ", max map error " << max_map_err);
     CHECK(std::abs(v.ssim - ref_ssim) < 1e-5);
     CHECK(max_map_err < 2e-4);
-    if (h == 61) WARN("SSIM 3x61x47: mean error " << std::abs(v.ssim - ref_ssim) << ", max per-pixel error " << max_map_err);
+    if (h == 61)
+      WARN("SSIM 3x61x47: mean error " << std::abs(v.ssim - ref_ssim) << ", max per-pixel error " << max_map_err);
   }
   test::require_no_validation_messages();
 }
@@ -263,6 +267,7 @@ TEST_CASE("loss: SSIM forward+backward timing at 3x260x346", "[.][loss-bench]") 
   std::sort(wall.begin() + 2, wall.end());
   std::sort(gpu_ms.begin(), gpu_ms.end());
   WARN(ctx.caps().name << ": L1+SSIM forward+backward 3x260x346: submit wall median " << wall[2 + (wall.size() - 2) / 2]
-                        << " ms, GPU timestamps median " << (gpu_ms.empty() ? -1.0 : gpu_ms[gpu_ms.size() / 2]) << " ms");
+                       << " ms, GPU timestamps median " << (gpu_ms.empty() ? -1.0 : gpu_ms[gpu_ms.size() / 2])
+                       << " ms");
   test::require_no_validation_messages();
 }

@@ -8,8 +8,8 @@
 
 #include "camera/trajectory.h"
 #include "events/event_model.h"
-#include "loss/event_loss.h"
 #include "gpu_fixture.h"
+#include "loss/event_loss.h"
 #include "splat/synthetic.h"
 #include "train/pose_refine.h"
 #include "train/synthetic_dataset.h"
@@ -47,20 +47,22 @@ TEST_CASE("refine_pose recovers a perturbed camera with the Gaussians frozen", "
   o.iterations = 80;
   auto res = refine_pose(ctx, r, p, start, target, o);
   const double before = pose_error(kCam0, start), after = pose_error(kCam0, res.camera);
-  std::printf("refine_pose: pose error %.4f -> %.4f, loss %.4f -> %.4f\n", before, after, res.first_loss, res.last_loss);
+  std::printf("refine_pose: pose error %.4f -> %.4f, loss %.4f -> %.4f\n", before, after, res.first_loss,
+              res.last_loss);
   REQUIRE(res.last_loss < 0.5 * res.first_loss);
   REQUIRE(after < 0.3 * before);
   test::require_no_validation_messages();
 }
 
-TEST_CASE("plain mode pose_refine: noisy training poses move towards the true ones and checkpoint", "[gpu][train][camera]") {
+TEST_CASE("plain mode pose_refine: noisy training poses move towards the true ones and checkpoint",
+          "[gpu][train][camera]") {
   auto& ctx = test::gpu_context();
   io::Dataset data = render_synthetic_dataset(ctx, 96, 72, 4, 0);
   std::vector<Camera> truth_cams;
   const std::array<std::array<double, 6>, 4> noise = {{{0.02, -0.01, 0.0, 0.008, -0.01, 0.004},
-                                                        {-0.015, 0.02, 0.01, -0.006, 0.008, 0.0},
-                                                        {0.01, 0.015, -0.02, 0.0, 0.01, -0.006},
-                                                        {-0.02, -0.01, 0.015, 0.01, 0.0, 0.008}}};
+                                                       {-0.015, 0.02, 0.01, -0.006, 0.008, 0.0},
+                                                       {0.01, 0.015, -0.02, 0.0, 0.01, -0.006},
+                                                       {-0.02, -0.01, 0.015, 0.01, 0.0, 0.008}}};
   for (size_t v = 0; v < 4; ++v) {
     truth_cams.push_back(data.train[v].camera);
     data.train[v].camera = data.train[v].camera.perturbed(noise[v]);
@@ -95,7 +97,8 @@ TEST_CASE("plain mode pose_refine: noisy training poses move towards the true on
 }
 
 // The blur loss cannot tell a trajectory from its time reversal (same mean image); the events can.
-TEST_CASE("blur+events: the event term tells the true exposure trajectory from its time reversal", "[gpu][train][events]") {
+TEST_CASE("blur+events: the event term tells the true exposure trajectory from its time reversal",
+          "[gpu][train][events]") {
   auto& ctx = test::gpu_context();
   io::Dataset data = render_synthetic_dataset(ctx, 96, 72, 4, 0);
   GaussianCloud truth = synthetic_cloud(42, 1500, 0, kCam0);
@@ -119,7 +122,8 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
       r.forward(gt, motion.camera_at(k / double(sub)), RenderSettings{}, rs);
       auto img = rs.outputs().rgb.read<float>(mean.size());
       for (float& x : img) x = io::srgb_to_linear(x);  // renders are sRGB; events and blur see linear light
-      for (size_t i = 0; i < luma.size(); ++i) luma[i] = 0.2126f * img[i] + 0.7152f * img[luma.size() + i] + 0.0722f * img[2 * luma.size() + i];
+      for (size_t i = 0; i < luma.size(); ++i)
+        luma[i] = 0.2126f * img[i] + 0.7152f * img[luma.size() + i] + 0.0722f * img[2 * luma.size() + i];
       sim.add_frame(luma.data(), t0 + T * k / sub);
       for (size_t i = 0; i < mean.size(); ++i) mean[i] += img[i] / (sub + 1);
     }
@@ -169,7 +173,8 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
       return el.value();
     };
     ExposureTrajectory tr(data.train[0].camera, 0, 0.0);
-    for (int j = 0; j < ExposureTrajectory::kKnots; ++j) tr.data()[j * 6 + 0] = 0.5 * kDrift * (j - 4) / 4.0, tr.data()[j * 6 + 4] = 0.5 * kYaw * (j - 4) / 4.0;
+    for (int j = 0; j < ExposureTrajectory::kKnots; ++j)
+      tr.data()[j * 6 + 0] = 0.5 * kDrift * (j - 4) / 4.0, tr.data()[j * 6 + 4] = 0.5 * kYaw * (j - 4) / 4.0;
     std::array<double, ExposureTrajectory::kSize> kg{};
     loss_at(tr, &kg);
     int agree = 0;
@@ -201,7 +206,8 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
     Checkpoint init{0, truth, {}};
     for (size_t v = 0; v < data.train.size(); ++v) {
       TrajectoryState ts{0, std::vector<double>(54, 0.0), std::vector<double>(54, 0.0), std::vector<double>(54, 0.0)};
-      for (int j = 0; j < 9; ++j) ts.knots[j * 6 + 0] = sign * kDrift * (j - 4) / 4.0, ts.knots[j * 6 + 4] = sign * kYaw * (j - 4) / 4.0;
+      for (int j = 0; j < 9; ++j)
+        ts.knots[j * 6 + 0] = sign * kDrift * (j - 4) / 4.0, ts.knots[j * 6 + 4] = sign * kYaw * (j - 4) / 4.0;
       init.trajectories.push_back(ts);
     }
     Trainer t(ctx, data, cfg, init);
@@ -226,8 +232,8 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
     return mean;
   };
   auto fwd = run(1.0), rev = run(-1.0);
-  std::printf("blur+events: true trajectory: blur %.5f events %.4f; time-reversed: blur %.5f events %.4f\n", fwd[0], fwd[1],
-              rev[0], rev[1]);
+  std::printf("blur+events: true trajectory: blur %.5f events %.4f; time-reversed: blur %.5f events %.4f\n", fwd[0],
+              fwd[1], rev[0], rev[1]);
   REQUIRE(std::abs(fwd[0] - rev[0]) < 0.25 * fwd[0]);  // the blur term barely sees the difference
   REQUIRE(fwd[1] < 0.6);                               // the events agree with the true motion
   REQUIRE(rev[1] > 2.0 * fwd[1]);                      // and not with its reversal

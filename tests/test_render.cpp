@@ -1,8 +1,8 @@
 // `evflow render`: splats from a camera file render exactly as the engine renders them, and a
 // run's exposure path holds the image `evflow eval` scores at mid-exposure.
-#include <catch2/catch.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <catch2/catch.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -10,9 +10,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "camera/trajectory.h"
 #include "cli_helpers.h"
 #include "gpu_fixture.h"
-#include "camera/trajectory.h"
 #include "io/camera_json.h"
 #include "io/dataset.h"
 #include "io/ply_splats.h"
@@ -26,15 +26,6 @@ using namespace evflow::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-int run_evflow(const fs::path& dir, const std::string& args, std::string& out) {
-  const fs::path log = dir / "run.log";
-  const std::string cmd = "cd " + quote(dir.string()) + " && timeout 600 " + quote(evflow_binary().string()) + " " + args +
-                          " > " + quote(log.string()) + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  out = slurp(log);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 // Runs an evflow command that must succeed; its output shows when it does not.
 void expect_ok(const fs::path& dir, const std::string& args) {

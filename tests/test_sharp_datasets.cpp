@@ -70,6 +70,7 @@ TEST_CASE("datasets: NeRF-synthetic transforms.json converts OpenGL cameras to o
   REQUIRE(a[2] == Approx(4.0));
   REQUIRE(b[1] < a[1]);
   std::ofstream(dir / "transforms_train.json") << R"({"frames": []})";
-  REQUIRE_THROWS_WITH(io::load_dataset(dir), Catch::Contains("transforms_train.json") && Catch::Contains("camera_angle_x"));
+  REQUIRE_THROWS_WITH(io::load_dataset(dir),
+                      Catch::Contains("transforms_train.json") && Catch::Contains("camera_angle_x"));
   fs::remove_all(dir);
 }

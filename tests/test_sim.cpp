@@ -80,7 +80,8 @@ TEST_CASE("sim renderer: quad coverage (pixel centres), depth and texture lookup
   push_tri(s, p00, p11, p01, {0, 0, 1, 1, 0, 1}, 0);
   // A slanted triangle behind it (partly hidden) with vertices off the pixel grid.
   s.materials.push_back(sim::Material{"flat", {0.5f, 0.25f, 0.125f, 1}, -1});
-  const std::array<float, 3> q0 = at_pixel(cam, 5.3, 3.7, 3), q1 = at_pixel(cam, 90.2, 20.1, 5), q2 = at_pixel(cam, 30.6, 68.4, 4);
+  const std::array<float, 3> q0 = at_pixel(cam, 5.3, 3.7, 3), q1 = at_pixel(cam, 90.2, 20.1, 5),
+                             q2 = at_pixel(cam, 30.6, 68.4, 4);
   push_tri(s, q0, q1, q2, {0, 0, 0, 0, 0, 0}, 1);
   sim::ShadingParams sh;
   sh.ambient = 1.0f;
@@ -96,7 +97,8 @@ TEST_CASE("sim renderer: quad coverage (pixel centres), depth and texture lookup
   // Plane of the slanted triangle: depth along each pixel ray (double).
   auto plane_depth = [&](double u, double v) {
     const double d[3] = {(u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1};
-    const double a[3] = {q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]}, b[3] = {q2[0] - q0[0], q2[1] - q0[1], q2[2] - q0[2]};
+    const double a[3] = {q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]},
+                 b[3] = {q2[0] - q0[0], q2[1] - q0[1], q2[2] - q0[2]};
     const double n[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
     return (n[0] * q0[0] + n[1] * q0[1] + n[2] * q0[2]) / (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]);
   };
@@ -113,7 +115,8 @@ TEST_CASE("sim renderer: quad coverage (pixel centres), depth and texture lookup
         ++covered_quad;
         REQUIRE(f.depth[p] == Approx(2.0).epsilon(1e-6));
         const int i = x - 20, j = y - 10;
-        for (int c = 0; c < 3; ++c) REQUIRE(f.rgb[p * 3 + c] == Approx(io::srgb_to_linear(srgb_byte(i, j, c) / 255.f)).margin(2e-4));
+        for (int c = 0; c < 3; ++c)
+          REQUIRE(f.rgb[p * 3 + c] == Approx(io::srgb_to_linear(srgb_byte(i, j, c) / 255.f)).margin(2e-4));
       } else if (on_edge) {
         continue;
       } else if (in_tri) {
@@ -183,7 +186,10 @@ TEST_CASE("sim glTF: a user glTF with a texture loads and renders, bad files giv
     a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
     a.count = 6;
     a.type = k ? TINYGLTF_TYPE_VEC2 : TINYGLTF_TYPE_VEC3;
-    if (!k) { a.minValues = {-1, -1, 0}; a.maxValues = {1, 1, 0}; }
+    if (!k) {
+      a.minValues = {-1, -1, 0};
+      a.maxValues = {1, 1, 0};
+    }
     m.accessors.push_back(a);
   }
   tinygltf::Image img;
@@ -225,7 +231,8 @@ TEST_CASE("sim glTF: a user glTF with a texture loads and renders, bad files giv
   tinygltf::TinyGLTF w;
   for (const char* name : {"quad.gltf", "quad.glb"}) {
     const fs::path file = dir / name;
-    REQUIRE(w.WriteGltfSceneToFile(&m, file.string(), true, true, true, std::string(name).find(".glb") != std::string::npos));
+    REQUIRE(w.WriteGltfSceneToFile(&m, file.string(), true, true, true,
+                                   std::string(name).find(".glb") != std::string::npos));
     const sim::Scene s = sim::load_gltf(file);
     REQUIRE(s.triangle_count() == 2);
     REQUIRE(s.textures.size() == 1);
@@ -262,7 +269,9 @@ TEST_CASE("sim glTF: a user glTF with a texture loads and renders, bad files giv
   CHECK(diff < 1e-5);
   // Errors name the file.
   auto message = [](const fs::path& p) {
-    try { sim::load_gltf(p); } catch (const std::runtime_error& e) { return std::string(e.what()); }
+    try {
+      sim::load_gltf(p);
+    } catch (const std::runtime_error& e) { return std::string(e.what()); }
     return std::string("no error");
   };
   const fs::path missing = dir / "missing.gltf";
@@ -309,7 +318,8 @@ TEST_CASE("sim blur: zero shake gives blurry == sharp, sub-frame bound, blur sca
     events::EventSimulator ev(96, 72, events::EventModelParams::defaults(), 1);
     const auto r = s.simulate_view(0, ev);
     double diff = 0;
-    for (size_t i = 0; i < r.blurry.size(); ++i) diff = std::max(diff, double(std::abs(r.blurry[i] - r.sharp_mid.rgb[i])));
+    for (size_t i = 0; i < r.blurry.size(); ++i)
+      diff = std::max(diff, double(std::abs(r.blurry[i] - r.sharp_mid.rgb[i])));
     CHECK(diff < 1e-6);
     CHECK(r.mean_blur_px < 1e-3);
   }
@@ -326,7 +336,8 @@ TEST_CASE("sim blur: zero shake gives blurry == sharp, sub-frame bound, blur sca
       }
       ++intervals;
     });
-    INFO("blur " << blur << ": " << intervals << " intervals, measured " << r.mean_blur_px << " px, max step " << max_motion);
+    INFO("blur " << blur << ": " << intervals << " intervals, measured " << r.mean_blur_px << " px, max step "
+                 << max_motion);
     CHECK(max_motion <= 0.5);
     CHECK(intervals + 1 == r.times.size());
     CHECK(intervals >= size_t(2 * blur));  // at least path / 0.5 px steps for the mean pixel
@@ -391,8 +402,8 @@ TEST_CASE("sim flow: warping sub-frame k+1 by the ground-truth flow reproduces s
       }
   });
   REQUIRE(n > 1000);
-  std::printf("[sim] flow warp: mean abs error %.5f (warped) vs %.5f (unwarped) over %zu textured pixels\n", err_warp / (3 * n),
-              err_id / (3 * n), n);
+  std::printf("[sim] flow warp: mean abs error %.5f (warped) vs %.5f (unwarped) over %zu textured pixels\n",
+              err_warp / (3 * n), err_id / (3 * n), n);
   CHECK(err_warp < 0.35 * err_id);
   test::require_no_validation_messages();
 }
@@ -418,7 +429,10 @@ TEST_CASE("sim events: EDI with the known thresholds recovers the mid-exposure f
       events::EdiThresholds th;
       th.pos = p.events.theta_pos;
       th.neg = p.events.theta_neg;
-      if (!noisy) { th.pos_map = ev.theta_pos_map(); th.neg_map = ev.theta_neg_map(); }
+      if (!noisy) {
+        th.pos_map = ev.theta_pos_map();
+        th.neg_map = ev.theta_neg_map();
+      }
       const auto edi = events::edi_deblur(r.blurry.data(), 3, es, r.t0, r.t1, th);
       const double b = sim::psnr_srgb(r.blurry, r.sharp_mid.rgb), e = sim::psnr_srgb(edi, r.sharp_mid.rgb);
       pb += b / p.train_views;
@@ -428,15 +442,17 @@ TEST_CASE("sim events: EDI with the known thresholds recovers the mid-exposure f
       events::EdiThresholds tm;
       tm.pos_map = ev.theta_pos_map();
       tm.neg_map = ev.theta_neg_map();
-      pe_maps += sim::psnr_srgb(events::edi_deblur(r.blurry.data(), 3, es, r.t0, r.t1, tm), r.sharp_mid.rgb) / p.train_views;
+      pe_maps +=
+          sim::psnr_srgb(events::edi_deblur(r.blurry.data(), 3, es, r.t0, r.t1, tm), r.sharp_mid.rgb) / p.train_views;
       for (const auto* m : {&tm.pos_map, &tm.neg_map})
         for (double x : *m) th_mean += x, th_var += x * x, th_n += 1;
     }
     th_mean /= th_n;
     const double th_sd = std::sqrt(th_var / th_n - th_mean * th_mean);
-    std::printf("[sim] EDI (%s events): PSNR %.2f dB vs blurry %.2f dB, gain %.2f dB; with the per-pixel thresholds %.2f dB; "
-                "%zu events, %zu dropped by the refractory period, thresholds %.4f +- %.4f\n",
-                noisy ? "default-noise" : "exact", pe, pb, gain, pe_maps, count, dropped, th_mean, th_sd);
+    std::printf(
+        "[sim] EDI (%s events): PSNR %.2f dB vs blurry %.2f dB, gain %.2f dB; with the per-pixel thresholds %.2f dB; "
+        "%zu events, %zu dropped by the refractory period, thresholds %.4f +- %.4f\n",
+        noisy ? "default-noise" : "exact", pe, pb, gain, pe_maps, count, dropped, th_mean, th_sd);
     if (!noisy) {
       exact_events = count;
       CHECK(gain >= 6.0);
@@ -450,7 +466,8 @@ TEST_CASE("sim events: EDI with the known thresholds recovers the mid-exposure f
       // ... cross E[theta / theta_i] ~ 1 + (sigma / theta)^2 times as often as exact ones; the
       // refractory period drops crossings (many, at edges moving 10 px) but still moves the
       // reference level past them, so emitted + dropped is that count.
-      const double crossings = double(count + dropped), expected = exact_events * (1 + std::pow(m.theta_sigma / m.theta_pos, 2));
+      const double crossings = double(count + dropped),
+                   expected = exact_events * (1 + std::pow(m.theta_sigma / m.theta_pos, 2));
       std::printf("[sim]   crossings %.0f, expected from the exact run %.0f\n", crossings, expected);
       CHECK(crossings == Approx(expected).epsilon(0.02));
       CHECK(dropped > count / 10);
@@ -507,7 +524,6 @@ TEST_CASE("sim dataset: the written dataset loads back", "[sim][gpu]") {
   fs::remove_all(dir);
   test::require_no_validation_messages();
 }
-
 
 TEST_CASE("built-in scenes: the default room with other textures, unknown names refused", "[sim]") {
   const sim::Scene def = sim::make_builtin_scene("default");

@@ -45,7 +45,10 @@ double consensus(const std::vector<double>& v) {
   for (size_t a = 0; a < v.size(); ++a)
     for (size_t b = a + 1; b < v.size(); ++b) {
       double d = std::abs(v[a] - v[b]) / std::max({std::abs(v[a]), std::abs(v[b]), 1e-12});
-      if (d < best) { best = d; out = 0.5 * (v[a] + v[b]); }
+      if (d < best) {
+        best = d;
+        out = 0.5 * (v[a] + v[b]);
+      }
     }
   return out;
 }
@@ -53,8 +56,11 @@ double consensus(const std::vector<double>& v) {
 // A 64x48 random scene uploaded, gradient buffers, and random image gradients (v_rgb, v_alpha).
 struct BackwardSetup {
   BackwardSetup(gpu::Context& ctx, uint64_t seed)
-      : s(make_scene(seed, 400, 1, 64, 48, false)), params(ctx, s.cloud.size(), 1, "p_"), grads(ctx, s.cloud.size(), 1, "v_"),
-        vr(ctx, 64 * 48 * 12, "v_rgb"), va(ctx, 64 * 48 * 4, "v_alpha") {
+      : s(make_scene(seed, 400, 1, 64, 48, false)),
+        params(ctx, s.cloud.size(), 1, "p_"),
+        grads(ctx, s.cloud.size(), 1, "v_"),
+        vr(ctx, 64 * 48 * 12, "v_rgb"),
+        va(ctx, 64 * 48 * 4, "v_alpha") {
     params.upload(s.cloud);
     vr.write(reference::random_weights(seed * 2, 3 * 64 * 48));
     va.write(reference::random_weights(seed * 2 + 1, 64 * 48));
@@ -120,7 +126,12 @@ static void check_gradients(gpu::Context& ctx, const Scene& s, size_t sampled_ga
   std::mt19937_64 rng(seed);
   std::shuffle(ids.begin(), ids.end(), rng);
   ids.resize(std::min(sampled_gaussians, ids.size()));
-  struct Kind { Param p; const char* name; const std::vector<float>* v; int comps; };
+  struct Kind {
+    Param p;
+    const char* name;
+    const std::vector<float>* v;
+    int comps;
+  };
   const int K = s.cloud.coeffs();
   std::vector<Kind> kinds = {{Param::Mean, "means", &g.means, 3},
                              {Param::LogScale, "log_scales", &g.log_scales, 3},
@@ -135,10 +146,13 @@ static void check_gradients(gpu::Context& ctx, const Scene& s, size_t sampled_ga
         double gpu = (*kind.v)[id * kind.comps + c];
         double ref = fd.param(kind.p, id, c, h);
         if (std::abs(gpu - ref) > 1e-3 * std::max(std::abs(gpu), std::abs(ref)))  // a jump? re-check with consensus
-          ref = consensus({ref, fd.param(kind.p, id, c, 1e-5), fd.param(kind.p, id, c, 3e-6), fd.param(kind.p, id, c, 3e-7),
-                           fd.param(kind.p, id, c, 1e-7)});
+          ref = consensus({ref, fd.param(kind.p, id, c, 1e-5), fd.param(kind.p, id, c, 3e-6),
+                           fd.param(kind.p, id, c, 3e-7), fd.param(kind.p, id, c, 1e-7)});
         double scale = std::max(std::abs(gpu), std::abs(ref));
-        if (scale < 1e-7) { ++zero_both; continue; }
+        if (scale < 1e-7) {
+          ++zero_both;
+          continue;
+        }
         rel.push_back(std::abs(gpu - ref) / scale);
       }
     double med = median(rel), mx = rel.empty() ? 0 : *std::max_element(rel.begin(), rel.end());
@@ -176,7 +190,10 @@ TEST_CASE("splat gradients match finite differences of the reference", "[gpu][sp
 
 TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-reduction paths agree", "[gpu][splat]") {
   Scene s = make_scene(31, 600, 2, 96, 80, false);
-  struct Result { GaussianCloud grads; std::vector<float> rgb, alpha; };
+  struct Result {
+    GaussianCloud grads;
+    std::vector<float> rgb, alpha;
+  };
   auto run = [&](gpu::Context& ctx, const RasterKernels& kernels) {
     GaussianBuffers params(ctx, s.cloud.size(), 2, "p_"), grads(ctx, s.cloud.size(), 2, "v_");
     params.upload(s.cloud);
@@ -197,7 +214,8 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
       REQUIRE(a.grads.means[i] == Approx(b.grads.means[i]).margin(1e-6).epsilon(1e-4));
     for (size_t i = 0; i < a.grads.quats.size(); ++i)
       REQUIRE(a.grads.quats[i] == Approx(b.grads.quats[i]).margin(1e-6).epsilon(1e-4));
-    for (size_t i = 0; i < a.grads.sh.size(); ++i) REQUIRE(a.grads.sh[i] == Approx(b.grads.sh[i]).margin(1e-6).epsilon(1e-4));
+    for (size_t i = 0; i < a.grads.sh.size(); ++i)
+      REQUIRE(a.grads.sh[i] == Approx(b.grads.sh[i]).margin(1e-6).epsilon(1e-4));
   };
   // The device's default kernels (CPU drivers: several pixels per invocation).
   auto& ctx = test::gpu_context();
@@ -251,8 +269,7 @@ TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][
   test::require_no_validation_messages();
 }
 
-TEST_CASE("splat render states kept side by side: each backward equals a fresh render's, norms added",
-          "[gpu][splat]") {
+TEST_CASE("splat render states kept side by side: each backward equals a fresh render's, norms added", "[gpu][splat]") {
   auto& ctx = test::gpu_context();
   BackwardSetup setup(ctx, 43);
   Scene& s = setup.s;

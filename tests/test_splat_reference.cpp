@@ -67,7 +67,8 @@ struct Expected {
 Expected expected_pixel(const GaussianCloud& c, int x, int y, const RenderSettings& s) {
   std::vector<size_t> order(c.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return c.means[a * 3 + 2] < c.means[b * 3 + 2]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return c.means[a * 3 + 2] < c.means[b * 3 + 2]; });
   const double r2 = (x + 0.5 - 16.5) * (x + 0.5 - 16.5) + (y + 0.5 - 16.5) * (y + 0.5 - 16.5);
   double C[3] = {0, 0, 0}, D = 0, T = 1;
   for (size_t i : order) {
@@ -134,7 +135,8 @@ TEST_CASE("reference: single isotropic Gaussian gives the analytic image", "[ref
   REQUIRE(r.alpha[16 * 33 + 20] == Approx(o * std::exp(-0.5 * 16.0 / (sig2 + 0.3))).epsilon(1e-13));
   // background shows through with T = 1 - alpha
   const double col0 = colour_of(c, 0, 0);
-  REQUIRE(r.rgb[16 * 33 + 20] == Approx(r.alpha[16 * 33 + 20] * col0 + (1 - r.alpha[16 * 33 + 20]) * 0.2f).epsilon(1e-13));
+  REQUIRE(r.rgb[16 * 33 + 20] ==
+          Approx(r.alpha[16 * 33 + 20] * col0 + (1 - r.alpha[16 * 33 + 20]) * 0.2f).epsilon(1e-13));
   // far corner: untouched background
   REQUIRE(r.alpha[0] == 0.0);
   REQUIRE(r.rgb[2 * 33 * 33] == double(0.6f));
@@ -152,8 +154,10 @@ TEST_CASE("reference: overlapping Gaussians blend front to back, ties by index",
     const double a1 = 0.5, a0 = sigmoid(0.5);
     const size_t p = centre_pixel(), HW = 33 * 33;
     const double g1 = colour_of(c, 1, 1), r0 = colour_of(c, 0, 0);
-    REQUIRE(r.rgb[HW + p] == Approx(a1 * g1 + a0 * (1 - a1) * colour_of(c, 0, 1) + (1 - a1) * (1 - a0) * 0.1f).epsilon(1e-13));
-    REQUIRE(r.rgb[p] == Approx(a0 * (1 - a1) * r0 + a1 * colour_of(c, 1, 0) + (1 - a1) * (1 - a0) * 0.1f).epsilon(1e-13));
+    REQUIRE(r.rgb[HW + p] ==
+            Approx(a1 * g1 + a0 * (1 - a1) * colour_of(c, 0, 1) + (1 - a1) * (1 - a0) * 0.1f).epsilon(1e-13));
+    REQUIRE(r.rgb[p] ==
+            Approx(a0 * (1 - a1) * r0 + a1 * colour_of(c, 1, 0) + (1 - a1) * (1 - a0) * 0.1f).epsilon(1e-13));
     REQUIRE(r.depth[p] == Approx((a1 * 4.0 + a0 * (1 - a1) * 6.0) / (1 - (1 - a1) * (1 - a0))).epsilon(1e-13));
   }
   SECTION("equal depth: lower index first") {
@@ -164,7 +168,8 @@ TEST_CASE("reference: overlapping Gaussians blend front to back, ties by index",
     const double green0 = colour_of(c, 0, 1);
     const size_t p = centre_pixel(), HW = 33 * 33;
     REQUIRE(r.rgb[HW + p] == Approx(a0 * green0 + (1 - a0) * a1 * green1 + (1 - a0) * (1 - a1) * 0.1f).epsilon(1e-13));
-    REQUIRE(r.rgb[p] == Approx(a0 * red0 + (1 - a0) * a1 * colour_of(c, 1, 0) + (1 - a0) * (1 - a1) * 0.1f).epsilon(1e-13));
+    REQUIRE(r.rgb[p] ==
+            Approx(a0 * red0 + (1 - a0) * a1 * colour_of(c, 1, 0) + (1 - a0) * (1 - a1) * 0.1f).epsilon(1e-13));
     check_against_expected(c, s);
   }
 }
@@ -172,7 +177,8 @@ TEST_CASE("reference: overlapping Gaussians blend front to back, ties by index",
 TEST_CASE("reference: culling behind the camera, before near and beyond far", "[reference]") {
   RenderSettings s;
   s.background = {0.3f, 0.5f, 0.7f};
-  GaussianCloud c = iso_cloud({{-5.0, 2.0, 6.0, {1, 1, 1}}, {0.005, 0.01, 6.0, {1, 1, 1}}, {12.0, 2.0, 6.0, {1, 1, 1}}});
+  GaussianCloud c =
+      iso_cloud({{-5.0, 2.0, 6.0, {1, 1, 1}}, {0.005, 0.01, 6.0, {1, 1, 1}}, {12.0, 2.0, 6.0, {1, 1, 1}}});
   Camera cam = simple_camera();
   cam.far_plane = 10.0;
   const RenderOutput r = render(c, cam, s);
@@ -191,10 +197,10 @@ TEST_CASE("reference: transmittance stop and the 1/255 alpha skip", "[reference]
   s.background = {0.25f, 0.5f, 0.75f};
   SECTION("T(1 - alpha) < 1e-4 stops the pixel before blending") {
     const double l98 = std::log(0.98 / 0.02), l90 = std::log(0.9 / 0.1);
-    const GaussianCloud c = iso_cloud({{3.0, 0.5, l98, {0, 1, 0}},     // second: alpha 0.98
-                                       {2.0, 0.5, 10.0, {1, 0, 0}},    // first: alpha clamped to 0.99
-                                       {4.0, 0.5, l90, {0, 0, 1}},     // third: T*(1-0.9) = 2e-5 -> stop
-                                       {5.0, 0.5, 0.0, {1, 1, 1}}});   // fourth: never reached
+    const GaussianCloud c = iso_cloud({{3.0, 0.5, l98, {0, 1, 0}},    // second: alpha 0.98
+                                       {2.0, 0.5, 10.0, {1, 0, 0}},   // first: alpha clamped to 0.99
+                                       {4.0, 0.5, l90, {0, 0, 1}},    // third: T*(1-0.9) = 2e-5 -> stop
+                                       {5.0, 0.5, 0.0, {1, 1, 1}}});  // fourth: never reached
     const RenderOutput r = render(c, simple_camera(), s);
     const size_t p = centre_pixel(), HW = 33 * 33;
     const double a1 = 0.99, a2 = sigmoid(double(c.opacity_logits[0]));
@@ -211,7 +217,8 @@ TEST_CASE("reference: transmittance stop and the 1/255 alpha skip", "[reference]
     // o = sigmoid(1): alpha falls below 1/255 at r^2 > 2 (S + 0.3) ln(255 o) ~ 170, inside the image
     const GaussianCloud c = iso_cloud({{5.0, 0.5, 1.0, {0.8, 0.2, 0.6}}});
     const RenderOutput r = render(c, simple_camera(), s);
-    const double o = sigmoid(double(c.opacity_logits[0])), S = std::pow(kFx * std::exp(double(c.log_scales[0])) / 5.0, 2);
+    const double o = sigmoid(double(c.opacity_logits[0])),
+                 S = std::pow(kFx * std::exp(double(c.log_scales[0])) / 5.0, 2);
     int skipped = 0, kept_small = 0;
     for (int y = 0; y < 33; ++y)
       for (int x = 0; x < 33; ++x) {
@@ -329,7 +336,8 @@ TEST_CASE("reference: local-region finite differences equal full re-render finit
   }
   REQUIRE(nonzero > checked / 2);
   // the base loss agrees with weighted_loss
-  REQUIRE(fd.loss() == Approx(weighted_loss(c, cam, s, random_weights(3, 3 * HW), random_weights(4, HW))).epsilon(1e-12));
+  REQUIRE(fd.loss() ==
+          Approx(weighted_loss(c, cam, s, random_weights(3, 3 * HW), random_weights(4, HW))).epsilon(1e-12));
 }
 
 TEST_CASE("reference: pose finite differences of a translation along z", "[reference]") {
@@ -368,7 +376,8 @@ TEST_CASE("reference: random scene is deterministic and hard", "[reference]") {
   for (size_t i = 0; i < a.size(); ++i) {
     double p[3];
     for (int r = 0; r < 3; ++r)
-      p[r] = cam.R[r * 3] * a.means[i * 3] + cam.R[r * 3 + 1] * a.means[i * 3 + 1] + cam.R[r * 3 + 2] * a.means[i * 3 + 2] + cam.t[r];
+      p[r] = cam.R[r * 3] * a.means[i * 3] + cam.R[r * 3 + 1] * a.means[i * 3 + 1] +
+             cam.R[r * 3 + 2] * a.means[i * 3 + 2] + cam.t[r];
     if (p[2] < 0) {
       ++behind;
       continue;

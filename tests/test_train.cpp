@@ -6,13 +6,13 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "camera/trajectory.h"
 #include "gpu_fixture.h"
 #include "loss/image_losses.h"
+#include "metrics/srgb_metrics.h"
 #include "splat/synthetic.h"
 #include "train/checkpoint.h"
-#include "camera/trajectory.h"
 #include "train/synthetic_dataset.h"
-#include "metrics/srgb_metrics.h"
 #include "train/trainer.h"
 
 using namespace evflow;
@@ -60,8 +60,8 @@ TEST_CASE("trainer: fits held-out views of a scene of random Gaussians", "[gpu][
   }
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double after = mean_psnr(ctx, t, data.novel);
-  std::printf("trainer: held-out PSNR %.2f dB -> %.2f dB after %u steps at 200x150 (%.1f it/s); loss %.4f -> %.4f\n", before,
-              after, cfg.iterations, cfg.iterations / secs, first_loss / 12, last_loss / 12);
+  std::printf("trainer: held-out PSNR %.2f dB -> %.2f dB after %u steps at 200x150 (%.1f it/s); loss %.4f -> %.4f\n",
+              before, after, cfg.iterations, cfg.iterations / secs, first_loss / 12, last_loss / 12);
   REQUIRE(last_loss < 0.5 * first_loss);
   REQUIRE(after > before + 6.0);
   REQUIRE(after >= 30.0);  // held-out PSNR >= 30 dB at 200x150 within the test budget
@@ -124,8 +124,8 @@ TEST_CASE("trainer: density control grows and prunes during training, state stay
     REQUIRE_FALSE(st.skipped);
     if (st.step % 30 == 0) counts.push_back(t.params().count);
   }
-  std::printf("density control in training: Gaussian count at steps 30/60/90/120: %zu %zu %zu %zu\n", counts[0], counts[1],
-              counts[2], counts[3]);
+  std::printf("density control in training: Gaussian count at steps 30/60/90/120: %zu %zu %zu %zu\n", counts[0],
+              counts[1], counts[2], counts[3]);
   REQUIRE(counts.back() != 1500);
   for (size_t c : counts) REQUIRE(c <= 2500);
   Checkpoint c = t.checkpoint();
@@ -196,15 +196,17 @@ TEST_CASE("trainer: config keys, presets and bad values", "[train]") {
 // point at depth z by -f d / z pixels, a yaw (about the camera's y axis) by an angle w moves a
 // point on the optical axis by -f tan(w) pixels. Measured on the centroid of one splat seen by a
 // camera that is not aligned with the world axes, relative to the plain render of the view.
-TEST_CASE("blur mode: virtual cameras along a drift and a yaw shift the image by the expected pixels", "[gpu][train][camera]") {
+TEST_CASE("blur mode: virtual cameras along a drift and a yaw shift the image by the expected pixels",
+          "[gpu][train][camera]") {
   auto& ctx = test::gpu_context();
   const std::array<double, 3> eye{1.0, -0.6, -3.0}, target{0.1, -0.05, 1.0};
   const Camera cam = Camera::look_at(80, 60, 60.0, eye, target, {0, -1, 0});
-  const double z = std::sqrt(std::pow(target[0] - eye[0], 2) + std::pow(target[1] - eye[1], 2) + std::pow(target[2] - eye[2], 2));
+  const double z =
+      std::sqrt(std::pow(target[0] - eye[0], 2) + std::pow(target[1] - eye[1], 2) + std::pow(target[2] - eye[2], 2));
   GaussianCloud one;
   one.resize(1, 0);
   one.means = {float(target[0]), float(target[1]), float(target[2])};  // on the optical axis
-  one.log_scales.assign(3, float(std::log(1.5 * z / cam.fx)));        // 1.5 px
+  one.log_scales.assign(3, float(std::log(1.5 * z / cam.fx)));         // 1.5 px
   one.quats = {1, 0, 0, 0};
   one.opacity_logits = {4.0f};
   one.sh = {1.5f, 1.5f, 1.5f};
@@ -228,7 +230,8 @@ TEST_CASE("blur mode: virtual cameras along a drift and a yaw shift the image by
   const double d = 0.3, w = 0.08;  // drift (world units) and yaw (rad) at the ends of the exposure
   for (int axis : {0, 4}) {
     ExposureTrajectory traj(cam, 0, 0.0);
-    for (int j = 0; j < ExposureTrajectory::kKnots; ++j) traj.data()[j * 6 + axis] = (axis == 0 ? d : w) * (j - 4) / 4.0;
+    for (int j = 0; j < ExposureTrajectory::kKnots; ++j)
+      traj.data()[j * 6 + axis] = (axis == 0 ? d : w) * (j - 4) / 4.0;
     for (double u : {0.0, 0.25, 0.5, 5.0 / 6.0, 1.0}) {
       const auto c = centroid(traj.camera_at(u));
       const double off = 2 * u - 1;
@@ -256,8 +259,8 @@ TEST_CASE("blur mode: the mean of virtual renders is fitted, knots learn, trajec
     for (size_t v = 0; v < data.train.size(); ++v) {
       ExposureTrajectory motion(data.train[v].camera, 100 + v, 0.0);
       for (int j = 0; j < ExposureTrajectory::kKnots; ++j) {
-        motion.data()[j * 6 + 0] = 0.04 * (j - 4) / 4.0;   // sideways drift across the exposure
-        motion.data()[j * 6 + 4] = 0.01 * (j - 4) / 4.0;   // and a little yaw
+        motion.data()[j * 6 + 0] = 0.04 * (j - 4) / 4.0;  // sideways drift across the exposure
+        motion.data()[j * 6 + 4] = 0.01 * (j - 4) / 4.0;  // and a little yaw
       }
       std::vector<float> mean(96 * 72 * 3, 0.f);
       for (double u : ExposureTrajectory::virtual_times(3)) {
@@ -333,7 +336,8 @@ std::vector<double> linear_knots(const lie::Vec6& amp, double scale = 1.0) {
 // has no exposure motion (its target is sharp, every virtual pose must reach the true pose) and
 // starts from the default knots; views 1 and 2 move and start from half of their motion, in
 // order, offset by the pose error.
-TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from perturbed poses", "[gpu][train][camera]") {
+TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from perturbed poses",
+          "[gpu][train][camera]") {
   auto& ctx = test::gpu_context();
   const uint32_t W = 80, H = 60;
   io::Dataset data = make_dataset(ctx, W, H, 3, 0);
@@ -345,12 +349,11 @@ TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from
   RenderState rs(ctx);
   // Per view: the exposure motion (a drift with a turn: about 2 to 5 px of blur at 80x60) and the
   // error of the recorded pose (about 1 px).
-  const std::array<lie::Vec6, 3> motion = {{{0, 0, 0, 0, 0, 0},
-                                           {0.075, 0.0, 0.015, 0.0, 0.015, 0.0},
-                                           {0.0, 0.06, -0.02, -0.0125, 0.0, 0.005}}};
+  const std::array<lie::Vec6, 3> motion = {
+      {{0, 0, 0, 0, 0, 0}, {0.075, 0.0, 0.015, 0.0, 0.015, 0.0}, {0.0, 0.06, -0.02, -0.0125, 0.0, 0.005}}};
   const std::array<lie::Vec6, 3> pose_noise = {{{0.03, -0.02, 0.02, 0.012, -0.01, 0.006},
-                                               {-0.025, 0.02, -0.015, -0.008, 0.012, -0.01},
-                                               {0.02, 0.025, 0.02, -0.01, -0.008, 0.012}}};
+                                                {-0.025, 0.02, -0.015, -0.008, 0.012, -0.01},
+                                                {0.02, 0.025, 0.02, -0.01, -0.008, 0.012}}};
   const std::vector<double> us = ExposureTrajectory::virtual_times(3);
   const size_t n = size_t(W) * H * 3;
   std::vector<ExposureTrajectory> truth_traj;
@@ -364,7 +367,8 @@ TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from
     for (double u : us) {
       r.forward(gt, truth_traj[v].camera_at(u), RenderSettings{}, rs);
       auto img = rs.outputs().rgb.read<float>(n);
-      for (size_t i = 0; i < n; ++i) mean[i] += io::srgb_to_linear(img[i]) / float(us.size());  // the blur averages linear light
+      for (size_t i = 0; i < n; ++i)
+        mean[i] += io::srgb_to_linear(img[i]) / float(us.size());  // the blur averages linear light
     }
     data.train[v].blurry = io::image_from_planar_rgb(mean, W, H);
     data.train[v].camera = data.train[v].camera.perturbed(pose_noise[v]);
@@ -383,7 +387,8 @@ TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from
   cfg.set("iterations", "300");  // 100 steps per view
   cfg.set("lr_trajectory_init", "6e-3");
   cfg.set("lr_trajectory_final", "3e-3");
-  for (const char* key : {"lr_means_init", "lr_means_final", "lr_sh_dc", "lr_sh_rest", "lr_opacity", "lr_log_scales", "lr_quats"})
+  for (const char* key :
+       {"lr_means_init", "lr_means_final", "lr_sh_dc", "lr_sh_rest", "lr_opacity", "lr_log_scales", "lr_quats"})
     cfg.set(key, "0");
   Trainer t(ctx, data, cfg, start);
   auto error_at = [&](size_t v, double u) {
@@ -407,14 +412,16 @@ TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from
     if (st.step > cfg.iterations - nv) last += st.loss / nv;
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("blur mode, trajectories alone: loss %.5f -> %.5f over %u steps (%.1f s)\n", first, last, cfg.iterations, secs);
+  std::printf("blur mode, trajectories alone: loss %.5f -> %.5f over %u steps (%.1f s)\n", first, last, cfg.iterations,
+              secs);
   for (size_t v = 0; v < nv; ++v) {
     const auto after = error_at(v, 0.5), worst_after = worst(v);
-    std::printf("  view %zu: mid-exposure rotation error %.5f -> %.5f rad (%.1fx), translation %.5f -> %.5f (%.1fx); "
-                "worst virtual pose %.5f -> %.5f rad, %.5f -> %.5f\n",
-                v, before[v].first, after.first, before[v].first / after.first, before[v].second, after.second,
-                before[v].second / after.second, worst_before[v].first, worst_after.first, worst_before[v].second,
-                worst_after.second);
+    std::printf(
+        "  view %zu: mid-exposure rotation error %.5f -> %.5f rad (%.1fx), translation %.5f -> %.5f (%.1fx); "
+        "worst virtual pose %.5f -> %.5f rad, %.5f -> %.5f\n",
+        v, before[v].first, after.first, before[v].first / after.first, before[v].second, after.second,
+        before[v].second / after.second, worst_before[v].first, worst_after.first, worst_before[v].second,
+        worst_after.second);
     CHECK(after.first < before[v].first / 5);
     CHECK(after.second < before[v].second / 5);
     // and the whole exposure: every virtual pose (the motion, not only its middle).

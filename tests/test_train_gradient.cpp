@@ -28,7 +28,8 @@ constexpr float kGrey = 0.35f;
 
 std::vector<double> motion_knots(double scale) {
   std::vector<double> k(ExposureTrajectory::kSize, 0.0);
-  for (int j = 0; j < ExposureTrajectory::kKnots; ++j) k[j * 6 + 0] = scale * kDrift * (j - 4) / 4.0, k[j * 6 + 4] = scale * kYaw * (j - 4) / 4.0;
+  for (int j = 0; j < ExposureTrajectory::kKnots; ++j)
+    k[j * 6 + 0] = scale * kDrift * (j - 4) / 4.0, k[j * 6 + 4] = scale * kYaw * (j - 4) / 4.0;
   return k;
 }
 
@@ -56,7 +57,8 @@ io::Dataset blur_event_dataset(gpu::Context& ctx, const GaussianCloud& truth) {
       r.forward(gt, motion.camera_at(s / double(sub)), rs, state);
       auto img = state.outputs().rgb.read<float>(mean.size());
       for (float& x : img) x = io::srgb_to_linear(x);
-      for (size_t i = 0; i < luma.size(); ++i) luma[i] = 0.2126f * img[i] + 0.7152f * img[luma.size() + i] + 0.0722f * img[2 * luma.size() + i];
+      for (size_t i = 0; i < luma.size(); ++i)
+        luma[i] = 0.2126f * img[i] + 0.7152f * img[luma.size() + i] + 0.0722f * img[2 * luma.size() + i];
       sim.add_frame(luma.data(), t0 + T * s / sub);
       for (size_t i = 0; i < mean.size(); ++i) mean[i] += img[i] / (sub + 1);
     }
@@ -72,7 +74,8 @@ io::Dataset blur_event_dataset(gpu::Context& ctx, const GaussianCloud& truth) {
 std::vector<size_t> largest(const std::vector<double>& g, size_t n) {
   std::vector<size_t> idx(g.size());
   std::iota(idx.begin(), idx.end(), size_t(0));
-  std::partial_sort(idx.begin(), idx.begin() + n, idx.end(), [&](size_t a, size_t b) { return std::abs(g[a]) > std::abs(g[b]); });
+  std::partial_sort(idx.begin(), idx.begin() + n, idx.end(),
+                    [&](size_t a, size_t b) { return std::abs(g[a]) > std::abs(g[b]); });
   idx.resize(n);
   return idx;
 }
@@ -121,13 +124,15 @@ TEST_CASE("trainer: one step's applied gradient (blur + events, 2N+1 frames) mat
     return s.loss;
   };
   int checked = 0;
-  auto check = [&](const char* what, size_t index, double analytic, double h, const std::function<void(Checkpoint&, double)>& add) {
+  auto check = [&](const char* what, size_t index, double analytic, double h,
+                   const std::function<void(Checkpoint&, double)>& add) {
     // The least-squares slope of symmetric differences at +-h .. +-4h: the loss steps where a
     // Gaussian's edge crosses the 1/255 alpha cut-off and where an L1 residual changes sign, so a
     // single central difference scatters by a few percent; the fit follows the smooth slope.
     double num = 0, den = 0;
     for (int k = 1; k <= 4; ++k) {
-      const double lp = loss_with([&](Checkpoint& c) { add(c, +k * h); }), lm = loss_with([&](Checkpoint& c) { add(c, -k * h); });
+      const double lp = loss_with([&](Checkpoint&c) { add(c, +k * h); }),
+                   lm = loss_with([&](Checkpoint&c) { add(c, -k * h); });
       num += k * (lp - lm);
       den += 2.0 * k * k * h;
     }

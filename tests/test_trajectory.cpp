@@ -106,7 +106,10 @@ void randomize_knots(ExposureTrajectory& traj, std::mt19937_64& rng, double max_
   for (int j = 0; j < ExposureTrajectory::kKnots; ++j) {
     Vec6 x;
     double l = 0;
-    for (double& v : x) { v = n(rng); l += v * v; }
+    for (double& v : x) {
+      v = n(rng);
+      l += v * v;
+    }
     const double m = std::exp(lg(rng)) / std::sqrt(l);
     for (double& v : x) v *= m;
     traj.set_knot(j, x);
@@ -140,8 +143,8 @@ std::array<double, ExposureTrajectory::kSize> knot_fd(const ExposureTrajectory& 
 
 TEST_CASE("SO(3) Exp matches the quaternion rotation and Log inverts it up to pi", "[camera]") {
   std::mt19937_64 rng(11);
-  const double angles[] = {0.0,  1e-12, 1e-8, 1e-5, 1e-3, 0.1,        0.5,        0.999,       1.0,
-                           1.001, 2.0,  2.5,  3.0,  kPi - 1e-3, kPi - 1e-6, kPi - 1e-9};
+  const double angles[] = {0.0, 1e-12, 1e-8, 1e-5, 1e-3, 0.1,        0.5,        0.999,
+                           1.0, 1.001, 2.0,  2.5,  3.0,  kPi - 1e-3, kPi - 1e-6, kPi - 1e-9};
   double worst_exp = 0, worst_log = 0, worst_orth = 0;
   for (double th : angles)
     for (int rep = 0; rep < 8; ++rep) {
@@ -216,12 +219,14 @@ TEST_CASE("SE(3) Exp/Log round trips, adjoint and Jacobians", "[camera]") {
       const Vec6 x{0.3 * n(rng), 0.3 * n(rng), 0.3 * n(rng), 0.3 * n(rng), 0.3 * n(rng), 0.3 * n(rng)};
       const Mat6 Ad = se3_adjoint(T);
       const SE3 lhs = T * se3_exp(x) * T.inverse(), rhs = se3_exp(mul(Ad, x));
-      worst_ad = std::max({worst_ad, max_abs_diff(lhs.R.data(), rhs.R.data(), 9), max_abs_diff(lhs.t.data(), rhs.t.data(), 3)});
+      worst_ad = std::max(
+          {worst_ad, max_abs_diff(lhs.R.data(), rhs.R.data(), 9), max_abs_diff(lhs.t.data(), rhs.t.data(), 3)});
       const Vec6 g1 = mul_transposed(Ad, x), g2 = se3_adjoint_transposed_apply(T, x);
       worst_ad = std::max(worst_ad, max_abs_diff(g1.data(), g2.data(), 6));
     }
-  std::printf("[camera] SE(3): |Log(Exp) - xi| %.2e, |J_r - FD| %.2e, |J_l - FD| %.2e, |J J^-1 - I| %.2e, adjoint %.2e\n",
-              worst_rt, worst_jr, worst_jl, worst_inv, worst_ad);
+  std::printf(
+      "[camera] SE(3): |Log(Exp) - xi| %.2e, |J_r - FD| %.2e, |J_l - FD| %.2e, |J J^-1 - I| %.2e, adjoint %.2e\n",
+      worst_rt, worst_jr, worst_jl, worst_inv, worst_ad);
   CHECK(worst_rt < 1e-12);
   CHECK(worst_jr < 1e-9);
   CHECK(worst_jl < 1e-9);
@@ -289,7 +294,10 @@ TEST_CASE("Exposure trajectory: weights, times, zero knots, init noise, Camera::
   CHECK(std::equal(a.data(), a.data() + 54, b.data()));
   CHECK(!std::equal(a.data(), a.data() + 54, c.data()));
   double ss = 0, mx = 0;
-  for (int i = 0; i < 54; ++i) { ss += a.data()[i] * a.data()[i]; mx = std::max(mx, std::abs(a.data()[i])); }
+  for (int i = 0; i < 54; ++i) {
+    ss += a.data()[i] * a.data()[i];
+    mx = std::max(mx, std::abs(a.data()[i]));
+  }
   const double sd = std::sqrt(ss / 54);
   CHECK(sd > 0.5e-5);
   CHECK(sd < 2e-5);
@@ -402,7 +410,8 @@ TEST_CASE("Exposure trajectory: knot gradients match finite differences", "[came
     sum_worst = std::max(sum_worst, *std::max_element(e.begin(), e.end()));
   }
   const double sum_med = median(sum_err);
-  std::printf("[camera] summed gradient over 7 virtual poses vs FD: median rel err %.2e, max %.2e\n", sum_med, sum_worst);
+  std::printf("[camera] summed gradient over 7 virtual poses vs FD: median rel err %.2e, max %.2e\n", sum_med,
+              sum_worst);
   CHECK(sum_med < 1e-6);
   CHECK(sum_worst < 1e-8);
   CHECK_THROWS(ExposureTrajectory(view).backward(std::vector<double>{0.5}, std::vector<Vec6>{}));

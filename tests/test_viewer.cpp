@@ -36,7 +36,8 @@ using test::slurp;
 // Runs `evflow view` on a synthetic PLY under Xvfb with a window of W x H (plus `extra`
 // arguments), then compares its screenshot (expected size OW x OH) with the offscreen render of
 // viewer::initial_view_camera at that size.
-void view_and_compare(const std::string& tag, uint32_t W, uint32_t H, const std::string& extra, uint32_t OW, uint32_t OH) {
+void view_and_compare(const std::string& tag, uint32_t W, uint32_t H, const std::string& extra, uint32_t OW,
+                      uint32_t OH) {
   const fs::path bin = evflow_binary();
   INFO("looked for the evflow binary next to the tests folder: " << bin);
   REQUIRE(fs::exists(bin));
@@ -56,9 +57,9 @@ void view_and_compare(const std::string& tag, uint32_t W, uint32_t H, const std:
 
   std::string cmd = "cd " + quote(dir.string()) + " && XDG_RUNTIME_DIR=" + quote((dir / "xdg").string()) +
                     " EVF_VALIDATION=1 timeout 300 xvfb-run -a -s '-screen 0 1024x768x24' " + quote(bin.string()) +
-                    " view " + quote(ply.string()) + " --width " + std::to_string(W) + " --height " + std::to_string(H) +
-                    " --frames 5 --fps-cap 0 --screenshot " + quote(png.string()) + " " + extra + " > " +
-                    quote(log.string()) + " 2>&1";
+                    " view " + quote(ply.string()) + " --width " + std::to_string(W) + " --height " +
+                    std::to_string(H) + " --frames 5 --fps-cap 0 --screenshot " + quote(png.string()) + " " + extra +
+                    " > " + quote(log.string()) + " 2>&1";
   const auto t0 = std::chrono::steady_clock::now();
   const int status = std::system(cmd.c_str());
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -101,8 +102,8 @@ void view_and_compare(const std::string& tag, uint32_t W, uint32_t H, const std:
     max_diff = std::max(max_diff, worst);
   }
   const double frac = double(within) / double(npx), lit_frac = double(lit) / double(npx);
-  INFO("pixels within 1 level: " << frac * 100 << "%, max difference " << max_diff << " levels, lit pixels " << lit_frac * 100
-                                 << "%");
+  INFO("pixels within 1 level: " << frac * 100 << "%, max difference " << max_diff << " levels, lit pixels "
+                                 << lit_frac * 100 << "%");
   WARN("viewer " << tag << ": " << OW << "x" << OH << " screenshot vs offscreen: " << frac * 100
                  << "% of pixels within 1 level, max difference " << max_diff << " levels; " << lit_frac * 100
                  << "% lit; viewer run " << secs << " s");

@@ -17,11 +17,11 @@
 
 #include "camera/trajectory.h"
 #include "cli_helpers.h"
-#include "metrics/srgb_metrics.h"
 #include "gpu_fixture.h"
 #include "io/dataset.h"
 #include "io/dataset_writer.h"
 #include "io/image.h"
+#include "metrics/srgb_metrics.h"
 #include "train/synthetic_dataset.h"
 #include "train/trainer.h"
 #include "viewer/canvas.h"
@@ -103,8 +103,8 @@ void require_xvfb() {
 
 // The training configuration both the CLI run and the in-process reference use.
 const std::vector<std::pair<std::string, std::string>> kKeys = {
-    {"iterations", "3"}, {"init_gaussians", "400"}, {"sh_degree", "0"}, {"mode", "blur"},
-    {"virtual_frames", "1"}, {"densify", "false"}, {"seed", "3"}};
+    {"iterations", "3"},     {"init_gaussians", "400"}, {"sh_degree", "0"}, {"mode", "blur"},
+    {"virtual_frames", "1"}, {"densify", "false"},      {"seed", "3"}};
 
 std::string key_args() {
   std::string s;
@@ -128,7 +128,8 @@ double tile_match(const io::Image& shot, const json& tile, const std::vector<flo
       const size_t s = size_t(viewer::nearest_source(dy, h, sh)) * sw + viewer::nearest_source(dx, w, sw);
       const size_t p = (size_t(y0 + dy) * shot.width + x0 + dx) * 3;
       int worst = 0;
-      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(int(encode8(shot.data[p + c])) - int(test::quantise8(planar[c * n + s]))));
+      for (int c = 0; c < 3; ++c)
+        worst = std::max(worst, std::abs(int(encode8(shot.data[p + c])) - int(test::quantise8(planar[c * n + s]))));
       within += worst <= 1;
       *max_diff = std::max(*max_diff, worst);
     }
@@ -180,7 +181,8 @@ TEST_CASE("viewer canvas: text, fill and nearest-neighbour blit match their host
     for (uint32_t x = 0; x < W; ++x) {
       uint32_t want = bgra(10, 20, 30);
       if (x >= r.x && x < r.x + r.w && y >= r.y && y < r.y + r.h) {
-        const size_t s = size_t(viewer::nearest_source(y - r.y, r.h, sh)) * sw + viewer::nearest_source(x - r.x, r.w, sw);
+        const size_t s =
+            size_t(viewer::nearest_source(y - r.y, r.h, sh)) * sw + viewer::nearest_source(x - r.x, r.w, sw);
         const size_t n = size_t(sw) * sh;
         want = bgra(test::quantise8(img[s]), test::quantise8(img[n + s]), test::quantise8(img[2 * n + s]));
       }
@@ -248,7 +250,8 @@ TEST_CASE("train --view: bad viewer options give clear errors before a window op
       {"--view --view-budget 0", "--view-budget must be in (0, 1]"},
   };
   for (const auto& c : cases) {
-    const Run r = run_evflow(dir, "train " + quote(data.string()) + " --out " + quote((dir / "run").string()) + " " + c.args, false);
+    const Run r = run_evflow(
+        dir, "train " + quote(data.string()) + " --out " + quote((dir / "run").string()) + " " + c.args, false);
     INFO(r.out);
     CHECK(r.rc == 1);
     CHECK(r.out.find(c.message) != std::string::npos);
@@ -262,10 +265,11 @@ TEST_CASE("train --view under Xvfb: panels show the blurry input, the renders an
   const fs::path data_dir = write_dataset(dir);
   const fs::path shot_png = dir / "shot.png", report_json = dir / "report.json";
   // Paused from the start; one single step before frame 2; 3 frames, then training finishes.
-  const Run r = run_evflow(dir, "train " + quote(data_dir.string()) + " --out " + quote((dir / "run").string()) + key_args() +
-                                    " --view --view-width 640 --view-height 400 --view-paused --view-frames 3"
-                                    " --view-script 2:n --view-fps-cap 0 --view-screenshot " + quote(shot_png.string()) +
-                                    " --view-report " + quote(report_json.string()));
+  const Run r =
+      run_evflow(dir, "train " + quote(data_dir.string()) + " --out " + quote((dir / "run").string()) + key_args() +
+                          " --view --view-width 640 --view-height 400 --view-paused --view-frames 3"
+                          " --view-script 2:n --view-fps-cap 0 --view-screenshot " +
+                          quote(shot_png.string()) + " --view-report " + quote(report_json.string()));
   INFO(r.out);
   REQUIRE(r.rc == 0);
   REQUIRE(r.out.find("done: 3 steps") != std::string::npos);
@@ -339,9 +343,12 @@ TEST_CASE("train --view under Xvfb: panels show the blurry input, the renders an
       const auto p = shot_px(shot, x0 + dx, y0 + dy);
       const bool is_red = p == std::array<int, 3>{255, 0, 0}, is_blue = p == std::array<int, 3>{0, 0, 255};
       const bool is_grey = p == std::array<int, 3>{128, 128, 128};
-      if (sx == 10 && sy == 10) red += is_red, other += !is_red;
-      else if (sx == 40 && sy == 30) blue += is_blue, other += !is_blue;
-      else grey += is_grey, other += !is_grey;
+      if (sx == 10 && sy == 10)
+        red += is_red, other += !is_red;
+      else if (sx == 40 && sy == 30)
+        blue += is_blue, other += !is_blue;
+      else
+        grey += is_grey, other += !is_grey;
     }
   INFO("events panel: red " << red << ", blue " << blue << ", grey " << grey << ", other " << other);
   CHECK(red > 0);
@@ -363,11 +370,13 @@ TEST_CASE("train --view under Xvfb: pause stops training, N steps exactly once, 
   const fs::path report_json = dir / "report.json";
   // Running at first; Space before frame 3 pauses, Right before 4 shows view 1, N before 5 and
   // 6 steps once each, 3 before 7 hides the virtual frames, Space before 8 resumes.
-  const Run r = run_evflow(dir, "train " + quote(data_dir.string()) + " --out " + quote((dir / "run").string()) +
-                                    " iterations=40 init_gaussians=300 sh_degree=0 mode=blur virtual_frames=1 densify=false"
-                                    " --view --view-width 480 --view-height 300 --view-frames 9 --view-budget 0.5"
-                                    " --view-fps-cap 0 --view-script 3:space,4:right,5:n,6:n,7:3,8:space"
-                                    " --view-report " + quote(report_json.string()));
+  const Run r =
+      run_evflow(dir, "train " + quote(data_dir.string()) + " --out " + quote((dir / "run").string()) +
+                          " iterations=40 init_gaussians=300 sh_degree=0 mode=blur virtual_frames=1 densify=false"
+                          " --view --view-width 480 --view-height 300 --view-frames 9 --view-budget 0.5"
+                          " --view-fps-cap 0 --view-script 3:space,4:right,5:n,6:n,7:3,8:space"
+                          " --view-report " +
+                          quote(report_json.string()));
   INFO(r.out);
   REQUIRE(r.rc == 0);
   REQUIRE(r.out.find("done: 40 steps") != std::string::npos);
@@ -381,7 +390,7 @@ TEST_CASE("train --view under Xvfb: pause stops training, N steps exactly once, 
   CHECK_FALSE(paused(2));
   CHECK(step(2) >= 1);  // training ran between frames 1 and 2
   for (int k = 3; k <= 7; ++k) CHECK(paused(k));
-  CHECK(step(3) == step(2));      // paused: no step
+  CHECK(step(3) == step(2));  // paused: no step
   CHECK(step(4) == step(3));
   CHECK(step(5) == step(4) + 1);  // N: exactly one step
   CHECK(step(6) == step(5) + 1);

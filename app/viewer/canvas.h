@@ -22,7 +22,9 @@ inline constexpr uint32_t rgba(uint32_t r, uint32_t g, uint32_t b, uint32_t a = 
 class Canvas {
  public:
   Canvas(gpu::Context& ctx, gpu::Commands& cmd)
-      : cmd_(cmd), packed_(ctx, 16, "view_canvas"), font_(ctx, uint64_t(shaderio::kFontGlyphs) * 8, "view_font"),
+      : cmd_(cmd),
+        packed_(ctx, 16, "view_canvas"),
+        font_(ctx, uint64_t(shaderio::kFontGlyphs) * 8, "view_font"),
         glyphs_(ctx, 4096, "view_glyphs") {
     font_.write(font_table());
   }
@@ -49,14 +51,15 @@ class Canvas {
   void blit(const gpu::Buffer& rgb, uint32_t src_w, uint32_t src_h, const Rect& r) {
     if (r.empty() || src_w == 0 || src_h == 0) return;
     shaderio::BlitPC pc{src_w, src_h, w_, h_, r.x, r.y, r.w, r.h, bgr_ ? 1u : 0u};
-    cmd_.dispatch("view/blit_rgb", {{shaderio::kBlitRgbBindRgb, rgb}, {shaderio::kBlitRgbBindCanvas, packed_}},
-                  pc, groups(uint64_t(r.w) * r.h));
+    cmd_.dispatch("view/blit_rgb", {{shaderio::kBlitRgbBindRgb, rgb}, {shaderio::kBlitRgbBindCanvas, packed_}}, pc,
+                  groups(uint64_t(r.w) * r.h));
   }
 
   // Queues a line of text with its top-left corner at (x, y); draw_text() draws all queued text.
   void text(uint32_t x, uint32_t y, const std::string& s, uint32_t color = rgba(255, 255, 255)) {
     for (size_t i = 0; i < s.size(); ++i)
-      queued_.push_back({x + uint32_t(i) * shaderio::kGlyphCellW * scale_, y, uint32_t(static_cast<uint8_t>(s[i])), color});
+      queued_.push_back(
+          {x + uint32_t(i) * shaderio::kGlyphCellW * scale_, y, uint32_t(static_cast<uint8_t>(s[i])), color});
   }
   void set_text_scale(uint32_t s) { scale_ = std::max(1u, s); }
   uint32_t text_scale() const { return scale_; }
@@ -70,13 +73,17 @@ class Canvas {
     glyphs_.write(queued_);
     shaderio::TextPC pc{uint32_t(queued_.size()), scale_, w_, h_, bg, backdrop ? 1u : 0u, bgr_ ? 1u : 0u};
     const uint64_t cell = uint64_t(shaderio::kGlyphCellW) * shaderio::kGlyphCellH * scale_ * scale_;
-    cmd_.dispatch("view/text", {{shaderio::kTextBindFont, font_}, {shaderio::kTextBindGlyphs, glyphs_},
-                                {shaderio::kTextBindCanvas, packed_}}, pc, groups(queued_.size() * cell));
+    cmd_.dispatch(
+        "view/text",
+        {{shaderio::kTextBindFont, font_}, {shaderio::kTextBindGlyphs, glyphs_}, {shaderio::kTextBindCanvas, packed_}},
+        pc, groups(queued_.size() * cell));
     queued_.clear();
   }
 
  private:
-  gpu::Groups groups(uint64_t n) const { return cmd_.linear_groups(gpu::Commands::div_up(n, shaderio::kViewGroupSize)); }
+  gpu::Groups groups(uint64_t n) const {
+    return cmd_.linear_groups(gpu::Commands::div_up(n, shaderio::kViewGroupSize));
+  }
   gpu::Commands& cmd_;
   gpu::Buffer packed_, font_, glyphs_;
   std::vector<shaderio::Glyph> queued_;

@@ -16,18 +16,19 @@ namespace evflow::viewer {
 
 struct EventImage {
   uint32_t width = 0, height = 0;
-  std::vector<int32_t> sum;   // net polarity per pixel, row-major
-  std::vector<float> rgb;     // planar sRGB [3][H][W] (what the canvas shows)
+  std::vector<int32_t> sum;           // net polarity per pixel, row-major
+  std::vector<float> rgb;             // planar sRGB [3][H][W] (what the canvas shows)
   size_t positive = 0, negative = 0;  // events counted (EBAD-NeRF counts: sums of the bins)
-  bool has_events = false;    // the dataset carries events for this view
+  bool has_events = false;            // the dataset carries events for this view
 };
 
 // Colour scale: a pixel whose |sum| reaches k = max(1, the 95th percentile of the nonzero
 // |sum|) is pure red (255, 0, 0) or pure blue (0, 0, 255); sum 0 is grey (0.5 in sRGB, byte
 // 128); in between the sRGB values are interpolated linearly: grey + (primary - grey) * |sum| / k.
 inline EventImage event_image(const io::Dataset& data, size_t v) {
-  if (v >= data.train.size()) throw std::out_of_range("event_image: training view " + std::to_string(v) + " of " +
-                                                      std::to_string(data.train.size()));
+  if (v >= data.train.size())
+    throw std::out_of_range("event_image: training view " + std::to_string(v) + " of " +
+                            std::to_string(data.train.size()));
   const io::View& view = data.train[v];
   EventImage e;
   const bool ebad = !data.event_counts.empty() && data.event_counts_shape.size() == 3;

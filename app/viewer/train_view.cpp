@@ -121,8 +121,16 @@ std::map<int, std::vector<int>> TrainView::parse_script(const std::string& scrip
 
 TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data, const TrainViewOptions& options,
                      const volatile std::sig_atomic_t* interrupted)
-    : display_(display), trainer_(trainer), data_(data), opt_(options), interrupted_(interrupted), ctx_(display.context()),
-      cmd_(ctx_), raster_(ctx_), free_view_(ctx_), canvas_(ctx_, cmd_) {
+    : display_(display),
+      trainer_(trainer),
+      data_(data),
+      opt_(options),
+      interrupted_(interrupted),
+      ctx_(display.context()),
+      cmd_(ctx_),
+      raster_(ctx_),
+      free_view_(ctx_),
+      canvas_(ctx_, cmd_) {
   if (data_.train.empty()) throw std::invalid_argument("train --view: the dataset has no training views");
   if (opt_.view < 0 || size_t(opt_.view) >= data_.train.size())
     throw std::invalid_argument("--view-index " + std::to_string(opt_.view) + ": the dataset has " +
@@ -149,7 +157,8 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
     const auto c = cam.center();
     double depth = 0;
     for (int k = 0; k < 3; ++k) depth += (centre.target[k] - c[k]) * cam.R[6 + k];
-    if (!(depth > 0)) depth = data_.near > 0 && data_.far > data_.near ? 0.5 * (data_.near + data_.far) : centre.distance;
+    if (!(depth > 0))
+      depth = data_.near > 0 && data_.far > data_.near ? 0.5 * (data_.near + data_.far) : centre.distance;
     home_ = orbit_from_camera(cam, depth);
   }
   display_.input().orbit = home_;
@@ -163,9 +172,7 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
 TrainView::~TrainView() {
   try {
     close();
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "train --view: %s\n", e.what());
-  }
+  } catch (const std::exception& e) { std::fprintf(stderr, "train --view: %s\n", e.what()); }
   display_.input().on_key = nullptr;
 }
 
@@ -176,8 +183,10 @@ void TrainView::press(int key) {
       step_requests_ = 0;
       break;
     case GLFW_KEY_N:
-      if (!paused_) paused_ = true;
-      else ++step_requests_;
+      if (!paused_)
+        paused_ = true;
+      else
+        ++step_requests_;
       break;
     case GLFW_KEY_RIGHT:
     case GLFW_KEY_RIGHT_BRACKET:
@@ -262,8 +271,10 @@ void TrainView::after_training() {
   while (open_ && ((opt_.frames > 0 && frames_shown_ < opt_.frames) || opt_.hold)) {
     if (interrupted_ && *interrupted_) break;
     const double t = now_s();
-    if (t >= next_frame_) draw_frame();
-    else glfwWaitEventsTimeout(std::min(next_frame_ - t, 0.1));
+    if (t >= next_frame_)
+      draw_frame();
+    else
+      glfwWaitEventsTimeout(std::min(next_frame_ - t, 0.1));
     poll();
   }
   close();
@@ -285,9 +296,9 @@ void TrainView::refresh_content(bool force) {
     shown_.width = W;
     shown_.height = H;
     if (view.blurry.width != W || view.blurry.height != H)
-      throw std::runtime_error("train --view: view '" + view.name + "': blurry image " + std::to_string(view.blurry.width) + "x" +
-                               std::to_string(view.blurry.height) + " differs from its camera's " + std::to_string(W) +
-                               "x" + std::to_string(H));
+      throw std::runtime_error("train --view: view '" + view.name + "': blurry image " +
+                               std::to_string(view.blurry.width) + "x" + std::to_string(view.blurry.height) +
+                               " differs from its camera's " + std::to_string(W) + "x" + std::to_string(H));
     shown_.blurry.ensure(n * 4);
     shown_.blurry.write(encoded(io::planar_rgb(view.blurry)));  // the canvas shows sRGB values
     EventImage ev = event_image(data_, view_);
@@ -367,7 +378,8 @@ void TrainView::draw_frame() {
     const std::vector<Tile> tiles = shown[i]->tiles(shown_);
     std::vector<std::pair<Rect, Tile>> placed;
     if (!tiles.empty()) {
-      const std::vector<Rect> rects = tile_grid(layout.boxes[i], uint32_t(tiles.size()), tiles[0].width, tiles[0].height);
+      const std::vector<Rect> rects =
+          tile_grid(layout.boxes[i], uint32_t(tiles.size()), tiles[0].width, tiles[0].height);
       for (size_t k = 0; k < rects.size() && k < tiles.size(); ++k) {
         canvas_.blit(*tiles[k].rgb, tiles[k].width, tiles[k].height, rects[k]);
         placed.push_back({rects[k], tiles[k]});
@@ -381,10 +393,12 @@ void TrainView::draw_frame() {
     const double share = training_wall_s_ > 0 ? viewer_s_ / training_wall_s_ : 0.0;
     std::vector<std::string> lines;
     lines.push_back("STEP " + std::to_string(trainer_.current_step()) + "/" + std::to_string(cfg.iterations) +
-                    (training_done_ ? " DONE" : paused_ ? " PAUSED" : "") + "  LOSS " +
-                    (loss_ema_ < 0 ? std::string("-") : fmt("%.4f", loss_ema_)));
-    lines.push_back(fmt("%.2f IT/S", its_ema_) + "  GAUSSIANS " + std::to_string(trainer_.params().count) + "  VIEWER " +
-                    fmt("%.0f%%", 100.0 * share));
+                    (training_done_ ? " DONE"
+                     : paused_      ? " PAUSED"
+                                    : "") +
+                    "  LOSS " + (loss_ema_ < 0 ? std::string("-") : fmt("%.4f", loss_ema_)));
+    lines.push_back(fmt("%.2f IT/S", its_ema_) + "  GAUSSIANS " + std::to_string(trainer_.params().count) +
+                    "  VIEWER " + fmt("%.0f%%", 100.0 * share));
     lines.push_back("VIEW " + std::to_string(view_ + 1) + "/" + std::to_string(data_.train.size()) + " " + view.name +
                     "  PSNR " + fmt("%.2f DB", shown_.psnr) +
                     (shown_.psnr_mid_sharp >= 0 ? "  MID VS SHARP " + fmt("%.2f DB", shown_.psnr_mid_sharp) : ""));
@@ -440,13 +454,14 @@ nlohmann::json TrainView::report() const {
               {"main", rect(main_rect_)},
               {"panels", panels},
               {"frames", frame_log_},
-              {"content", {{"view", shown_.view},
-                           {"step", shown_.step},
-                           {"psnr", shown_.psnr},
-                           {"psnr_mid_sharp", shown_.psnr_mid_sharp},
-                           {"events_pos", shown_.events_pos},
-                           {"events_neg", shown_.events_neg},
-                           {"virtual_times", shown_.times}}},
+              {"content",
+               {{"view", shown_.view},
+                {"step", shown_.step},
+                {"psnr", shown_.psnr},
+                {"psnr_mid_sharp", shown_.psnr_mid_sharp},
+                {"events_pos", shown_.events_pos},
+                {"events_neg", shown_.events_neg},
+                {"virtual_times", shown_.times}}},
               {"viewer_seconds", viewer_s_},
               {"training_wall_seconds", training_wall_s_},
               {"budget", opt_.budget}};
@@ -460,17 +475,19 @@ void TrainView::close() {
   if (!opt_.screenshot.empty()) {
     if (frames_shown_ == 0) throw std::runtime_error("train --view: no frame was presented, no screenshot written");
     save_screenshot(canvas_.packed(), canvas_.width(), canvas_.height(), canvas_.bgr(), opt_.screenshot);
-    std::fprintf(stderr, "train --view: %d frame(s) presented, wrote %s (%ux%u)\n", frames_shown_, opt_.screenshot.c_str(),
-                 canvas_.width(), canvas_.height());
+    std::fprintf(stderr, "train --view: %d frame(s) presented, wrote %s (%ux%u)\n", frames_shown_,
+                 opt_.screenshot.c_str(), canvas_.width(), canvas_.height());
   }
   if (!opt_.report.empty()) {
     std::ofstream f(opt_.report);
     f << report().dump(1) << "\n";
     if (!f) throw std::runtime_error(opt_.report + ": cannot write the viewer report");
   }
-  std::fprintf(stderr, "train --view: viewer closed after %d frame(s); its time %.2f s of %.2f s training wall time (%.1f%%)%s\n",
-               frames_shown_, viewer_s_, training_wall_s_, training_wall_s_ > 0 ? 100.0 * viewer_s_ / training_wall_s_ : 0.0,
-               training_done_ ? "" : "; training goes on");
+  std::fprintf(
+      stderr,
+      "train --view: viewer closed after %d frame(s); its time %.2f s of %.2f s training wall time (%.1f%%)%s\n",
+      frames_shown_, viewer_s_, training_wall_s_, training_wall_s_ > 0 ? 100.0 * viewer_s_ / training_wall_s_ : 0.0,
+      training_done_ ? "" : "; training goes on");
   glfwHideWindow(display_.window());
   glfwPollEvents();
 }

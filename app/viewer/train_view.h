@@ -23,35 +23,35 @@ namespace evflow::viewer {
 
 struct TrainViewOptions {
   uint32_t width = 1280, height = 720;  // window size (screen coordinates)
-  int frames = 0;                 // > 0: the viewer closes after this many presented frames
-  std::string screenshot;         // PNG of the last presented frame (written when the viewer closes)
-  std::string report;             // JSON: per-frame step/paused/view, panel rectangles, PSNR, time share
-  double budget = 0.10;           // viewer time / wall time while training runs
-  double fps_cap = 30.0;          // <= 0: uncapped
-  double refresh_s = 1.0;         // the training-view panels re-render at most this often while training runs
+  int frames = 0;                       // > 0: the viewer closes after this many presented frames
+  std::string screenshot;               // PNG of the last presented frame (written when the viewer closes)
+  std::string report;                   // JSON: per-frame step/paused/view, panel rectangles, PSNR, time share
+  double budget = 0.10;                 // viewer time / wall time while training runs
+  double fps_cap = 30.0;                // <= 0: uncapped
+  double refresh_s = 1.0;               // the training-view panels re-render at most this often while training runs
   bool start_paused = false;
-  bool hold = false;              // keep the window open after training ends, until it is closed
-  int view = 0;                   // training view shown first
-  std::string script;             // testing: "FRAME:KEY,..." presses KEY just before frame FRAME is drawn
+  bool hold = false;   // keep the window open after training ends, until it is closed
+  int view = 0;        // training view shown first
+  std::string script;  // testing: "FRAME:KEY,..." presses KEY just before frame FRAME is drawn
   bool vsync = false;
 };
 
 // Everything the side panels show for the chosen training view, refreshed together.
 struct ShownView {
   uint32_t view = 0;
-  bool inputs_ready = false;            // blurry + events (depend on the view only)
-  uint32_t step = UINT32_MAX;           // training step of the renders below
-  uint32_t width = 0, height = 0;       // the view's image size
-  gpu::Buffer blurry;                   // planar linear RGB, width x height
+  bool inputs_ready = false;       // blurry + events (depend on the view only)
+  uint32_t step = UINT32_MAX;      // training step of the renders below
+  uint32_t width = 0, height = 0;  // the view's image size
+  gpu::Buffer blurry;              // planar linear RGB, width x height
   uint32_t events_w = 0, events_h = 0;
-  gpu::Buffer events;                   // planar linear RGB, events_w x events_h
+  gpu::Buffer events;  // planar linear RGB, events_w x events_h
   size_t events_pos = 0, events_neg = 0;
   bool has_events = false;
-  gpu::Buffer mid;                      // render at mid-exposure (plain mode: the view's camera)
-  std::vector<double> times;            // blur mode: the virtual frames' exposure times u
-  std::vector<gpu::Buffer> frames;      // blur mode: renders at those times
-  double psnr = 0;                      // model image (blur: mean of the frames) vs the training target
-  double psnr_mid_sharp = -1;           // mid render vs the sharp ground truth (when the view has one)
+  gpu::Buffer mid;                  // render at mid-exposure (plain mode: the view's camera)
+  std::vector<double> times;        // blur mode: the virtual frames' exposure times u
+  std::vector<gpu::Buffer> frames;  // blur mode: renders at those times
+  double psnr = 0;                  // model image (blur: mean of the frames) vs the training target
+  double psnr_mid_sharp = -1;       // mid render vs the sharp ground truth (when the view has one)
 };
 
 struct Tile {

@@ -26,7 +26,8 @@ int run_viewer(const GaussianCloud& cloud, const ViewerOptions& opt) {
   gpu::Swapchain& sc = display.swapchain();
   GLFWwindow* const window = display.window();
   {
-    std::fprintf(stderr, "evflow view: %s, %s, %zu Gaussians\n", ctx.caps().name.c_str(), sc.describe().c_str(), cloud.size());
+    std::fprintf(stderr, "evflow view: %s, %s, %zu Gaussians\n", ctx.caps().name.c_str(), sc.describe().c_str(),
+                 cloud.size());
 
     GaussianBuffers params(ctx, cloud.size(), cloud.sh_degree, "view");
     params.upload(cloud);
@@ -63,9 +64,10 @@ int run_viewer(const GaussianCloud& cloud, const ViewerOptions& opt) {
       const Camera cam = orbit_camera(display.input().orbit, w, h);
       raster.forward(params, cam, settings, raster_state);
       shaderio::PackPC pc{w, h, sc.bgr() ? 1u : 0u};
-      cmd.dispatch("view/pack_rgba8", {{shaderio::kPackRgba8BindRgb, raster_state.outputs().rgb},
-                                       {shaderio::kPackRgba8BindPacked, packed}}, pc,
-                   cmd.linear_groups(gpu::Commands::div_up(uint64_t(w) * h, shaderio::kViewGroupSize)));
+      cmd.dispatch(
+          "view/pack_rgba8",
+          {{shaderio::kPackRgba8BindRgb, raster_state.outputs().rgb}, {shaderio::kPackRgba8BindPacked, packed}}, pc,
+          cmd.linear_groups(gpu::Commands::div_up(uint64_t(w) * h, shaderio::kViewGroupSize)));
       cmd.submit();
       const bool ok = sc.present(packed);
       render_ms_sum += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -106,7 +108,8 @@ int run_viewer(const GaussianCloud& cloud, const ViewerOptions& opt) {
     if (!opt.screenshot.empty()) {
       if (!last_valid) throw std::runtime_error("evflow view: no frame was presented, no screenshot written");
       save_screenshot(packed, last_w, last_h, sc.bgr(), opt.screenshot);
-      std::fprintf(stderr, "evflow view: %d frame(s) presented, wrote %s (%ux%u)\n", shown, opt.screenshot.c_str(), last_w, last_h);
+      std::fprintf(stderr, "evflow view: %d frame(s) presented, wrote %s (%ux%u)\n", shown, opt.screenshot.c_str(),
+                   last_w, last_h);
     }
   }
   return report_validation(ctx, "evflow view");

@@ -20,7 +20,7 @@ struct ViewerOptions {
   // size, and the run ends only once `frames` frames in all, the last of that size, were shown.
   uint32_t resize_width = 0, resize_height = 0;
   std::string title = "evflow view";
-  gpu::ContextOptions context;         // presentation is switched on by the viewer
+  gpu::ContextOptions context;  // presentation is switched on by the viewer
 };
 
 // Opens the window and runs until it is closed (or `frames` were shown). Returns the process

@@ -42,10 +42,12 @@ void install_callbacks(GLFWwindow* w) {
 }  // namespace
 
 Display::Glfw::Glfw(const std::string& what) {
-  glfwSetErrorCallback([](int code, const char* msg) { std::fprintf(stderr, "evflow: GLFW error %d: %s\n", code, msg); });
+  glfwSetErrorCallback(
+      [](int code, const char* msg) { std::fprintf(stderr, "evflow: GLFW error %d: %s\n", code, msg); });
   if (!glfwInit())
-    throw std::runtime_error(what + ": cannot open a window (GLFW could not initialise: is DISPLAY set? "
-                                    "headless machines can use xvfb-run)");
+    throw std::runtime_error(what +
+                             ": cannot open a window (GLFW could not initialise: is DISPLAY set? "
+                             "headless machines can use xvfb-run)");
 }
 Display::Glfw::~Glfw() { glfwTerminate(); }
 
@@ -90,8 +92,10 @@ bool Display::sync_swapchain() {
   int fbw = 0, fbh = 0;
   glfwGetFramebufferSize(window_, &fbw, &fbh);
   if (sc_->needs_recreate() || uint32_t(fbw) != sc_->width() || uint32_t(fbh) != sc_->height()) {
-    if (fbw > 0 && fbh > 0) sc_->recreate(uint32_t(fbw), uint32_t(fbh));
-    else if (sc_->ready()) sc_->recreate(0, 0);
+    if (fbw > 0 && fbh > 0)
+      sc_->recreate(uint32_t(fbw), uint32_t(fbh));
+    else if (sc_->ready())
+      sc_->recreate(0, 0);
   }
   return sc_->ready();
 }

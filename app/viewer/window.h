@@ -33,8 +33,8 @@ class Display {
  public:
   // `what` names the command in error messages ("evflow view"). Throws std::runtime_error when
   // no window can be opened (no display, no Vulkan surface support).
-  Display(const std::string& what, uint32_t width, uint32_t height, const std::string& title, gpu::ContextOptions options,
-          bool vsync);
+  Display(const std::string& what, uint32_t width, uint32_t height, const std::string& title,
+          gpu::ContextOptions options, bool vsync);
   ~Display();
   Display(const Display&) = delete;
   Display& operator=(const Display&) = delete;

@@ -14,8 +14,15 @@ static void se3_exp(const std::array<double, 6>& d, double Rm[9], double tv[3]) 
   const double px = d[3], py = d[4], pz = d[5];
   const double th2 = px * px + py * py + pz * pz, th = std::sqrt(th2);
   double A, B, C;  // sin/th, (1-cos)/th^2, (th - sin)/th^3
-  if (th < 1e-6) { A = 1 - th2 / 6; B = 0.5 - th2 / 24; C = 1.0 / 6 - th2 / 120; }
-  else { A = std::sin(th) / th; B = (1 - std::cos(th)) / th2; C = (th - std::sin(th)) / (th2 * th); }
+  if (th < 1e-6) {
+    A = 1 - th2 / 6;
+    B = 0.5 - th2 / 24;
+    C = 1.0 / 6 - th2 / 120;
+  } else {
+    A = std::sin(th) / th;
+    B = (1 - std::cos(th)) / th2;
+    C = (th - std::sin(th)) / (th2 * th);
+  }
   const double K[9] = {0, -pz, py, pz, 0, -px, -py, px, 0};
   double K2[9];
   for (int i = 0; i < 3; ++i)
@@ -60,9 +67,9 @@ Camera Camera::look_at(uint32_t width, uint32_t height, double fov_y_deg, const 
     double l = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
     return std::array<double, 3>{a[0] / l, a[1] / l, a[2] / l};
   };
-  auto z = norm(sub(target, eye));         // forward
-  auto x = norm(cross(z, up));             // right (y down in the image)
-  auto y = cross(z, x);                    // down
+  auto z = norm(sub(target, eye));  // forward
+  auto x = norm(cross(z, up));      // right (y down in the image)
+  auto y = cross(z, x);             // down
   Camera c;
   c.width = width;
   c.height = height;

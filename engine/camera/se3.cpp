@@ -44,8 +44,9 @@ double inv_jacobian_coeff(double th2) {
   const double th = std::sqrt(th2);
   if (th < 0.3) {
     // -sum_{n>=1} (-1)^n B_2n th^(2n-2) / (2n)!  (Bernoulli numbers)
-    return 1.0 / 12 + th2 * (1.0 / 720 + th2 * (1.0 / 30240 + th2 * (1.0 / 1209600 + th2 * (1.0 / 47900160 +
-                                                                                          th2 * (691.0 / 1307674368000.0)))));
+    return 1.0 / 12 +
+           th2 * (1.0 / 720 + th2 * (1.0 / 30240 +
+                                     th2 * (1.0 / 1209600 + th2 * (1.0 / 47900160 + th2 * (691.0 / 1307674368000.0)))));
   }
   const double h = 0.5 * th;
   return (1 - h / std::tan(h)) / th2;
@@ -284,9 +285,7 @@ Mat6 se3_left_jacobian(const Vec6& xi) {
   return m;
 }
 
-Mat6 se3_right_jacobian(const Vec6& xi) {
-  return se3_left_jacobian({-xi[0], -xi[1], -xi[2], -xi[3], -xi[4], -xi[5]});
-}
+Mat6 se3_right_jacobian(const Vec6& xi) { return se3_left_jacobian({-xi[0], -xi[1], -xi[2], -xi[3], -xi[4], -xi[5]}); }
 
 Mat6 se3_left_jacobian_inv(const Vec6& xi) {
   Mat6 m{};

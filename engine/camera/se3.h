@@ -22,8 +22,8 @@ using Mat6 = std::array<double, 36>;  // row-major
 
 // ---- small 3x3 helpers ---------------------------------------------------------------------
 Mat3 identity3();
-Mat3 hat(const Vec3& v);   // v^ : hat(v) * w = v x w
-Vec3 vee(const Mat3& m);   // inverse of hat on the skew part: ((m21 - m12), (m02 - m20), (m10 - m01)) / 2
+Mat3 hat(const Vec3& v);  // v^ : hat(v) * w = v x w
+Vec3 vee(const Mat3& m);  // inverse of hat on the skew part: ((m21 - m12), (m02 - m20), (m10 - m01)) / 2
 Mat3 mul(const Mat3& a, const Mat3& b);
 Vec3 mul(const Mat3& a, const Vec3& v);
 Mat3 transpose(const Mat3& a);
@@ -37,10 +37,10 @@ Mat3 so3_exp(const Vec3& phi);
 // Rotation vector with angle in [0, pi]. R must be a rotation (orthonormal, det +1) up to
 // rounding. At exactly pi the sign of the axis is arbitrary (both are correct).
 Vec3 so3_log(const Mat3& R);
-Mat3 so3_left_jacobian(const Vec3& phi);        // I + (1-cos)/th^2 phi^ + (th-sin)/th^3 phi^^2
-Mat3 so3_right_jacobian(const Vec3& phi);       // J_l(-phi)
-Mat3 so3_left_jacobian_inv(const Vec3& phi);    // I - phi^/2 + D phi^^2
-Mat3 so3_right_jacobian_inv(const Vec3& phi);   // I + phi^/2 + D phi^^2
+Mat3 so3_left_jacobian(const Vec3& phi);       // I + (1-cos)/th^2 phi^ + (th-sin)/th^3 phi^^2
+Mat3 so3_right_jacobian(const Vec3& phi);      // J_l(-phi)
+Mat3 so3_left_jacobian_inv(const Vec3& phi);   // I - phi^/2 + D phi^^2
+Mat3 so3_right_jacobian_inv(const Vec3& phi);  // I + phi^/2 + D phi^^2
 
 // ---- SE(3) ---------------------------------------------------------------------------------
 struct SE3 {
@@ -50,7 +50,7 @@ struct SE3 {
   static SE3 identity() { return {}; }
   SE3 operator*(const SE3& o) const;  // composition: (this * o)(p) = this(o(p))
   SE3 inverse() const;
-  Vec3 apply(const Vec3& p) const;    // R p + t
+  Vec3 apply(const Vec3& p) const;  // R p + t
 };
 
 SE3 se3_exp(const Vec6& xi);
@@ -61,9 +61,9 @@ Vec6 se3_adjoint_transposed_apply(const SE3& T, const Vec6& g);
 Mat6 se3_ad(const Vec6& xi);  // small adjoint: [ phi^ rho^ ; 0 phi^ ]
 // Barfoot's Q(rho, phi): the upper-right block of the SE(3) left Jacobian.
 Mat3 se3_q_block(const Vec3& rho, const Vec3& phi);
-Mat6 se3_left_jacobian(const Vec6& xi);       // [ J_l(phi)  Q(rho,phi) ; 0  J_l(phi) ]
-Mat6 se3_right_jacobian(const Vec6& xi);      // J_l(-xi)
-Mat6 se3_left_jacobian_inv(const Vec6& xi);   // [ J^-1  -J^-1 Q J^-1 ; 0  J^-1 ]
+Mat6 se3_left_jacobian(const Vec6& xi);      // [ J_l(phi)  Q(rho,phi) ; 0  J_l(phi) ]
+Mat6 se3_right_jacobian(const Vec6& xi);     // J_l(-xi)
+Mat6 se3_left_jacobian_inv(const Vec6& xi);  // [ J^-1  -J^-1 Q J^-1 ; 0  J^-1 ]
 Mat6 se3_right_jacobian_inv(const Vec6& xi);
 
 }  // namespace evflow::lie

@@ -171,7 +171,7 @@ std::array<double, ExposureTrajectory::kSize> ExposureTrajectory::backward(doubl
 }
 
 std::array<double, ExposureTrajectory::kSize> ExposureTrajectory::backward(const std::vector<double>& us,
-                                                                         const std::vector<Vec6>& gs) const {
+                                                                           const std::vector<Vec6>& gs) const {
   if (us.size() != gs.size())
     throw std::invalid_argument("ExposureTrajectory::backward: " + std::to_string(us.size()) + " times but " +
                                 std::to_string(gs.size()) + " pose gradients");

@@ -25,8 +25,8 @@ namespace evflow {
 
 class ExposureTrajectory {
  public:
-  static constexpr int kKnots = 9;   // Bézier degree 8
-  static constexpr int kDof = 6;     // per knot: (rho, phi)
+  static constexpr int kKnots = 9;  // Bézier degree 8
+  static constexpr int kDof = 6;    // per knot: (rho, phi)
   static constexpr size_t kSize = size_t(kKnots) * kDof;
   static constexpr double kDefaultInitSigma = 1e-5;  // exact zeros give NaNs in some Log maps
 

@@ -54,38 +54,45 @@ void DensityStats::reset(gpu::Commands& cmd, uint32_t count) {
 
 void DensityStats::accumulate(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm, float grad_scale) {
   if (!count_) return;
-  if (grad2d_norm.size() < uint64_t(count_) * 4) throw std::invalid_argument("DensityStats: grad2d_norm smaller than the count");
+  if (grad2d_norm.size() < uint64_t(count_) * 4)
+    throw std::invalid_argument("DensityStats: grad2d_norm smaller than the count");
   AccumulatePC pc{};
   pc.count = count_;
   pc.use_camera = 0;
   pc.grad_scale = grad_scale;
   // Parameter bindings are unused without a camera: bind the statistics buffers in their place.
-  cmd.dispatch("densify/accumulate", {{kDensifyAccumulateBindGrad2d, grad2d_norm},
-                                      {kDensifyAccumulateBindMeans, grad_sum_},
-                                      {kDensifyAccumulateBindLogScales, grad_sum_},
-                                      {kDensifyAccumulateBindQuats, grad_sum_},
-                                      {kDensifyAccumulateBindGradSum, grad_sum_},
-                                      {kDensifyAccumulateBindVisCount, vis_count_},
-                                      {kDensifyAccumulateBindMaxRadius, max_radius_}}, pc,
-               groups_for(cmd, count_));
+  cmd.dispatch("densify/accumulate",
+               {{kDensifyAccumulateBindGrad2d, grad2d_norm},
+                {kDensifyAccumulateBindMeans, grad_sum_},
+                {kDensifyAccumulateBindLogScales, grad_sum_},
+                {kDensifyAccumulateBindQuats, grad_sum_},
+                {kDensifyAccumulateBindGradSum, grad_sum_},
+                {kDensifyAccumulateBindVisCount, vis_count_},
+                {kDensifyAccumulateBindMaxRadius, max_radius_}},
+               pc, groups_for(cmd, count_));
 }
 
 void DensityStats::accumulate(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm, const GaussianBuffers& params,
                               const Camera& cam, float grad_scale) {
   if (!count_) return;
-  if (params.count != count_) throw std::invalid_argument("DensityStats: parameter count differs from the statistics' count");
-  if (grad2d_norm.size() < uint64_t(count_) * 4) throw std::invalid_argument("DensityStats: grad2d_norm smaller than the count");
+  if (params.count != count_)
+    throw std::invalid_argument("DensityStats: parameter count differs from the statistics' count");
+  if (grad2d_norm.size() < uint64_t(count_) * 4)
+    throw std::invalid_argument("DensityStats: grad2d_norm smaller than the count");
   AccumulatePC pc{};
   pc.cam = camera_pc(cam);
   pc.count = count_;
   pc.use_camera = 1;
   pc.grad_scale = grad_scale;
   cmd.dispatch("densify/accumulate",
-               {{kDensifyAccumulateBindGrad2d, grad2d_norm}, {kDensifyAccumulateBindMeans, params.means},
-                {kDensifyAccumulateBindLogScales, params.log_scales}, {kDensifyAccumulateBindQuats, params.quats},
-                {kDensifyAccumulateBindGradSum, grad_sum_}, {kDensifyAccumulateBindVisCount, vis_count_},
-                {kDensifyAccumulateBindMaxRadius, max_radius_}}, pc,
-               groups_for(cmd, count_));
+               {{kDensifyAccumulateBindGrad2d, grad2d_norm},
+                {kDensifyAccumulateBindMeans, params.means},
+                {kDensifyAccumulateBindLogScales, params.log_scales},
+                {kDensifyAccumulateBindQuats, params.quats},
+                {kDensifyAccumulateBindGradSum, grad_sum_},
+                {kDensifyAccumulateBindVisCount, vis_count_},
+                {kDensifyAccumulateBindMaxRadius, max_radius_}},
+               pc, groups_for(cmd, count_));
 }
 
 // ------------------------------------------------------------------------------ refinement
@@ -113,8 +120,9 @@ RefineResult DensityControl::refine(gpu::Commands& cmd, GaussianBuffers& params,
   const uint64_t n64 = params.count;
   if (n64 > 0x7FFFFFFFull) throw std::invalid_argument("DensityControl: too many Gaussians");
   const uint32_t n = static_cast<uint32_t>(n64);
-  if (stats.count() != n) throw std::invalid_argument("DensityControl: statistics sized for " + std::to_string(stats.count()) +
-                                                      " Gaussians, parameters hold " + std::to_string(n));
+  if (stats.count() != n)
+    throw std::invalid_argument("DensityControl: statistics sized for " + std::to_string(stats.count()) +
+                                " Gaussians, parameters hold " + std::to_string(n));
   if (grads.count != n || grads.sh_degree != params.sh_degree)
     throw std::invalid_argument("DensityControl: gradient buffers do not match the parameters");
   RefineResult res{n, n};
@@ -142,7 +150,8 @@ RefineResult DensityControl::refine(gpu::Commands& cmd, GaussianBuffers& params,
   dpc.min_opacity_logit = logit(cfg_.min_opacity);
   // 0 turns a rule off.
   dpc.max_screen_radius = cfg_.max_screen_radius > 0 ? cfg_.max_screen_radius : std::numeric_limits<float>::infinity();
-  dpc.max_world_scale = cfg_.max_world_scale > 0 ? cfg_.max_world_scale * extent : std::numeric_limits<float>::infinity();
+  dpc.max_world_scale =
+      cfg_.max_world_scale > 0 ? cfg_.max_world_scale * extent : std::numeric_limits<float>::infinity();
   dpc.log_split_div = log_div;
   dpc.prune_big = prune_big ? 1u : 0u;
   dpc.capped = capped ? 1u : 0u;
@@ -150,29 +159,41 @@ RefineResult DensityControl::refine(gpu::Commands& cmd, GaussianBuffers& params,
   const gpu::Buffer& keys = capped ? keys_ : offsets_;
   const gpu::Buffer& ids = capped ? ids_ : offsets_;
   cmd.dispatch("densify/decide",
-               {{kDecideBindLogScales, params.log_scales}, {kDecideBindOpacity, params.opacity_logits},
-                {kDecideBindGradSum, stats.grad_sum()}, {kDecideBindVisCount, stats.vis_count()},
-                {kDecideBindMaxRadius, stats.max_radius()}, {kDecideBindDecision, decision_},
-                {kDecideBindOutCount, out_count_}, {kDecideBindKeys, keys}, {kDecideBindIds, ids}},
+               {{kDecideBindLogScales, params.log_scales},
+                {kDecideBindOpacity, params.opacity_logits},
+                {kDecideBindGradSum, stats.grad_sum()},
+                {kDecideBindVisCount, stats.vis_count()},
+                {kDecideBindMaxRadius, stats.max_radius()},
+                {kDecideBindDecision, decision_},
+                {kDecideBindOutCount, out_count_},
+                {kDecideBindKeys, keys},
+                {kDecideBindIds, ids}},
                dpc, groups_for(cmd, n));
   if (capped) {
     scan_.record(cmd, out_count_, base_offsets_, n, n + 1);  // base_offsets_[n]: rows without growth
     auto sorted = sort_.record(cmd, keys_, ids_, n, 32);
     CapPC cpc{n, cfg_.max_gaussians, 0, 0};
-    cmd.dispatch("densify/cap_extra", {{kCapExtraBindIds, *sorted.second}, {kCapExtraBindDecision, decision_},
-                                       {kCapExtraBindExtra, sorted_extra_}}, cpc, groups_for(cmd, n));
+    cmd.dispatch(
+        "densify/cap_extra",
+        {{kCapExtraBindIds, *sorted.second}, {kCapExtraBindDecision, decision_}, {kCapExtraBindExtra, sorted_extra_}},
+        cpc, groups_for(cmd, n));
     scan_.record(cmd, sorted_extra_, extra_offsets_, n, n);
-    cmd.dispatch("densify/cap_grant", {{kCapGrantBindIds, *sorted.second}, {kCapGrantBindExtra, sorted_extra_},
-                                       {kCapGrantBindExtraScan, extra_offsets_}, {kCapGrantBindBaseScan, base_offsets_},
-                                       {kCapGrantBindDecision, decision_}, {kCapGrantBindOutCount, out_count_}}, cpc,
-                 groups_for(cmd, n));
+    cmd.dispatch("densify/cap_grant",
+                 {{kCapGrantBindIds, *sorted.second},
+                  {kCapGrantBindExtra, sorted_extra_},
+                  {kCapGrantBindExtraScan, extra_offsets_},
+                  {kCapGrantBindBaseScan, base_offsets_},
+                  {kCapGrantBindDecision, decision_},
+                  {kCapGrantBindOutCount, out_count_}},
+                 cpc, groups_for(cmd, n));
   }
   scan_.record(cmd, out_count_, offsets_, n, n + 1);
   cmd.submit();
   const uint32_t m = offsets_.read_one<uint32_t>(n);  // the one readback
   res.after = m;
   if (m > GaussianBuffers::max_count(ctx_, params.sh_degree))
-    throw gpu::Error("DensityControl: " + std::to_string(m) + " Gaussians exceed the device's binding limit; set a cap");
+    throw gpu::Error("DensityControl: " + std::to_string(m) +
+                     " Gaussians exceed the device's binding limit; set a cap");
 
   // ---- phase 2: index, gather everything into fresh buffers, move the optimizer state.
   param_src_.ensure(words(m));
@@ -186,14 +207,21 @@ RefineResult DensityControl::refine(gpu::Commands& cmd, GaussianBuffers& params,
   epc.seed = cfg_.seed * 0x9E3779B9u + refinements_ * 0x85EBCA6Bu + 0x1234567u;
   epc.log_split_div = log_div;
   epc.max_sigma = cfg_.split_max_sigma;
-  cmd.dispatch("densify/index", {{kDensifyIndexBindDecision, decision_}, {kDensifyIndexBindOffsets, offsets_},
-                                 {kDensifyIndexBindParamSrc, param_src_}, {kDensifyIndexBindStateSrc, state_src_},
-                                 {kDensifyIndexBindCode, row_code_}}, epc, groups_for(cmd, n));
+  cmd.dispatch("densify/index",
+               {{kDensifyIndexBindDecision, decision_},
+                {kDensifyIndexBindOffsets, offsets_},
+                {kDensifyIndexBindParamSrc, param_src_},
+                {kDensifyIndexBindStateSrc, state_src_},
+                {kDensifyIndexBindCode, row_code_}},
+               epc, groups_for(cmd, n));
   if (m > 0) {
     cmd.dispatch("densify/geometry",
-                 {{kDensifyGeometryBindMeans, params.means}, {kDensifyGeometryBindLogScales, params.log_scales},
-                  {kDensifyGeometryBindQuats, params.quats}, {kDensifyGeometryBindParamSrc, param_src_},
-                  {kDensifyGeometryBindCode, row_code_}, {kDensifyGeometryBindNewMeans, new_params.means},
+                 {{kDensifyGeometryBindMeans, params.means},
+                  {kDensifyGeometryBindLogScales, params.log_scales},
+                  {kDensifyGeometryBindQuats, params.quats},
+                  {kDensifyGeometryBindParamSrc, param_src_},
+                  {kDensifyGeometryBindCode, row_code_},
+                  {kDensifyGeometryBindNewMeans, new_params.means},
                   {kDensifyGeometryBindNewLogScales, new_params.log_scales}},
                  epc, groups_for(cmd, m));
     Adam::gather_rows(cmd, params.quats, new_params.quats, param_src_, m, 4);
@@ -222,11 +250,16 @@ RefineResult DensityControl::refine(gpu::Commands& cmd, GaussianBuffers& params,
   for (auto [i, f] : moved) {
     auto field = [&](GaussianBuffers& b) -> const gpu::Buffer& {
       switch (f) {
-        case 0: return b.means;
-        case 1: return b.log_scales;
-        case 2: return b.quats;
-        case 3: return b.opacity_logits;
-        default: return b.sh[f - 4];
+        case 0:
+          return b.means;
+        case 1:
+          return b.log_scales;
+        case 2:
+          return b.quats;
+        case 3:
+          return b.opacity_logits;
+        default:
+          return b.sh[f - 4];
       }
     };
     adam.set_buffers(i, field(params), field(grads));
@@ -240,8 +273,9 @@ void DensityControl::reset_opacity(gpu::Commands& cmd, GaussianBuffers& params, 
   if (n == 0) return;
   mask_.ensure(words(n));
   ResetPC pc{n, logit(cfg_.reset_opacity), 0, 0};
-  cmd.dispatch("densify/opacity_reset", {{kOpacityResetBindOpacity, params.opacity_logits},
-                                         {kOpacityResetBindMask, mask_}}, pc, groups_for(cmd, n));
+  cmd.dispatch("densify/opacity_reset",
+               {{kOpacityResetBindOpacity, params.opacity_logits}, {kOpacityResetBindMask, mask_}}, pc,
+               groups_for(cmd, n));
   for (size_t i = 0; i < adam.group_count(); ++i)
     if (adam.group(i).name == "opacity_logits") adam.reset_masked(cmd, i, mask_);
 }

@@ -20,24 +20,26 @@ struct DensityConfig {
   uint32_t refine_from = 500;     // first refinement step
   uint32_t refine_until = 15000;  // refinement while step < refine_until (3DGS densify_until_iter)
   uint32_t refine_every = 100;
-  uint32_t reset_every = 3000;    // opacity reset period (0 = never)
+  uint32_t reset_every = 3000;  // opacity reset period (0 = never)
   // Rules.
-  float grad_threshold = 2e-4f;   // grow where the mean screen-space gradient > this
-  float percent_dense = 0.01f;    // clone where max scale <= percent_dense * extent, else split
-  float split_divisor = 1.6f;     // children's scale = parent's / split_divisor
-  float split_max_sigma = 3.0f;   // children's offsets truncated to this Mahalanobis radius
-  float min_opacity = 0.005f;     // prune where opacity < this
-  float max_screen_radius = 20.0f;   // after the first reset: prune where max radius (px) > this (0: off)
-  float max_world_scale = 0.1f;      // after the first reset: prune where max scale > this * extent (0: off)
-  float reset_opacity = 0.01f;       // opacity reset: opacity = min(opacity, this)
-  uint32_t max_gaussians = 0;     // cap on the count after growth (0 = none)
-  uint32_t seed = 0;              // split sampling
+  float grad_threshold = 2e-4f;     // grow where the mean screen-space gradient > this
+  float percent_dense = 0.01f;      // clone where max scale <= percent_dense * extent, else split
+  float split_divisor = 1.6f;       // children's scale = parent's / split_divisor
+  float split_max_sigma = 3.0f;     // children's offsets truncated to this Mahalanobis radius
+  float min_opacity = 0.005f;       // prune where opacity < this
+  float max_screen_radius = 20.0f;  // after the first reset: prune where max radius (px) > this (0: off)
+  float max_world_scale = 0.1f;     // after the first reset: prune where max scale > this * extent (0: off)
+  float reset_opacity = 0.01f;      // opacity reset: opacity = min(opacity, this)
+  uint32_t max_gaussians = 0;       // cap on the count after growth (0 = none)
+  uint32_t seed = 0;                // split sampling
 
   bool refine_at(uint32_t step) const {
     return refine_every && step >= refine_from && step < refine_until && step % refine_every == 0;
   }
   // 3DGS resets opacity every reset_every steps (while refining), and never at step 0.
-  bool reset_at(uint32_t step) const { return reset_every && step > 0 && step < refine_until && step % reset_every == 0; }
+  bool reset_at(uint32_t step) const {
+    return reset_every && step > 0 && step < refine_until && step % reset_every == 0;
+  }
   // Screen- and world-size pruning starts after the first opacity reset (3DGS: iteration > reset).
   bool prune_big_at(uint32_t step) const { return reset_every && step > reset_every; }
 };

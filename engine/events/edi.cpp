@@ -14,9 +14,11 @@ EdiIntegrator::EdiIntegrator(const EventStream& ev, double t0, double t1, const 
   if (w_ == 0 || h_ == 0) throw std::runtime_error("EDI: event stream has no sensor size");
   const size_t n = size_t(w_) * h_;
   if (!th.pos_map.empty() && th.pos_map.size() != n)
-    throw std::runtime_error("EDI: pos_map has " + std::to_string(th.pos_map.size()) + " values, expected " + std::to_string(n));
+    throw std::runtime_error("EDI: pos_map has " + std::to_string(th.pos_map.size()) + " values, expected " +
+                             std::to_string(n));
   if (!th.neg_map.empty() && th.neg_map.size() != n)
-    throw std::runtime_error("EDI: neg_map has " + std::to_string(th.neg_map.size()) + " values, expected " + std::to_string(n));
+    throw std::runtime_error("EDI: neg_map has " + std::to_string(th.neg_map.size()) + " values, expected " +
+                             std::to_string(n));
   if (th.pos_map.empty() && !(th.pos > 0)) throw std::runtime_error("EDI: positive threshold must be > 0");
   if (th.neg_map.empty() && !(th.neg > 0)) throw std::runtime_error("EDI: negative threshold must be > 0");
 

@@ -49,7 +49,9 @@ class EdiIntegrator {
   std::vector<double> double_integral(double f) const;
   // Latent sharp image I(f) = B / D(f); blurry is H*W*channels (1 or 3, interleaved), linear.
   std::vector<float> frame_at(const float* blurry, uint32_t channels, double f) const;
-  std::vector<float> frame_mid(const float* blurry, uint32_t channels) const { return frame_at(blurry, channels, 0.5 * (t0_ + t1_)); }
+  std::vector<float> frame_mid(const float* blurry, uint32_t channels) const {
+    return frame_at(blurry, channels, 0.5 * (t0_ + t1_));
+  }
 
   // Net signed log change Σ c p of each pixel's events in [t0, f] (C(f) above).
   std::vector<double> level_at(double f) const;

@@ -125,20 +125,32 @@ EventModelParams EventModelParams::from_json(const nlohmann::json& j) {
       if (!v.is_number()) throw std::runtime_error("EventModelParams: '" + k + "' must be a number");
       return v.get<double>();
     };
-    if (k == "theta_pos") p.theta_pos = num();
-    else if (k == "theta_neg") p.theta_neg = num();
-    else if (k == "theta_sigma") p.theta_sigma = num();
-    else if (k == "theta_min") p.theta_min = num();
-    else if (k == "eps") p.eps = num();
-    else if (k == "refractory_s") p.refractory_s = num();
-    else if (k == "shot_rate_hz") p.shot_rate_hz = num();
-    else if (k == "leak_rate_hz") p.leak_rate_hz = num();
-    else if (k == "jitter_s") p.jitter_s = num();
+    if (k == "theta_pos")
+      p.theta_pos = num();
+    else if (k == "theta_neg")
+      p.theta_neg = num();
+    else if (k == "theta_sigma")
+      p.theta_sigma = num();
+    else if (k == "theta_min")
+      p.theta_min = num();
+    else if (k == "eps")
+      p.eps = num();
+    else if (k == "refractory_s")
+      p.refractory_s = num();
+    else if (k == "shot_rate_hz")
+      p.shot_rate_hz = num();
+    else if (k == "leak_rate_hz")
+      p.leak_rate_hz = num();
+    else if (k == "jitter_s")
+      p.jitter_s = num();
     else if (k == "color") {
       const std::string c = v.is_string() ? v.get<std::string>() : std::string();
-      if (c == "luma") p.color = ColorMode::Luma;
-      else if (c == "rggb") p.color = ColorMode::RGGB;
-      else throw std::runtime_error("EventModelParams: 'color' must be \"luma\" or \"rggb\"");
+      if (c == "luma")
+        p.color = ColorMode::Luma;
+      else if (c == "rggb")
+        p.color = ColorMode::RGGB;
+      else
+        throw std::runtime_error("EventModelParams: 'color' must be \"luma\" or \"rggb\"");
     } else if (k == "seed") {
       if (!v.is_number_integer() || (v.is_number_integer() && !v.is_number_unsigned() && v.get<int64_t>() < 0))
         throw std::runtime_error("EventModelParams: 'seed' must be a non-negative integer");
@@ -199,8 +211,7 @@ EventSimulator::EventSimulator(uint32_t width, uint32_t height, const EventModel
 }
 
 static inline double checked(double v, size_t i) {
-  if (!std::isfinite(v))
-    throw std::runtime_error("EventSimulator: non-finite intensity at pixel " + std::to_string(i));
+  if (!std::isfinite(v)) throw std::runtime_error("EventSimulator: non-finite intensity at pixel " + std::to_string(i));
   return v > 0.0 ? v : 0.0;
 }
 
@@ -311,7 +322,8 @@ void EventSimulator::step(double t) {
       size_t pix = static_cast<size_t>(uniform01(rng_shot_) * double(n));
       if (pix >= n) pix = n - 1;
       const int8_t p = uniform01(rng_shot_) < 0.5 ? int8_t(1) : int8_t(-1);
-      scratch_.push_back({std::max(next_shot_, t0), static_cast<uint16_t>(pix % w_), static_cast<uint16_t>(pix / w_), p});
+      scratch_.push_back(
+          {std::max(next_shot_, t0), static_cast<uint16_t>(pix % w_), static_cast<uint16_t>(pix / w_), p});
       next_shot_ += exponential(rng_shot_, shot_rate);
     }
   }

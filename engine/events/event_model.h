@@ -56,17 +56,17 @@ namespace evflow::events {
 enum class ColorMode { Luma, RGGB };
 
 struct EventModelParams {
-  double theta_pos = 0.2;       // mean positive (ON) contrast threshold, log units
-  double theta_neg = 0.2;       // mean negative (OFF) contrast threshold, log units (> 0)
-  double theta_sigma = 0.03;    // per-pixel threshold standard deviation (fixed pattern)
-  double theta_min = 0.01;      // per-pixel thresholds are clamped to >= this
-  double eps = 1e-3;            // L = log(eps + I)
-  double refractory_s = 5e-4;   // dead time after an emitted event (0 = none)
-  double shot_rate_hz = 0.0;    // shot noise events per pixel per second (both polarities)
-  double leak_rate_hz = 0.0;    // leak (positive) events per pixel per second on a static scene
-  double jitter_s = 0.0;        // timestamp jitter standard deviation
+  double theta_pos = 0.2;      // mean positive (ON) contrast threshold, log units
+  double theta_neg = 0.2;      // mean negative (OFF) contrast threshold, log units (> 0)
+  double theta_sigma = 0.03;   // per-pixel threshold standard deviation (fixed pattern)
+  double theta_min = 0.01;     // per-pixel thresholds are clamped to >= this
+  double eps = 1e-3;           // L = log(eps + I)
+  double refractory_s = 5e-4;  // dead time after an emitted event (0 = none)
+  double shot_rate_hz = 0.0;   // shot noise events per pixel per second (both polarities)
+  double leak_rate_hz = 0.0;   // leak (positive) events per pixel per second on a static scene
+  double jitter_s = 0.0;       // timestamp jitter standard deviation
   ColorMode color = ColorMode::Luma;
-  uint64_t seed = 0;            // recorded for the manifest; EventSimulator's seed argument wins
+  uint64_t seed = 0;  // recorded for the manifest; EventSimulator's seed argument wins
 
   // v2e-like defaults (the struct's defaults).
   static EventModelParams defaults() { return {}; }
@@ -145,9 +145,9 @@ class EventSimulator {
 };
 
 // Portable samplers on std::mt19937_64 (exposed for tests and other simulator parts).
-double uniform01(std::mt19937_64& g);             // [0, 1), 53 random bits
-double uniform01_open(std::mt19937_64& g);        // (0, 1]
-double normal01(std::mt19937_64& g);              // Box-Muller, one value per call (2 draws)
+double uniform01(std::mt19937_64& g);                 // [0, 1), 53 random bits
+double uniform01_open(std::mt19937_64& g);            // (0, 1]
+double normal01(std::mt19937_64& g);                  // Box-Muller, one value per call (2 draws)
 double exponential(std::mt19937_64& g, double rate);  // mean 1/rate
 uint64_t poisson(std::mt19937_64& g, double mean);    // exact: Knuth below mean 30, Hoermann's PTRS above
 uint64_t splitmix64(uint64_t& state);

@@ -10,7 +10,8 @@ void EventStream::validate(const std::string& source) const {
   const size_t n = t.size();
   if (x.size() != n || y.size() != n || p.size() != n)
     throw std::runtime_error(source + ": event arrays differ in length (x " + std::to_string(x.size()) + ", y " +
-                             std::to_string(y.size()) + ", t " + std::to_string(n) + ", p " + std::to_string(p.size()) + ")");
+                             std::to_string(y.size()) + ", t " + std::to_string(n) + ", p " + std::to_string(p.size()) +
+                             ")");
   for (size_t i = 0; i < n; ++i) {
     if (x[i] >= width || y[i] >= height)
       throw std::runtime_error(source + ": event " + std::to_string(i) + " at (" + std::to_string(x[i]) + ", " +
@@ -19,11 +20,12 @@ void EventStream::validate(const std::string& source) const {
     if (p[i] != 1 && p[i] != -1)
       throw std::runtime_error(source + ": event " + std::to_string(i) + " has polarity " + std::to_string(p[i]) +
                                " (expected +1 or -1)");
-    if (!std::isfinite(t[i])) throw std::runtime_error(source + ": event " + std::to_string(i) + " has a non-finite timestamp");
+    if (!std::isfinite(t[i]))
+      throw std::runtime_error(source + ": event " + std::to_string(i) + " has a non-finite timestamp");
     if (i && t[i] < t[i - 1])
-      throw std::runtime_error(source + ": timestamps are not sorted: event " + std::to_string(i) + " (t = " +
-                               std::to_string(t[i]) + ") comes before event " + std::to_string(i - 1) + " (t = " +
-                               std::to_string(t[i - 1]) + ")");
+      throw std::runtime_error(source + ": timestamps are not sorted: event " + std::to_string(i) +
+                               " (t = " + std::to_string(t[i]) + ") comes before event " + std::to_string(i - 1) +
+                               " (t = " + std::to_string(t[i - 1]) + ")");
   }
 }
 

@@ -19,8 +19,8 @@ GpuEvents::GpuEvents(gpu::Context& ctx, const EventStream& stream, const std::ve
   for (size_t w = 0; w < windows.size(); ++w) {
     const EventWindow& win = windows[w];
     if (!(std::isfinite(win.t0) && std::isfinite(win.t1)) || win.t1 <= win.t0)
-      throw std::runtime_error(source + ": exposure window " + std::to_string(w) + " [" + std::to_string(win.t0) + ", " +
-                               std::to_string(win.t1) + ") is empty or not finite");
+      throw std::runtime_error(source + ": exposure window " + std::to_string(w) + " [" + std::to_string(win.t0) +
+                               ", " + std::to_string(win.t1) + ") is empty or not finite");
     auto [a, b] = stream.window(win.t0, win.t1);
     for (size_t i = a; i < b; ++i) {
       packed.push_back(uint32_t(stream.x[i]) | (uint32_t(stream.y[i]) << shaderio::kEventCoordBits) |
@@ -30,14 +30,16 @@ GpuEvents::GpuEvents(gpu::Context& ctx, const EventStream& stream, const std::ve
     first_.push_back(packed.size());
   }
   const uint64_t bytes = std::max<uint64_t>(packed.size() * 4, 16);
-  if (packed.size() > 0xFFFFFFFFull) throw std::runtime_error(source + ": more than 2^32 events in the training windows");
+  if (packed.size() > 0xFFFFFFFFull)
+    throw std::runtime_error(source + ": more than 2^32 events in the training windows");
   ctx.check_binding_size(bytes, source + ": events of the training exposures");
   packed_.ensure(bytes);
   if (!packed.empty()) packed_.write(packed);
 }
 
 std::pair<uint32_t, uint32_t> GpuEvents::range(size_t w, double t0, double t1) const {
-  if (w >= windows_.size()) throw std::out_of_range("GpuEvents: window " + std::to_string(w) + " of " + std::to_string(windows_.size()));
+  if (w >= windows_.size())
+    throw std::out_of_range("GpuEvents: window " + std::to_string(w) + " of " + std::to_string(windows_.size()));
   auto begin = times_.begin() + std::ptrdiff_t(first_[w]), end = times_.begin() + std::ptrdiff_t(first_[w + 1]);
   auto a = std::lower_bound(begin, end, t0), b = std::lower_bound(begin, end, t1);
   if (b < a) b = a;
@@ -52,8 +54,8 @@ void GpuEvents::accumulate(gpu::Commands& cmd, size_t w, double t0, double t1, c
   auto [first, last] = range(w, t0, t1);
   if (last == first) return;
   shaderio::EventAccumulatePC pc{first, last - first, width_, height_, plane, 0, 0, 0};
-  cmd.dispatch("events/accumulate", {{shaderio::kEventAccumulateBindPacked, packed_},
-                                     {shaderio::kEventAccumulateBindCounts, counts}}, pc,
+  cmd.dispatch("events/accumulate",
+               {{shaderio::kEventAccumulateBindPacked, packed_}, {shaderio::kEventAccumulateBindCounts, counts}}, pc,
                cmd.linear_groups(gpu::Commands::div_up(last - first, shaderio::kEventGroupSize)));
 }
 

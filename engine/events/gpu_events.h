@@ -41,8 +41,8 @@ class GpuEvents {
  private:
   uint32_t width_ = 0, height_ = 0;
   std::vector<EventWindow> windows_;
-  std::vector<size_t> first_;   // per window: offset of its events (size windows + 1)
-  std::vector<double> times_;   // per packed event
+  std::vector<size_t> first_;  // per window: offset of its events (size windows + 1)
+  std::vector<double> times_;  // per packed event
   gpu::Buffer packed_;
 };
 

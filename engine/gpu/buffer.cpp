@@ -38,8 +38,9 @@ void Buffer::release() {
 void Buffer::allocate(uint64_t bytes) {
   bytes = std::max<uint64_t>(16, (bytes + 15) & ~uint64_t(15));
   if (bytes > ctx_->caps().max_allocation_size)
-    throw Error("buffer '" + name_ + "' needs " + std::to_string(bytes) + " bytes, above this device's largest allocation (" +
-                std::to_string(ctx_->caps().max_allocation_size) + " bytes)");
+    throw Error("buffer '" + name_ + "' needs " + std::to_string(bytes) +
+                " bytes, above this device's largest allocation (" + std::to_string(ctx_->caps().max_allocation_size) +
+                " bytes)");
   VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   bci.size = bytes;
   bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
@@ -81,16 +82,22 @@ void Buffer::ensure(uint64_t bytes) {
 
 void Buffer::upload(const void* data, uint64_t bytes, uint64_t offset) {
   if (offset + bytes > size_)
-    throw Error("upload of " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " overflows buffer '" + name_ + "'");
-  if (mapped_) std::memcpy(static_cast<char*>(mapped_) + offset, data, bytes);
-  else staged_copy(true, const_cast<void*>(data), bytes, offset);
+    throw Error("upload of " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " overflows buffer '" +
+                name_ + "'");
+  if (mapped_)
+    std::memcpy(static_cast<char*>(mapped_) + offset, data, bytes);
+  else
+    staged_copy(true, const_cast<void*>(data), bytes, offset);
 }
 
 void Buffer::download(void* data, uint64_t bytes, uint64_t offset) const {
   if (offset + bytes > size_)
-    throw Error("download of " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " overflows buffer '" + name_ + "'");
-  if (mapped_) std::memcpy(data, static_cast<const char*>(mapped_) + offset, bytes);
-  else staged_copy(false, data, bytes, offset);
+    throw Error("download of " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " overflows buffer '" +
+                name_ + "'");
+  if (mapped_)
+    std::memcpy(data, static_cast<const char*>(mapped_) + offset, bytes);
+  else
+    staged_copy(false, data, bytes, offset);
 }
 
 // For devices whose device-local memory is not host-visible: a host-visible staging buffer and
@@ -107,9 +114,9 @@ void Buffer::staged_copy(bool to_device, void* host, uint64_t bytes, uint64_t of
   vkGetBufferMemoryRequirements(dev, staging, &req);
   VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   mai.allocationSize = req.size;
-  mai.memoryTypeIndex = ctx_->memory_type(req.memoryTypeBits,
-                                          VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                                          VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+  mai.memoryTypeIndex =
+      ctx_->memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
   EVF_VK(vkAllocateMemory(dev, &mai, nullptr, &mem));
   EVF_VK(vkBindBufferMemory(dev, staging, mem, 0));
   void* p;
@@ -126,8 +133,13 @@ void Buffer::staged_copy(bool to_device, void* host, uint64_t bytes, uint64_t of
   vkBeginCommandBuffer(cb, &bi);
   VkBufferCopy region{};
   region.size = bytes;
-  if (to_device) { region.dstOffset = offset; vkCmdCopyBuffer(cb, staging, buffer_, 1, &region); }
-  else { region.srcOffset = offset; vkCmdCopyBuffer(cb, buffer_, staging, 1, &region); }
+  if (to_device) {
+    region.dstOffset = offset;
+    vkCmdCopyBuffer(cb, staging, buffer_, 1, &region);
+  } else {
+    region.srcOffset = offset;
+    vkCmdCopyBuffer(cb, buffer_, staging, 1, &region);
+  }
   vkEndCommandBuffer(cb);
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   si.commandBufferCount = 1;

@@ -65,7 +65,7 @@ class Buffer {
 struct BufferRef {
   const Buffer* buffer = nullptr;
   uint64_t offset = 0;
-  uint64_t range = 0;  // 0 = to the end
+  uint64_t range = 0;                         // 0 = to the end
   BufferRef(const Buffer& b) : buffer(&b) {}  // NOLINT(google-explicit-constructor)
   BufferRef(const Buffer& b, uint64_t off, uint64_t r) : buffer(&b), offset(off), range(r) {}
 };

@@ -46,10 +46,14 @@ Groups Commands::linear_groups(uint64_t n) const {
   Groups g;
   if (n == 0) return {0, 1, 1};
   const uint64_t mx = ctx_.caps().max_workgroup_count[0];
-  if (n <= mx) { g.x = static_cast<uint32_t>(n); return g; }
+  if (n <= mx) {
+    g.x = static_cast<uint32_t>(n);
+    return g;
+  }
   g.x = static_cast<uint32_t>(mx);
   uint64_t y = (n + mx - 1) / mx;
-  if (y > ctx_.caps().max_workgroup_count[1]) throw Error("dispatch of " + std::to_string(n) + " workgroups exceeds the device grid");
+  if (y > ctx_.caps().max_workgroup_count[1])
+    throw Error("dispatch of " + std::to_string(n) + " workgroups exceeds the device grid");
   g.y = static_cast<uint32_t>(y);
   return g;
 }
@@ -111,7 +115,8 @@ void Commands::dispatch(const std::string& name, std::initializer_list<Bind> bin
   }
   vkCmdBindPipeline(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.pipeline());
   if (!writes.empty())
-    ctx_.push_descriptor_set()(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.layout(), 0, static_cast<uint32_t>(writes.size()), writes.data());
+    ctx_.push_descriptor_set()(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.layout(), 0, static_cast<uint32_t>(writes.size()),
+                               writes.data());
   uint8_t pc[kPushConstantBytes] = {};
   if (push_bytes > kPushConstantBytes) throw Error("push constants above 128 bytes for kernel '" + name + "'");
   if (push_bytes) std::copy_n(static_cast<const uint8_t*>(push), push_bytes, pc);
@@ -157,8 +162,8 @@ void Commands::submit() {
   stage_ms_.clear();
   if (queries_ && !marks_.empty()) {
     std::vector<uint64_t> ts(marks_.size() + 1);
-    EVF_VK(vkGetQueryPoolResults(ctx_.device(), queries_, 0, static_cast<uint32_t>(ts.size()), ts.size() * 8, ts.data(), 8,
-                                 VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    EVF_VK(vkGetQueryPoolResults(ctx_.device(), queries_, 0, static_cast<uint32_t>(ts.size()), ts.size() * 8, ts.data(),
+                                 8, VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
     for (size_t i = 0; i < marks_.size(); ++i)
       stage_ms_.emplace_back(marks_[i], double(ts[i + 1] - ts[i]) * ctx_.caps().timestamp_period_ns * 1e-6);
   }

@@ -26,7 +26,8 @@ ContextOptions ContextOptions::from_env() {
   o.poison = env_flag("EVF_POISON");
   o.force_cas = env_flag("EVF_FORCE_CAS");
   o.print_validation = env_flag("EVF_VALIDATION_PRINT");
-  if (const char* e = std::getenv("EVF_SORT_ITEMS")) o.sort_items = std::clamp<uint32_t>(uint32_t(std::atoi(e)), 1u, 256u);
+  if (const char* e = std::getenv("EVF_SORT_ITEMS"))
+    o.sort_items = std::clamp<uint32_t>(uint32_t(std::atoi(e)), 1u, 256u);
   if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) o.subgroup_reduce = e[0] == '1' ? 1 : 0;
   if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
     o.raster_kernel = e;
@@ -38,10 +39,10 @@ ContextOptions ContextOptions::from_env() {
 
 static VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                      VkDebugUtilsMessageTypeFlagsEXT,
-                                                     const VkDebugUtilsMessengerCallbackDataEXT* data,
-                                                     void* user) {
+                                                     const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
   auto* ctx = static_cast<Context*>(user);
-  std::string msg = (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) ? "validation error: " : "validation warning: ";
+  std::string msg =
+      (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) ? "validation error: " : "validation warning: ";
   msg += data->pMessage ? data->pMessage : "(no message)";
   ctx->report_validation(msg);
   return VK_FALSE;
@@ -63,12 +64,12 @@ static VkInstance make_instance(bool validation, VkDebugUtilsMessengerCreateInfo
     vkEnumerateInstanceLayerProperties(&n, nullptr);
     std::vector<VkLayerProperties> props(n);
     vkEnumerateInstanceLayerProperties(&n, props.data());
-    bool found = std::any_of(props.begin(), props.end(), [](auto& p) {
-      return std::strcmp(p.layerName, "VK_LAYER_KHRONOS_validation") == 0;
-    });
+    bool found = std::any_of(props.begin(), props.end(),
+                             [](auto& p) { return std::strcmp(p.layerName, "VK_LAYER_KHRONOS_validation") == 0; });
     if (!found)
-      throw Error("validation requested but VK_LAYER_KHRONOS_validation is not installed "
-                  "(Debian package vulkan-validationlayers)");
+      throw Error(
+          "validation requested but VK_LAYER_KHRONOS_validation is not installed "
+          "(Debian package vulkan-validationlayers)");
     layers.push_back("VK_LAYER_KHRONOS_validation");
     exts.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
   }
@@ -109,11 +110,16 @@ static int compute_family(VkPhysicalDevice pd) {
 
 static int type_rank(VkPhysicalDeviceType t) {
   switch (t) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
-    default: return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+      return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+      return 1;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+      return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+      return 3;
+    default:
+      return 4;
   }
 }
 
@@ -127,8 +133,9 @@ std::vector<std::string> Context::list_devices() {
   for (uint32_t i = 0; i < n; ++i) {
     VkPhysicalDeviceProperties p;
     vkGetPhysicalDeviceProperties(pds[i], &p);
-    out.push_back(std::to_string(i) + ": " + p.deviceName + " (Vulkan " + std::to_string(VK_API_VERSION_MAJOR(p.apiVersion)) +
-                  "." + std::to_string(VK_API_VERSION_MINOR(p.apiVersion)) + ")");
+    out.push_back(std::to_string(i) + ": " + p.deviceName + " (Vulkan " +
+                  std::to_string(VK_API_VERSION_MAJOR(p.apiVersion)) + "." +
+                  std::to_string(VK_API_VERSION_MINOR(p.apiVersion)) + ")");
   }
   vkDestroyInstance(inst, nullptr);
   return out;
@@ -166,11 +173,18 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
     VkPhysicalDeviceProperties p;
     vkGetPhysicalDeviceProperties(pd, &p);
     std::string why;
-    if (p.apiVersion < VK_API_VERSION_1_2) why = "Vulkan < 1.2";
-    else if (compute_family(pd) < 0) why = "no compute queue";
-    else if (!has_extension(pd, VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME)) why = "no VK_KHR_push_descriptor";
-    else if (opts_.presentation && !has_extension(pd, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) why = "no VK_KHR_swapchain";
-    if (!why.empty()) { rejected += std::string(" ") + p.deviceName + " (" + why + ");"; continue; }
+    if (p.apiVersion < VK_API_VERSION_1_2)
+      why = "Vulkan < 1.2";
+    else if (compute_family(pd) < 0)
+      why = "no compute queue";
+    else if (!has_extension(pd, VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME))
+      why = "no VK_KHR_push_descriptor";
+    else if (opts_.presentation && !has_extension(pd, VK_KHR_SWAPCHAIN_EXTENSION_NAME))
+      why = "no VK_KHR_swapchain";
+    if (!why.empty()) {
+      rejected += std::string(" ") + p.deviceName + " (" + why + ");";
+      continue;
+    }
     cands.emplace_back(pd, p);
   }
   if (cands.empty()) throw Error("no usable Vulkan device (need 1.2+, compute, push descriptors):" + rejected);
@@ -178,14 +192,19 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   if (opts_.device.empty()) {
     chosen = 0;
     for (size_t i = 1; i < cands.size(); ++i)
-      if (type_rank(cands[i].second.deviceType) < type_rank(cands[chosen].second.deviceType)) chosen = static_cast<int>(i);
+      if (type_rank(cands[i].second.deviceType) < type_rank(cands[chosen].second.deviceType))
+        chosen = static_cast<int>(i);
   } else if (std::all_of(opts_.device.begin(), opts_.device.end(), ::isdigit)) {
     size_t idx = std::stoul(opts_.device);
-    if (idx >= cands.size()) throw Error("--device " + opts_.device + ": only " + std::to_string(cands.size()) + " usable device(s)");
+    if (idx >= cands.size())
+      throw Error("--device " + opts_.device + ": only " + std::to_string(cands.size()) + " usable device(s)");
     chosen = static_cast<int>(idx);
   } else {
     for (size_t i = 0; i < cands.size(); ++i)
-      if (lower(cands[i].second.deviceName).find(lower(opts_.device)) != std::string::npos) { chosen = static_cast<int>(i); break; }
+      if (lower(cands[i].second.deviceName).find(lower(opts_.device)) != std::string::npos) {
+        chosen = static_cast<int>(i);
+        break;
+      }
     if (chosen < 0) throw Error("--device '" + opts_.device + "' matches no usable device");
   }
   physical_ = cands[chosen].first;
@@ -219,7 +238,8 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   vkGetPhysicalDeviceProperties2(physical_, &p3);
   caps_.max_allocation_size = m3.maxMemoryAllocationSize;
   if (!caps_.subgroup_arithmetic)
-    throw Error(caps_.name + ": subgroup basic, vote and arithmetic operations in compute shaders are required and missing");
+    throw Error(caps_.name +
+                ": subgroup basic, vote and arithmetic operations in compute shaders are required and missing");
 
   const bool has_atomic_float = has_extension(physical_, VK_EXT_SHADER_ATOMIC_FLOAT_EXTENSION_NAME);
   VkPhysicalDeviceShaderAtomicFloatFeaturesEXT af{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
@@ -230,22 +250,28 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   vkGetPhysicalDeviceFeatures2(physical_, &f2);
   caps_.shared_float_atomic_add = has_atomic_float && af.shaderSharedFloat32AtomicAdd;
   caps_.buffer_float_atomic_add = has_atomic_float && af.shaderBufferFloat32AtomicAdd;
-  if (opts_.force_cas) { caps_.shared_float_atomic_add = false; caps_.buffer_float_atomic_add = false; }
+  if (opts_.force_cas) {
+    caps_.shared_float_atomic_add = false;
+    caps_.buffer_float_atomic_add = false;
+  }
 
   vkGetPhysicalDeviceMemoryProperties(physical_, &mem_props_);
   caps_.unified_memory = true;
   for (uint32_t i = 0; i < mem_props_.memoryTypeCount; ++i) {
     auto f = mem_props_.memoryTypes[i].propertyFlags;
-    if ((f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)) caps_.unified_memory = false;
+    if ((f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT))
+      caps_.unified_memory = false;
   }
 
   // Device with only the features we use.
-  VkPhysicalDeviceShaderAtomicFloatFeaturesEXT af_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
+  VkPhysicalDeviceShaderAtomicFloatFeaturesEXT af_on{
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
   af_on.shaderSharedFloat32AtomicAdd = caps_.shared_float_atomic_add;
   af_on.shaderBufferFloat32AtomicAdd = caps_.buffer_float_atomic_add;
   VkPhysicalDeviceVulkan12Features f12_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
   f12_on.hostQueryReset = f12.hostQueryReset;
-  if (has_atomic_float && (af_on.shaderSharedFloat32AtomicAdd || af_on.shaderBufferFloat32AtomicAdd)) f12_on.pNext = &af_on;
+  if (has_atomic_float && (af_on.shaderSharedFloat32AtomicAdd || af_on.shaderBufferFloat32AtomicAdd))
+    f12_on.pNext = &af_on;
   VkPhysicalDeviceFeatures2 f2_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
   f2_on.pNext = &f12_on;
   std::vector<const char*> dev_exts = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
@@ -347,7 +373,8 @@ size_t Context::validation_message_count() const {
 
 void Context::check_binding_size(uint64_t bytes, const std::string& what) const {
   if (bytes > caps_.max_storage_buffer_range)
-    throw Error(what + " needs a " + std::to_string(bytes) + "-byte storage binding, above this device's maxStorageBufferRange of " +
+    throw Error(what + " needs a " + std::to_string(bytes) +
+                "-byte storage binding, above this device's maxStorageBufferRange of " +
                 std::to_string(caps_.max_storage_buffer_range) + " bytes (" + caps_.name + ")");
 }
 

@@ -28,12 +28,12 @@ struct ContextOptions {
   bool validation = false;  // enable VK_LAYER_KHRONOS_validation and collect its messages
   bool poison = false;      // fill fresh buffers with 0xFFFFFFFF (NaN) instead of leaving them
   bool verbose = false;
-  bool force_cas = false;   // use the compare-and-swap path even where float atomics exist
+  bool force_cas = false;         // use the compare-and-swap path even where float atomics exist
   bool print_validation = false;  // also print each validation message to stderr
   // Kernel choices for the device, overridden where set (Rasterizer, RadixSort read them):
-  uint32_t sort_items = 0;        // keys per radix-sort invocation, 1..256; 0 = by device and size
-  int subgroup_reduce = -1;       // rasterize backward: 1 = subgroupAdd first, 0 = per-lane adds; -1 = by device
-  std::string raster_kernel;      // "pixel" or "block" compositing kernels; "" = by device
+  uint32_t sort_items = 0;    // keys per radix-sort invocation, 1..256; 0 = by device and size
+  int subgroup_reduce = -1;   // rasterize backward: 1 = subgroupAdd first, 0 = per-lane adds; -1 = by device
+  std::string raster_kernel;  // "pixel" or "block" compositing kernels; "" = by device
   // Presentation (opt-in, for a window): enables these instance extensions (the windowing
   // system's surface extensions, e.g. from glfwGetRequiredInstanceExtensions) plus
   // VK_KHR_surface, and VK_KHR_swapchain on the device; devices without it are skipped.
@@ -93,8 +93,7 @@ class Context {
   void require_present(VkSurfaceKHR surface) const;
 
   // Memory type index with the required flags (and preferred ones when possible).
-  uint32_t memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
-                       VkMemoryPropertyFlags preferred) const;
+  uint32_t memory_type(uint32_t type_bits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const;
 
   // Kernels are created once per context and cached by embedded name ("splat/project").
   const Kernel& kernel(const std::string& name);

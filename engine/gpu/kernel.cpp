@@ -51,7 +51,8 @@ static std::vector<Kernel::Binding> reflect_bindings(const uint32_t* w, size_t n
     }
     out.push_back({index, block});
   }
-  std::sort(out.begin(), out.end(), [](const Kernel::Binding& a, const Kernel::Binding& b) { return a.index < b.index; });
+  std::sort(out.begin(), out.end(),
+            [](const Kernel::Binding& a, const Kernel::Binding& b) { return a.index < b.index; });
   return out;
 }
 

@@ -6,21 +6,31 @@ namespace evflow::gpu {
 
 const char* present_mode_name(VkPresentModeKHR m) {
   switch (m) {
-    case VK_PRESENT_MODE_IMMEDIATE_KHR: return "immediate";
-    case VK_PRESENT_MODE_MAILBOX_KHR: return "mailbox";
-    case VK_PRESENT_MODE_FIFO_KHR: return "fifo";
-    case VK_PRESENT_MODE_FIFO_RELAXED_KHR: return "fifo-relaxed";
-    default: return "other";
+    case VK_PRESENT_MODE_IMMEDIATE_KHR:
+      return "immediate";
+    case VK_PRESENT_MODE_MAILBOX_KHR:
+      return "mailbox";
+    case VK_PRESENT_MODE_FIFO_KHR:
+      return "fifo";
+    case VK_PRESENT_MODE_FIFO_RELAXED_KHR:
+      return "fifo-relaxed";
+    default:
+      return "other";
   }
 }
 
 static const char* format_name(VkFormat f) {
   switch (f) {
-    case VK_FORMAT_B8G8R8A8_UNORM: return "B8G8R8A8_UNORM";
-    case VK_FORMAT_B8G8R8A8_SRGB: return "B8G8R8A8_SRGB";
-    case VK_FORMAT_R8G8B8A8_UNORM: return "R8G8B8A8_UNORM";
-    case VK_FORMAT_R8G8B8A8_SRGB: return "R8G8B8A8_SRGB";
-    default: return "?";
+    case VK_FORMAT_B8G8R8A8_UNORM:
+      return "B8G8R8A8_UNORM";
+    case VK_FORMAT_B8G8R8A8_SRGB:
+      return "B8G8R8A8_SRGB";
+    case VK_FORMAT_R8G8B8A8_UNORM:
+      return "R8G8B8A8_UNORM";
+    case VK_FORMAT_R8G8B8A8_SRGB:
+      return "R8G8B8A8_SRGB";
+    default:
+      return "?";
   }
 }
 
@@ -115,16 +125,24 @@ void Swapchain::build(uint32_t width, uint32_t height) {
   bool found = false;
   for (VkFormat f : wanted) {
     for (const auto& sf : s.formats)
-      if (sf.format == f && sf.colorSpace == VK_COLOR_SPACE_SRGB_NONLINEAR_KHR) { format_ = sf; found = true; break; }
+      if (sf.format == f && sf.colorSpace == VK_COLOR_SPACE_SRGB_NONLINEAR_KHR) {
+        format_ = sf;
+        found = true;
+        break;
+      }
     if (found) break;
   }
   if (!found) throw Error(ctx_.caps().name + ": the surface offers no 8-bit RGBA/BGRA sRGB-nonlinear format");
   bgr_ = format_.format == VK_FORMAT_B8G8R8A8_UNORM || format_.format == VK_FORMAT_B8G8R8A8_SRGB;
-  auto has_mode = [&](VkPresentModeKHR m) { return std::find(s.present_modes.begin(), s.present_modes.end(), m) != s.present_modes.end(); };
+  auto has_mode = [&](VkPresentModeKHR m) {
+    return std::find(s.present_modes.begin(), s.present_modes.end(), m) != s.present_modes.end();
+  };
   mode_ = VK_PRESENT_MODE_FIFO_KHR;  // always supported
   if (!vsync_) {
-    if (has_mode(VK_PRESENT_MODE_MAILBOX_KHR)) mode_ = VK_PRESENT_MODE_MAILBOX_KHR;
-    else if (has_mode(VK_PRESENT_MODE_IMMEDIATE_KHR)) mode_ = VK_PRESENT_MODE_IMMEDIATE_KHR;
+    if (has_mode(VK_PRESENT_MODE_MAILBOX_KHR))
+      mode_ = VK_PRESENT_MODE_MAILBOX_KHR;
+    else if (has_mode(VK_PRESENT_MODE_IMMEDIATE_KHR))
+      mode_ = VK_PRESENT_MODE_IMMEDIATE_KHR;
   }
   uint32_t count = s.caps.minImageCount + 1;
   if (s.caps.maxImageCount) count = std::min(count, s.caps.maxImageCount);
@@ -132,7 +150,10 @@ void Swapchain::build(uint32_t width, uint32_t height) {
   if (!(s.caps.supportedCompositeAlpha & alpha)) {
     for (VkCompositeAlphaFlagBitsKHR a : {VK_COMPOSITE_ALPHA_INHERIT_BIT_KHR, VK_COMPOSITE_ALPHA_PRE_MULTIPLIED_BIT_KHR,
                                           VK_COMPOSITE_ALPHA_POST_MULTIPLIED_BIT_KHR})
-      if (s.caps.supportedCompositeAlpha & a) { alpha = a; break; }
+      if (s.caps.supportedCompositeAlpha & a) {
+        alpha = a;
+        break;
+      }
   }
   VkSwapchainCreateInfoKHR ci{VK_STRUCTURE_TYPE_SWAPCHAIN_CREATE_INFO_KHR};
   ci.surface = surface_;
@@ -143,8 +164,9 @@ void Swapchain::build(uint32_t width, uint32_t height) {
   ci.imageArrayLayers = 1;
   ci.imageUsage = VK_IMAGE_USAGE_TRANSFER_DST_BIT;
   ci.imageSharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  ci.preTransform = (s.caps.supportedTransforms & VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR) ? VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR
-                                                                                           : s.caps.currentTransform;
+  ci.preTransform = (s.caps.supportedTransforms & VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR)
+                        ? VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR
+                        : s.caps.currentTransform;
   ci.compositeAlpha = alpha;
   ci.presentMode = mode_;
   ci.clipped = VK_TRUE;
@@ -169,14 +191,20 @@ bool Swapchain::present(const Buffer& rgba8) {
   if (!swapchain_) return false;
   const uint64_t bytes = uint64_t(extent_.width) * extent_.height * 4;
   if (rgba8.size() < bytes)
-    throw Error("Swapchain::present: buffer '" + rgba8.name() + "' holds " + std::to_string(rgba8.size()) + " bytes, the " +
-                std::to_string(extent_.width) + "x" + std::to_string(extent_.height) + " image needs " + std::to_string(bytes));
+    throw Error("Swapchain::present: buffer '" + rgba8.name() + "' holds " + std::to_string(rgba8.size()) +
+                " bytes, the " + std::to_string(extent_.width) + "x" + std::to_string(extent_.height) +
+                " image needs " + std::to_string(bytes));
   VkDevice d = ctx_.device();
   uint32_t index = 0;
   VkResult r = vkAcquireNextImageKHR(d, swapchain_, UINT64_MAX, acquired_, VK_NULL_HANDLE, &index);
-  if (r == VK_ERROR_OUT_OF_DATE_KHR) { needs_recreate_ = true; return false; }
-  if (r == VK_SUBOPTIMAL_KHR) needs_recreate_ = true;  // the semaphore is signalled: still present this one
-  else check(r, "vkAcquireNextImageKHR");
+  if (r == VK_ERROR_OUT_OF_DATE_KHR) {
+    needs_recreate_ = true;
+    return false;
+  }
+  if (r == VK_SUBOPTIMAL_KHR)
+    needs_recreate_ = true;  // the semaphore is signalled: still present this one
+  else
+    check(r, "vkAcquireNextImageKHR");
 
   VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
@@ -214,8 +242,8 @@ bool Swapchain::present(const Buffer& rgba8) {
   pb.dstAccessMask = 0;
   pb.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
   pb.newLayout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
-  vkCmdPipelineBarrier(cb_, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0, 0, nullptr, 0, nullptr,
-                       1, &pb);
+  vkCmdPipelineBarrier(cb_, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0, 0, nullptr, 0,
+                       nullptr, 1, &pb);
   EVF_VK(vkEndCommandBuffer(cb_));
 
   const VkPipelineStageFlags wait_stage = VK_PIPELINE_STAGE_TRANSFER_BIT;
@@ -240,15 +268,17 @@ bool Swapchain::present(const Buffer& rgba8) {
   EVF_VK(vkWaitForFences(d, 1, &fence_, VK_TRUE, UINT64_MAX));
   EVF_VK(vkResetFences(d, 1, &fence_));
   EVF_VK(vkResetCommandBuffer(cb_, 0));
-  if (pr == VK_ERROR_OUT_OF_DATE_KHR || pr == VK_SUBOPTIMAL_KHR) needs_recreate_ = true;
-  else check(pr, "vkQueuePresentKHR");
+  if (pr == VK_ERROR_OUT_OF_DATE_KHR || pr == VK_SUBOPTIMAL_KHR)
+    needs_recreate_ = true;
+  else
+    check(pr, "vkQueuePresentKHR");
   return true;
 }
 
 std::string Swapchain::describe() const {
   if (!swapchain_) return "no swapchain (window minimised)";
-  return std::to_string(extent_.width) + "x" + std::to_string(extent_.height) + " " + format_name(format_.format) + ", " +
-         std::to_string(images_.size()) + " images, " + present_mode_name(mode_);
+  return std::to_string(extent_.width) + "x" + std::to_string(extent_.height) + " " + format_name(format_.format) +
+         ", " + std::to_string(images_.size()) + " images, " + present_mode_name(mode_);
 }
 
 }  // namespace evflow::gpu

@@ -65,7 +65,7 @@ class Swapchain {
   bool bgr_ = false;
   bool needs_recreate_ = false;
   std::vector<VkImage> images_;
-  std::vector<VkSemaphore> render_done_;  // one per image: signalled by the copy, waited by present
+  std::vector<VkSemaphore> render_done_;   // one per image: signalled by the copy, waited by present
   VkSemaphore acquired_ = VK_NULL_HANDLE;  // the copy waits on it (free again after the fence wait)
   VkFence fence_ = VK_NULL_HANDLE;
   VkCommandBuffer cb_ = VK_NULL_HANDLE;

@@ -29,7 +29,8 @@ void write_file_atomic(const fs::path& target, const std::function<void(const fs
     write(tmp);
     if (!fs::is_regular_file(tmp)) throw std::runtime_error(target.string() + ": the writer produced no file");
     fs::rename(tmp, target, ec);
-    if (ec) throw std::runtime_error(target.string() + ": cannot rename the temporary file into place: " + ec.message());
+    if (ec)
+      throw std::runtime_error(target.string() + ": cannot rename the temporary file into place: " + ec.message());
   } catch (...) {
     fs::remove(tmp, ec);
     throw;

@@ -9,7 +9,8 @@ namespace evflow::io {
 namespace {
 
 double number(const nlohmann::json& j, const char* key, const std::string& where) {
-  if (!j.contains(key) || !j[key].is_number()) throw std::runtime_error(where + ": '" + key + "' missing or not a number");
+  if (!j.contains(key) || !j[key].is_number())
+    throw std::runtime_error(where + ": '" + key + "' missing or not a number");
   const double v = j[key].get<double>();
   if (!std::isfinite(v)) throw std::runtime_error(where + ": '" + key + "' is not finite");
   return v;
@@ -17,7 +18,8 @@ double number(const nlohmann::json& j, const char* key, const std::string& where
 
 // The 12 numbers of [R | t], row-major, from 4 rows, 3 rows or 16 numbers.
 std::vector<double> w2c_values(const nlohmann::json& j, const std::string& where) {
-  if (!j.contains("w2c") || !j["w2c"].is_array()) throw std::runtime_error(where + ": 'w2c' (world-to-camera matrix) missing");
+  if (!j.contains("w2c") || !j["w2c"].is_array())
+    throw std::runtime_error(where + ": 'w2c' (world-to-camera matrix) missing");
   std::vector<double> flat;
   for (auto& row : j["w2c"]) {
     if (row.is_array())
@@ -38,7 +40,8 @@ void check_rotation(const Camera& c, const std::string& where) {
     for (int b = 0; b < 3; ++b) {
       double d = 0;
       for (int k = 0; k < 3; ++k) d += c.R[a * 3 + k] * c.R[b * 3 + k];
-      if (std::abs(d - (a == b ? 1.0 : 0.0)) > 1e-4) throw std::runtime_error(where + ": 'w2c' rotation is not orthonormal");
+      if (std::abs(d - (a == b ? 1.0 : 0.0)) > 1e-4)
+        throw std::runtime_error(where + ": 'w2c' rotation is not orthonormal");
     }
   const double det = c.R[0] * (c.R[4] * c.R[8] - c.R[5] * c.R[7]) - c.R[1] * (c.R[3] * c.R[8] - c.R[5] * c.R[6]) +
                      c.R[2] * (c.R[3] * c.R[7] - c.R[4] * c.R[6]);
@@ -70,7 +73,8 @@ nlohmann::json camera_to_json(const Camera& c) {
   nlohmann::json rows = nlohmann::json::array();
   for (int r = 0; r < 3; ++r) rows.push_back({c.R[r * 3], c.R[r * 3 + 1], c.R[r * 3 + 2], c.t[r]});
   rows.push_back({0, 0, 0, 1});
-  return {{"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy}, {"w2c", rows}};
+  return {{"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy},
+          {"cx", c.cx},       {"cy", c.cy},         {"w2c", rows}};
 }
 
 std::vector<Camera> read_cameras_json(const std::filesystem::path& path) {
@@ -79,14 +83,13 @@ std::vector<Camera> read_cameras_json(const std::filesystem::path& path) {
   nlohmann::json j;
   try {
     f >> j;
-  } catch (const std::exception& e) {
-    throw std::runtime_error(path.string() + ": not valid JSON (" + e.what() + ")");
-  }
+  } catch (const std::exception& e) { throw std::runtime_error(path.string() + ": not valid JSON (" + e.what() + ")"); }
   if (j.is_object() && j.contains("cameras")) j = j["cameras"];
   if (j.is_object()) j = nlohmann::json::array({j});
   if (!j.is_array() || j.empty()) throw std::runtime_error(path.string() + ": holds no camera");
   std::vector<Camera> out;
-  for (size_t i = 0; i < j.size(); ++i) out.push_back(camera_from_json(j[i], path.string() + ": camera " + std::to_string(i)));
+  for (size_t i = 0; i < j.size(); ++i)
+    out.push_back(camera_from_json(j[i], path.string() + ": camera " + std::to_string(i)));
   return out;
 }
 

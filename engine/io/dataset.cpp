@@ -17,15 +17,35 @@ struct Format {
 };
 
 const Format kFormats[] = {
-    {"evflow", [](const fs::path& d) { std::error_code ec; return fs::exists(d / "dataset.json", ec); },
+    {"evflow",
+     [](const fs::path& d) {
+       std::error_code ec;
+       return fs::exists(d / "dataset.json", ec);
+     },
      [](const fs::path& d, const LoadOptions&) { return detail::load_evflow(d); }},
-    {"ebad", [](const fs::path& d) { std::error_code ec; return fs::exists(d / "events.npy", ec); }, detail::load_ebad},
+    {"ebad",
+     [](const fs::path& d) {
+       std::error_code ec;
+       return fs::exists(d / "events.npy", ec);
+     },
+     detail::load_ebad},
     {"e3nerf",
-     [](const fs::path& d) { std::error_code ec; return fs::is_directory(d / "events", ec) && fs::is_directory(d / "gt", ec); },
+     [](const fs::path& d) {
+       std::error_code ec;
+       return fs::is_directory(d / "events", ec) && fs::is_directory(d / "gt", ec);
+     },
      detail::load_e3nerf},
-    {"nerf_synthetic", [](const fs::path& d) { std::error_code ec; return fs::exists(d / "transforms_train.json", ec); },
+    {"nerf_synthetic",
+     [](const fs::path& d) {
+       std::error_code ec;
+       return fs::exists(d / "transforms_train.json", ec);
+     },
      [](const fs::path& d, const LoadOptions&) { return detail::load_nerf_synthetic(d); }},
-    {"llff", [](const fs::path& d) { std::error_code ec; return fs::exists(d / "poses_bounds.npy", ec) && fs::is_directory(d / "images", ec); },
+    {"llff",
+     [](const fs::path& d) {
+       std::error_code ec;
+       return fs::exists(d / "poses_bounds.npy", ec) && fs::is_directory(d / "images", ec);
+     },
      detail::load_llff_sharp},
 };
 
@@ -36,8 +56,10 @@ Dataset load_dataset(const fs::path& dir, const LoadOptions& opt) {
   if (!fs::is_directory(dir, ec)) detail::fail(dir, "dataset folder is missing");
   for (const Format& f : kFormats)
     if (f.detect(dir)) return f.read(dir, opt);
-  detail::fail(dir, "unrecognised dataset layout: expected dataset.json (EvFlow), events.npy (EBAD-NeRF), events/ + gt/ (E3NeRF), "
-                    "transforms_train.json (NeRF-synthetic) or images/ + poses_bounds.npy (LLFF)");
+  detail::fail(
+      dir,
+      "unrecognised dataset layout: expected dataset.json (EvFlow), events.npy (EBAD-NeRF), events/ + gt/ (E3NeRF), "
+      "transforms_train.json (NeRF-synthetic) or images/ + poses_bounds.npy (LLFF)");
 }
 
 }  // namespace evflow::io

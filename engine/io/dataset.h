@@ -18,24 +18,24 @@ namespace evflow::io {
 
 struct View {
   std::string name;
-  Image blurry;                     // linear RGB; empty for novel views
-  Camera camera;                    // OpenCV world_to_camera + intrinsics matching the image size
+  Image blurry;                                 // linear RGB; empty for novel views
+  Camera camera;                                // OpenCV world_to_camera + intrinsics matching the image size
   double exposure_start = 0, exposure_end = 0;  // seconds, on the events' clock
-  std::optional<Image> sharp_mid;   // ground truth at mid-exposure (novel views: the test image)
+  std::optional<Image> sharp_mid;               // ground truth at mid-exposure (novel views: the test image)
 };
 
 struct Dataset {
-  std::string layout;                // "evflow", "e3nerf" or "ebad"
-  std::vector<View> train;           // blurry training views
-  std::vector<View> novel;           // test views: camera + sharp image (sharp_mid)
-  EventStream events;                // t in seconds; empty for EBAD-NeRF
+  std::string layout;       // "evflow", "e3nerf" or "ebad"
+  std::vector<View> train;  // blurry training views
+  std::vector<View> novel;  // test views: camera + sharp image (sharp_mid)
+  EventStream events;       // t in seconds; empty for EBAD-NeRF
   // EBAD-NeRF: signed per-pixel event counts, shape [train.size(), bins, H*W] (row v belongs to
   // train[v], pixel index y * W + x). Empty for the other layouts.
   std::vector<float> event_counts;
   std::vector<size_t> event_counts_shape;
-  double near = 0, far = 0;          // scene depth bounds (min near, max far over all poses)
-  nlohmann::json manifest;           // our dataset.json, or a description of the foreign layout
-  std::string root;                  // folder it was read from
+  double near = 0, far = 0;  // scene depth bounds (min near, max far over all poses)
+  nlohmann::json manifest;   // our dataset.json, or a description of the foreign layout
+  std::string root;          // folder it was read from
 };
 
 struct LoadOptions {

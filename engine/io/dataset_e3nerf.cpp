@@ -2,7 +2,6 @@
 #include "io/dataset_formats.h"
 
 #include <algorithm>
-#include <fstream>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -27,7 +26,8 @@ Dataset load_e3nerf(const fs::path& dir, const LoadOptions& opt) {
   PosesBounds pb = read_poses_bounds(ppath);
   if (pb.rows.size() != imgs.size() + gts.size())
     fail(ppath, "has " + std::to_string(pb.rows.size()) + " poses but there are " + std::to_string(imgs.size()) +
-                    " images in images/ and " + std::to_string(gts.size()) + " in gt/ (expected training rows then test rows)");
+                    " images in images/ and " + std::to_string(gts.size()) +
+                    " in gt/ (expected training rows then test rows)");
   uint32_t W = 0, H = 0;
   TimeUnit unit = TimeUnit::s;
   bool unit_known = opt.e3nerf_time_unit.has_value();
@@ -37,7 +37,10 @@ Dataset load_e3nerf(const fs::path& dir, const LoadOptions& opt) {
     View v;
     v.name = imgs[i].stem().string();
     v.blurry = load_view_image(imgs[i], W, H);
-    if (!W) { W = v.blurry.width; H = v.blurry.height; }
+    if (!W) {
+      W = v.blurry.width;
+      H = v.blurry.height;
+    }
     v.camera = pb.cameras[i];
     fit_camera_to_image(v.camera, W, H, ppath, i, imgs[i]);
     const fs::path epath = dir / "events" / (v.name + ".txt");
@@ -94,7 +97,8 @@ Dataset load_e3nerf(const fs::path& dir, const LoadOptions& opt) {
     idx.reserve(total);
     for (size_t k = 0; k < per_view.size(); ++k)
       for (size_t i = 0; i < per_view[k].size(); ++i) idx.emplace_back(k, i);
-    std::stable_sort(idx.begin(), idx.end(), [&](auto a, auto b) { return per_view[a.first].t[a.second] < per_view[b.first].t[b.second]; });
+    std::stable_sort(idx.begin(), idx.end(),
+                     [&](auto a, auto b) { return per_view[a.first].t[a.second] < per_view[b.first].t[b.second]; });
     for (auto [k, i] : idx) all.push(per_view[k].x[i], per_view[k].y[i], per_view[k].t[i], per_view[k].p[i]);
   }
   set_bounds(ds, pb);

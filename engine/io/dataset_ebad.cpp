@@ -30,12 +30,14 @@ Dataset load_ebad(const fs::path& dir, const LoadOptions& opt) {
   // present); images_gt_novel/ holds either every view or only the test views.
   auto pick = [&](const std::vector<fs::path>& files, const std::vector<size_t>& subset, const fs::path& folder) {
     std::vector<fs::path> out;
-    if (files.size() == N) for (size_t i : subset) out.push_back(files[i]);
-    else if (files.size() == subset.size()) out = files;
+    if (files.size() == N)
+      for (size_t i : subset) out.push_back(files[i]);
+    else if (files.size() == subset.size())
+      out = files;
     else
-      fail(folder, "has " + std::to_string(files.size()) + " images, but " + ppath.string() + " has " + std::to_string(N) +
-                       " poses (" + std::to_string(subset.size()) + " expected here: every " + std::to_string(every) +
-                       "th view is a test view)");
+      fail(folder, "has " + std::to_string(files.size()) + " images, but " + ppath.string() + " has " +
+                       std::to_string(N) + " poses (" + std::to_string(subset.size()) + " expected here: every " +
+                       std::to_string(every) + "th view is a test view)");
     return out;
   };
   const auto train_imgs = pick(imgs, train_idx, dir / "images");
@@ -44,13 +46,17 @@ Dataset load_ebad(const fs::path& dir, const LoadOptions& opt) {
   if (fs::is_directory(dir / "images_gt_blur", ec))
     sharp_imgs = pick(list_files(dir / "images_gt_blur", is_image_file), train_idx, dir / "images_gt_blur");
   std::vector<fs::path> novel_imgs;
-  if (!test_idx.empty()) novel_imgs = pick(list_files(dir / "images_gt_novel", is_image_file), test_idx, dir / "images_gt_novel");
+  if (!test_idx.empty())
+    novel_imgs = pick(list_files(dir / "images_gt_novel", is_image_file), test_idx, dir / "images_gt_novel");
   uint32_t W = 0, H = 0;
   for (size_t k = 0; k < train_idx.size(); ++k) {
     View v;
     v.name = train_imgs[k].stem().string();
     v.blurry = load_view_image(train_imgs[k], W, H);
-    if (!W) { W = v.blurry.width; H = v.blurry.height; }
+    if (!W) {
+      W = v.blurry.width;
+      H = v.blurry.height;
+    }
     if (!sharp_imgs.empty()) v.sharp_mid = load_view_image(sharp_imgs[k], W, H);
     v.camera = pb.cameras[train_idx[k]];
     fit_camera_to_image(v.camera, W, H, ppath, train_idx[k], train_imgs[k]);
@@ -68,7 +74,8 @@ Dataset load_ebad(const fs::path& dir, const LoadOptions& opt) {
   }
   const fs::path epath = dir / "events.npy";
   NpyArray a = read_npy(epath);
-  if (a.shape.size() != 3) fail(epath, "event counts must have shape [views, bins, H*W], found rank " + std::to_string(a.shape.size()));
+  if (a.shape.size() != 3)
+    fail(epath, "event counts must have shape [views, bins, H*W], found rank " + std::to_string(a.shape.size()));
   if (a.shape[2] != size_t(W) * H)
     fail(epath, "has " + std::to_string(a.shape[2]) + " pixels per bin, the images have " + std::to_string(W) + "x" +
                     std::to_string(H) + " = " + std::to_string(size_t(W) * H));
@@ -80,10 +87,11 @@ Dataset load_ebad(const fs::path& dir, const LoadOptions& opt) {
   } else if (a.shape[0] == N) {
     ds.event_counts.reserve(train_idx.size() * bins * hw);
     for (size_t i : train_idx)
-      ds.event_counts.insert(ds.event_counts.end(), counts.begin() + i * bins * hw, counts.begin() + (i + 1) * bins * hw);
+      ds.event_counts.insert(ds.event_counts.end(), counts.begin() + i * bins * hw,
+                             counts.begin() + (i + 1) * bins * hw);
   } else {
-    fail(epath, "has event counts for " + std::to_string(a.shape[0]) + " views; expected " + std::to_string(train_idx.size()) +
-                    " (training views) or " + std::to_string(N) + " (all views)");
+    fail(epath, "has event counts for " + std::to_string(a.shape[0]) + " views; expected " +
+                    std::to_string(train_idx.size()) + " (training views) or " + std::to_string(N) + " (all views)");
   }
   for (float c : ds.event_counts)
     if (!std::isfinite(c)) fail(epath, "has a non-finite event count");
@@ -93,12 +101,9 @@ Dataset load_ebad(const fs::path& dir, const LoadOptions& opt) {
   set_bounds(ds, pb);
   json test = json::array();
   for (size_t i : test_idx) test.push_back(i);
-  ds.manifest = {{"layout", "ebad"},
-                 {"resolution", {W, H}},
-                 {"test_every", every},
-                 {"test_rows", test},
-                 {"event_bins", bins},
-                 {"exposure", "normalised [0, 1]; events are per-view counts"}};
+  ds.manifest = {{"layout", "ebad"},    {"resolution", {W, H}},
+                 {"test_every", every}, {"test_rows", test},
+                 {"event_bins", bins},  {"exposure", "normalised [0, 1]; events are per-view counts"}};
   return ds;
 }
 

@@ -2,7 +2,6 @@
 #include "io/dataset_formats.h"
 
 #include <algorithm>
-#include <fstream>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -25,9 +24,7 @@ Dataset load_evflow(const fs::path& dir) {
     if (!f) fail(mpath, "cannot open manifest");
     try {
       ds.manifest = json::parse(f);
-    } catch (const std::exception& e) {
-      fail(mpath, std::string("malformed JSON: ") + e.what());
-    }
+    } catch (const std::exception& e) { fail(mpath, std::string("malformed JSON: ") + e.what()); }
   }
   const json& m = ds.manifest;
   try {
@@ -109,9 +106,7 @@ Dataset load_evflow(const fs::path& dir) {
       ds.event_counts = a.to_float();
       ds.event_counts_shape = a.shape;
     }
-  } catch (const json::exception& e) {
-    fail(mpath, std::string("malformed manifest: ") + e.what());
-  }
+  } catch (const json::exception& e) { fail(mpath, std::string("malformed manifest: ") + e.what()); }
   return ds;
 }
 

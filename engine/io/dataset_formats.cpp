@@ -71,12 +71,14 @@ Image load_view_image(const fs::path& p, uint32_t w, uint32_t h) {
 
 // Fits the LLFF camera's intrinsics to the actual image size (LLFF files may store the
 // full-resolution h, w, f of images that were downsampled).
-void fit_camera_to_image(Camera& cam, uint32_t w, uint32_t h, const fs::path& poses, size_t row, const fs::path& image) {
+void fit_camera_to_image(Camera& cam, uint32_t w, uint32_t h, const fs::path& poses, size_t row,
+                         const fs::path& image) {
   if (cam.width == w && cam.height == h) return;
   const double sx = double(w) / cam.width, sy = double(h) / cam.height;
   if (std::fabs(cam.height * sx - h) > 1.0 || std::fabs(cam.width * sy - w) > 1.0)  // rounded downsampling
     fail(image, "wrong image size " + std::to_string(w) + "x" + std::to_string(h) + ": row " + std::to_string(row) +
-                    " of " + poses.string() + " is for " + std::to_string(cam.width) + "x" + std::to_string(cam.height));
+                    " of " + poses.string() + " is for " + std::to_string(cam.width) + "x" +
+                    std::to_string(cam.height));
   cam.fx *= sx;
   cam.fy *= sy;
   cam.width = w;

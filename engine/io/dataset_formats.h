@@ -23,7 +23,8 @@ Dataset load_nerf_synthetic(const std::filesystem::path& dir);
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what);
 bool is_image_file(const std::filesystem::path& p);
 // Regular, non-hidden files of `dir` that `keep` accepts; numeric stems sort as numbers.
-std::vector<std::filesystem::path> list_files(const std::filesystem::path& dir, bool (*keep)(const std::filesystem::path&));
+std::vector<std::filesystem::path> list_files(const std::filesystem::path& dir,
+                                              bool (*keep)(const std::filesystem::path&));
 void require_file(const std::filesystem::path& p, const std::string& what);
 // Image read + size check (w = 0: any size).
 Image load_view_image(const std::filesystem::path& p, uint32_t w, uint32_t h);
@@ -33,6 +34,7 @@ void fit_camera_to_image(Camera& cam, uint32_t w, uint32_t h, const std::filesys
                          const std::filesystem::path& image);
 void set_bounds(Dataset& ds, const PosesBounds& pb);
 // j[key], failing with `file` and `where` when missing.
-const nlohmann::json& get(const nlohmann::json& j, const char* key, const std::filesystem::path& file, const std::string& where);
+const nlohmann::json& get(const nlohmann::json& j, const char* key, const std::filesystem::path& file,
+                          const std::string& where);
 
 }  // namespace evflow::io::detail

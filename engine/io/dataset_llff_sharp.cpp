@@ -30,7 +30,10 @@ Dataset load_llff_sharp(const fs::path& dir, const LoadOptions& opt) {
     View v;
     v.name = imgs[i].stem().string();
     Image im = load_view_image(imgs[i], W, H);
-    if (!W) { W = im.width; H = im.height; }
+    if (!W) {
+      W = im.width;
+      H = im.height;
+    }
     v.camera = pb.cameras[i];
     fit_camera_to_image(v.camera, W, H, ppath, i, imgs[i]);
     v.sharp_mid = im;

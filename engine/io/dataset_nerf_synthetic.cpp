@@ -22,7 +22,9 @@ Dataset load_nerf_synthetic(const fs::path& dir) {
     std::ifstream f(file);
     if (!f) fail(file, "cannot open");
     json j;
-    try { f >> j; } catch (const std::exception& e) { fail(file, std::string("malformed JSON: ") + e.what()); }
+    try {
+      f >> j;
+    } catch (const std::exception& e) { fail(file, std::string("malformed JSON: ") + e.what()); }
     const double fov = get(j, "camera_angle_x", file, "top level").get<double>();
     const json& frames = get(j, "frames", file, "top level");
     if (!frames.is_array() || frames.empty()) fail(file, "\"frames\" must be a non-empty array");
@@ -52,7 +54,8 @@ Dataset load_nerf_synthetic(const fs::path& dir) {
       // OpenCV rotation columns: x, -y, -z of the OpenGL camera; world_to_camera = its transpose.
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) cam.R[c * 3 + r] = c2w[r][c] * (c == 0 ? 1.0 : -1.0);
-      for (int r = 0; r < 3; ++r) cam.t[r] = -(cam.R[r * 3] * c2w[0][3] + cam.R[r * 3 + 1] * c2w[1][3] + cam.R[r * 3 + 2] * c2w[2][3]);
+      for (int r = 0; r < 3; ++r)
+        cam.t[r] = -(cam.R[r * 3] * c2w[0][3] + cam.R[r * 3 + 1] * c2w[1][3] + cam.R[r * 3 + 2] * c2w[2][3]);
       v.sharp_mid = im;
       if (train) v.blurry = std::move(im);
       out.push_back(std::move(v));

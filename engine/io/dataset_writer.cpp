@@ -31,20 +31,25 @@ void check_dataset(const Dataset& ds, const fs::path& dir, const WriteOptions& o
   auto check = [&](const View& v, const Image* im, const char* kind) {
     if (v.name.empty() || v.name.find_first_of("/\\") != std::string::npos || v.name[0] == '.')
       throw bad(dir, "bad view name '" + v.name + "'");
-    if (std::find(names.begin(), names.end(), v.name) != names.end()) throw bad(dir, "duplicate view name '" + v.name + "'");
+    if (std::find(names.begin(), names.end(), v.name) != names.end())
+      throw bad(dir, "duplicate view name '" + v.name + "'");
     names.push_back(v.name);
     if (!im || im->empty()) throw bad(dir, std::string(kind) + " view '" + v.name + "' has no image");
-    if (im->width != W || im->height != H) throw bad(dir, "view '" + v.name + "' image size differs from the first view's");
-    if (v.camera.width != W || v.camera.height != H) throw bad(dir, "view '" + v.name + "' camera size differs from its image");
+    if (im->width != W || im->height != H)
+      throw bad(dir, "view '" + v.name + "' image size differs from the first view's");
+    if (v.camera.width != W || v.camera.height != H)
+      throw bad(dir, "view '" + v.name + "' camera size differs from its image");
   };
   for (const View& v : ds.train) {
     check(v, &v.blurry, "training");
-    if (v.sharp_mid && (v.sharp_mid->width != W || v.sharp_mid->height != H)) throw bad(dir, "view '" + v.name + "' sharp image size");
+    if (v.sharp_mid && (v.sharp_mid->width != W || v.sharp_mid->height != H))
+      throw bad(dir, "view '" + v.name + "' sharp image size");
   }
   names.clear();
   for (const View& v : ds.novel) check(v, v.sharp_mid ? &*v.sharp_mid : nullptr, "novel");
   if (!ds.event_counts.empty() &&
-      (ds.event_counts_shape.size() != 3 || ds.event_counts_shape[0] * ds.event_counts_shape[1] * ds.event_counts_shape[2] != ds.event_counts.size()))
+      (ds.event_counts_shape.size() != 3 ||
+       ds.event_counts_shape[0] * ds.event_counts_shape[1] * ds.event_counts_shape[2] != ds.event_counts.size()))
     throw bad(dir, "event_counts does not match event_counts_shape");
 }
 
@@ -69,7 +74,10 @@ void write_evflow_dataset(const Dataset& ds, const fs::path& dir, const WriteOpt
   for (const View& v : ds.train) {
     const std::string img = "images/" + v.name + opt.image_ext;
     write_image(dir / img, v.blurry);
-    json e = {{"name", v.name}, {"image", img}, {"exposure", {v.exposure_start, v.exposure_end}}, {"intrinsics", intr(v.camera)}};
+    json e = {{"name", v.name},
+              {"image", img},
+              {"exposure", {v.exposure_start, v.exposure_end}},
+              {"intrinsics", intr(v.camera)}};
     if (v.sharp_mid) {
       const std::string s = "images_gt_blur/" + v.name + opt.image_ext;
       write_image(dir / s, *v.sharp_mid);
@@ -91,7 +99,10 @@ void write_evflow_dataset(const Dataset& ds, const fs::path& dir, const WriteOpt
   write_poses_bounds(dir / "poses_bounds.npy", cams, std::vector<double>(cams.size(), ds.near),
                      std::vector<double>(cams.size(), ds.far));
   EventStream ev = ds.events;
-  if (ev.width == 0 && ev.height == 0 && ev.size() == 0) { ev.width = W; ev.height = H; }
+  if (ev.width == 0 && ev.height == 0 && ev.size() == 0) {
+    ev.width = W;
+    ev.height = H;
+  }
   if (ev.width != W || ev.height != H) throw bad(dir, "event sensor size differs from the image size");
   write_events_h5(dir / "events.h5", ev, es, ee);
   m["events"] = "events.h5";

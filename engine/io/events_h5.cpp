@@ -39,7 +39,12 @@ class Hid {
   Hid(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
   Hid(Hid&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
   Hid& operator=(Hid&& o) noexcept {
-    if (this != &o) { reset(); id_ = o.id_; close_ = o.close_; o.id_ = -1; }
+    if (this != &o) {
+      reset();
+      id_ = o.id_;
+      close_ = o.close_;
+      o.id_ = -1;
+    }
     return *this;
   }
   ~Hid() { reset(); }
@@ -87,11 +92,12 @@ std::string missing_filters(hid_t dset) {
     char name[256] = {0};
     H5Z_filter_t id = H5Pget_filter2(dcpl.get(), unsigned(i), &flags, &ncd, nullptr, sizeof name, name, &conf);
     if (id < 0 || H5Zfilter_avail(id) > 0) continue;
-    out += "the data is compressed with HDF5 filter " + std::to_string(id) + (name[0] ? std::string(" (") + name + ")" : "") +
-           ", which is not available";
+    out += "the data is compressed with HDF5 filter " + std::to_string(id) +
+           (name[0] ? std::string(" (") + name + ")" : "") + ", which is not available";
     if (id == kBloscFilter)
-      out += ": install Debian's hdf5-filter-plugin-blosc-serial (or set HDF5_PLUGIN_PATH to a folder with the "
-             "Blosc HDF5 plugin)";
+      out +=
+          ": install Debian's hdf5-filter-plugin-blosc-serial (or set HDF5_PLUGIN_PATH to a folder with the "
+          "Blosc HDF5 plugin)";
     else
       out += ": install its HDF5 filter plugin (HDF5_PLUGIN_PATH)";
   }
@@ -114,7 +120,8 @@ Dataset1D open_1d(const fs::path& path, hid_t loc, const std::string& prefix, co
   if (!space.ok()) fail(path, "corrupt dataset " + d.name);
   int rank = H5Sget_simple_extent_ndims(space.get());
   hsize_t dims[8] = {0};
-  if (rank < 0 || rank > 8 || H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0) fail(path, "corrupt dataset " + d.name);
+  if (rank < 0 || rank > 8 || H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0)
+    fail(path, "corrupt dataset " + d.name);
   if (rank != 1 && !(rank == 2 && (dims[1] == 1 || dims[0] == 1)))
     fail(path, "dataset " + d.name + " must be one-dimensional (rank " + std::to_string(rank) + ")");
   d.n = rank == 1 ? dims[0] : dims[0] * dims[1];
@@ -140,7 +147,12 @@ void read_blocks(const fs::path& path, const Dataset1D& d, hid_t memtype, F&& f)
     if (rank == 2) {
       hsize_t dims[2];
       H5Sget_simple_extent_dims(fspace.get(), dims, nullptr);
-      if (dims[0] == 1) { start[0] = 0; start[1] = first; count[0] = 1; count[1] = cnt; }
+      if (dims[0] == 1) {
+        start[0] = 0;
+        start[1] = first;
+        count[0] = 1;
+        count[1] = cnt;
+      }
     }
     hsize_t mcount = cnt;
     Hid mspace(H5Screate_simple(1, &mcount, nullptr), H5Sclose);
@@ -161,7 +173,8 @@ std::vector<int64_t> read_int64(const fs::path& path, hid_t loc, const std::stri
   if (d.cls == H5T_FLOAT) {
     read_blocks<double>(path, d, H5T_NATIVE_DOUBLE, [&](const double* b, size_t first, size_t cnt) {
       for (size_t i = 0; i < cnt; ++i) {
-        if (!(std::fabs(b[i]) < 9e18)) fail(path, d.name + "[" + std::to_string(first + i) + "] is not a finite integer");
+        if (!(std::fabs(b[i]) < 9e18))
+          fail(path, d.name + "[" + std::to_string(first + i) + "] is not a finite integer");
         out[first + i] = std::llround(b[i]);
       }
     });
@@ -173,8 +186,9 @@ std::vector<int64_t> read_int64(const fs::path& path, hid_t loc, const std::stri
   return out;
 }
 
-template <typename T> void write_1d(const fs::path& path, hid_t loc, const char* name, hid_t filetype, hid_t memtype,
-                                    const std::vector<T>& v, int deflate) {
+template <typename T>
+void write_1d(const fs::path& path, hid_t loc, const char* name, hid_t filetype, hid_t memtype, const std::vector<T>& v,
+              int deflate) {
   hsize_t n = v.size();
   Hid space(H5Screate_simple(1, &n, nullptr), H5Sclose);
   Hid dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
@@ -274,12 +288,19 @@ H5Events read_events_h5(const fs::path& path, const H5ReadOptions& opt) {
   coords(dy, ev.y, max_y);
   read_blocks<double>(path, dp, H5T_NATIVE_DOUBLE, [&](const double* b, size_t first, size_t cnt) {
     for (size_t i = 0; i < cnt; ++i) {
-      if (b[i] > 0) ev.p[first + i] = 1;
-      else if (b[i] == 0 || b[i] == -1) ev.p[first + i] = -1;
-      else fail(path, "event " + std::to_string(first + i) + " has polarity " + std::to_string(b[i]) + " (expected 0/1 or -1/1)");
+      if (b[i] > 0)
+        ev.p[first + i] = 1;
+      else if (b[i] == 0 || b[i] == -1)
+        ev.p[first + i] = -1;
+      else
+        fail(path, "event " + std::to_string(first + i) + " has polarity " + std::to_string(b[i]) +
+                       " (expected 0/1 or -1/1)");
     }
   });
-  const double units_per_s = opt.unit == TimeUnit::s ? 1.0 : opt.unit == TimeUnit::ms ? 1e3 : opt.unit == TimeUnit::us ? 1e6 : 1e9;
+  const double units_per_s = opt.unit == TimeUnit::s    ? 1.0
+                             : opt.unit == TimeUnit::ms ? 1e3
+                             : opt.unit == TimeUnit::us ? 1e6
+                                                        : 1e9;
   if (dt.cls == H5T_FLOAT) {
     read_blocks<double>(path, dt, H5T_NATIVE_DOUBLE, [&](const double* b, size_t first, size_t cnt) {
       for (size_t i = 0; i < cnt; ++i) ev.t[first + i] = b[i] / units_per_s + double(off) / 1e6;
@@ -289,9 +310,14 @@ H5Events read_events_h5(const fs::path& path, const H5ReadOptions& opt) {
     read_blocks<int64_t>(path, dt, H5T_NATIVE_INT64, [&](const int64_t* b, size_t first, size_t cnt) {
       for (size_t i = 0; i < cnt; ++i) {
         switch (opt.unit) {
-          case TimeUnit::us: ev.t[first + i] = double(b[i] + off) / 1e6; break;
-          case TimeUnit::ns: ev.t[first + i] = double(b[i] + off * 1000) / 1e9; break;
-          default: ev.t[first + i] = double(b[i]) / units_per_s + double(off) / 1e6;
+          case TimeUnit::us:
+            ev.t[first + i] = double(b[i] + off) / 1e6;
+            break;
+          case TimeUnit::ns:
+            ev.t[first + i] = double(b[i] + off * 1000) / 1e9;
+            break;
+          default:
+            ev.t[first + i] = double(b[i]) / units_per_s + double(off) / 1e6;
         }
       }
     });
@@ -309,7 +335,8 @@ H5Events read_events_h5(const fs::path& path, const H5ReadOptions& opt) {
     auto s = read_int64(path, g.get(), "/exposure/", "start_us");
     auto e = read_int64(path, g.get(), "/exposure/", "end_us");
     if (s.size() != e.size())
-      fail(path, "/exposure/start_us has " + std::to_string(s.size()) + " entries, /exposure/end_us " + std::to_string(e.size()));
+      fail(path, "/exposure/start_us has " + std::to_string(s.size()) + " entries, /exposure/end_us " +
+                     std::to_string(e.size()));
     for (size_t i = 0; i < s.size(); ++i) {
       if (e[i] < s[i]) fail(path, "exposure window " + std::to_string(i) + " ends before it starts");
       out.exposure_start.push_back(double(s[i] + off) / 1e6);
@@ -363,7 +390,8 @@ void write_events_h5(const fs::path& path, const EventStream& ev, const std::vec
     write_uint_attr(g.get(), "height", ev.height);
     {
       Hid space(H5Screate(H5S_SCALAR), H5Sclose);
-      Hid d(H5Dcreate2(file.get(), "t_offset", H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
+      Hid d(H5Dcreate2(file.get(), "t_offset", H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+            H5Dclose);
       if (!d.ok() || H5Dwrite(d.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &opt.t_offset_us) < 0)
         fail(path, "cannot write /t_offset: " + h5_last_error());
     }

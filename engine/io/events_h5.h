@@ -14,13 +14,13 @@ struct H5ReadOptions {
   TimeUnit unit = TimeUnit::us;  // unit of the t datasets (DSEC: us; EvDeblurNeRF Blender: ns)
   // Sensor size; 0 = the /events (or root) attributes "width"/"height" if present, else max + 1.
   uint32_t width = 0, height = 0;
-  bool apply_t_offset = true;    // add /t_offset (us) so that times are absolute (DSEC)
+  bool apply_t_offset = true;  // add /t_offset (us) so that times are absolute (DSEC)
 };
 
 struct H5Events {
-  EventStream events;                               // t in seconds
+  EventStream events;                                // t in seconds
   std::vector<double> exposure_start, exposure_end;  // seconds, same clock as events; may be empty
-  int64_t t_offset_us = 0;                          // /t_offset as stored (0 when absent)
+  int64_t t_offset_us = 0;                           // /t_offset as stored (0 when absent)
 };
 
 // Reads /events/{x,y,t,p} or, failing that, root-level x, y, t, p, each a 1-D dataset of any

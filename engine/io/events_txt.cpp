@@ -17,20 +17,28 @@ namespace fs = std::filesystem;
 
 double seconds_per(TimeUnit u) {
   switch (u) {
-    case TimeUnit::s: return 1.0;
-    case TimeUnit::ms: return 1e-3;
-    case TimeUnit::us: return 1e-6;
-    case TimeUnit::ns: return 1e-9;
+    case TimeUnit::s:
+      return 1.0;
+    case TimeUnit::ms:
+      return 1e-3;
+    case TimeUnit::us:
+      return 1e-6;
+    case TimeUnit::ns:
+      return 1e-9;
   }
   return 1.0;
 }
 
 static int decimal_shift(TimeUnit u) {  // seconds = value * 10^-shift
   switch (u) {
-    case TimeUnit::s: return 0;
-    case TimeUnit::ms: return 3;
-    case TimeUnit::us: return 6;
-    case TimeUnit::ns: return 9;
+    case TimeUnit::s:
+      return 0;
+    case TimeUnit::ms:
+      return 3;
+    case TimeUnit::us:
+      return 6;
+    case TimeUnit::ns:
+      return 9;
   }
   return 0;
 }
@@ -45,10 +53,14 @@ TimeUnit parse_time_unit(const std::string& s) {
 
 std::string to_string(TimeUnit u) {
   switch (u) {
-    case TimeUnit::s: return "s";
-    case TimeUnit::ms: return "ms";
-    case TimeUnit::us: return "us";
-    case TimeUnit::ns: return "ns";
+    case TimeUnit::s:
+      return "s";
+    case TimeUnit::ms:
+      return "ms";
+    case TimeUnit::us:
+      return "us";
+    case TimeUnit::ns:
+      return "ns";
   }
   return "?";
 }
@@ -66,7 +78,10 @@ bool parse_scaled(std::string_view tok, int shift, double& out) {
     char c = tok[i];
     if (c >= '0' && c <= '9') {
       any = true;
-      if (digits.empty() && c == '0') { if (dot) ++frac; continue; }  // drop leading zeros
+      if (digits.empty() && c == '0') {
+        if (dot) ++frac;
+        continue;
+      }  // drop leading zeros
       digits += c;
       if (dot) ++frac;
     } else if (c == '.' && !dot) {
@@ -93,7 +108,10 @@ bool parse_scaled(std::string_view tok, int shift, double& out) {
     if (e > 100000 || e < -100000) return false;
     exp10 = e;
   }
-  if (digits.empty()) { out = neg ? -0.0 : 0.0; return true; }
+  if (digits.empty()) {
+    out = neg ? -0.0 : 0.0;
+    return true;
+  }
   std::string s = (neg ? "-" : "") + digits + "e" + std::to_string(exp10 - frac - shift);
   auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
   return ec == std::errc() && p == s.data() + s.size() && std::isfinite(out);
@@ -105,23 +123,32 @@ std::string format_scaled(double v, int shift) {
   auto [p, ec] = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::scientific);
   std::string_view s(buf, size_t(p - buf));
   bool neg = false;
-  if (!s.empty() && s[0] == '-') { neg = true; s.remove_prefix(1); }
+  if (!s.empty() && s[0] == '-') {
+    neg = true;
+    s.remove_prefix(1);
+  }
   size_t e = s.find('e');
   std::string mant(s.substr(0, e));
   long exp10 = std::stol(std::string(s.substr(e + 1)));
   std::string digits;
-  for (char c : mant) if (c != '.') digits += c;
+  for (char c : mant)
+    if (c != '.') digits += c;
   // value = digits * 10^(exp10 - (len-1)) * 10^shift
   long E = exp10 - long(digits.size() - 1) + shift;
-  while (digits.size() > 1 && digits.back() == '0') { digits.pop_back(); ++E; }
+  while (digits.size() > 1 && digits.back() == '0') {
+    digits.pop_back();
+    ++E;
+  }
   std::string r;
   if (digits == "0") return "0";
   if (E >= 0) {
     r = digits + std::string(size_t(E), '0');
   } else {
     long pos = long(digits.size()) + E;
-    if (pos > 0) r = digits.substr(0, size_t(pos)) + "." + digits.substr(size_t(pos));
-    else r = "0." + std::string(size_t(-pos), '0') + digits;
+    if (pos > 0)
+      r = digits.substr(0, size_t(pos)) + "." + digits.substr(size_t(pos));
+    else
+      r = "0." + std::string(size_t(-pos), '0') + digits;
   }
   return neg ? "-" + r : r;
 }
@@ -181,7 +208,8 @@ EventStream read_events_txt(const fs::path& path, const TxtReadOptions& opt) {
       }
     }
     if (toks.size() != 4)
-      throw err("expected 't x y p', found " + std::to_string(toks.size()) + " fields: '" + std::string(line.substr(0, 80)) + "'");
+      throw err("expected 't x y p', found " + std::to_string(toks.size()) + " fields: '" +
+                std::string(line.substr(0, 80)) + "'");
     double t, pd;
     long long x, y;
     if (!parse_scaled(toks[0], shift, t)) throw err("bad timestamp '" + std::string(toks[0]) + "'");
@@ -191,12 +219,20 @@ EventStream read_events_txt(const fs::path& path, const TxtReadOptions& opt) {
     int8_t p;
     switch (opt.polarity) {
       case PolarityCoding::zero_one:
-        if (pd == 1) p = 1; else if (pd == 0) p = -1;
-        else throw err("polarity " + std::string(toks[3]) + " is not 0 or 1");
+        if (pd == 1)
+          p = 1;
+        else if (pd == 0)
+          p = -1;
+        else
+          throw err("polarity " + std::string(toks[3]) + " is not 0 or 1");
         break;
       case PolarityCoding::minus_one_one:
-        if (pd == 1) p = 1; else if (pd == -1) p = -1;
-        else throw err("polarity " + std::string(toks[3]) + " is not -1 or 1");
+        if (pd == 1)
+          p = 1;
+        else if (pd == -1)
+          p = -1;
+        else
+          throw err("polarity " + std::string(toks[3]) + " is not -1 or 1");
         break;
       default:
         p = pd == 1 ? 1 : -1;
@@ -229,7 +265,10 @@ void write_events_txt(const fs::path& path, const EventStream& ev, const TxtWrit
       buf += ' ';
       buf += ev.p[i] > 0 ? "1" : (opt.polarity == PolarityCoding::minus_one_one ? "-1" : "0");
       buf += '\n';
-      if (buf.size() > (1 << 20) - 128) { f.write(buf.data(), std::streamsize(buf.size())); buf.clear(); }
+      if (buf.size() > (1 << 20) - 128) {
+        f.write(buf.data(), std::streamsize(buf.size()));
+        buf.clear();
+      }
     }
     f.write(buf.data(), std::streamsize(buf.size()));
     f.close();

@@ -9,7 +9,7 @@
 namespace evflow::io {
 
 enum class TimeUnit { s, ms, us, ns };
-double seconds_per(TimeUnit u);               // 1, 1e-3, 1e-6, 1e-9
+double seconds_per(TimeUnit u);                // 1, 1e-3, 1e-6, 1e-9
 TimeUnit parse_time_unit(const std::string&);  // "s", "ms", "us", "ns"; throws std::invalid_argument
 std::string to_string(TimeUnit u);
 
@@ -29,7 +29,7 @@ struct TxtReadOptions {
 struct TxtWriteOptions {
   TimeUnit unit = TimeUnit::s;
   PolarityCoding polarity = PolarityCoding::zero_one;  // one_else_negative writes 1 / 0
-  bool header = true;  // first line "W H" (sensor size)
+  bool header = true;                                  // first line "W H" (sensor size)
 };
 
 // Blank lines and lines starting with '#' are skipped. The first data line may be a header of
@@ -41,6 +41,7 @@ struct TxtWriteOptions {
 EventStream read_events_txt(const std::filesystem::path& path, const TxtReadOptions& options = {});
 // Writes atomically. Timestamps are written as the shortest decimal that reads back as the same
 // double, scaled to `unit` by moving the decimal point: write -> read round trips are exact.
-void write_events_txt(const std::filesystem::path& path, const EventStream& events, const TxtWriteOptions& options = {});
+void write_events_txt(const std::filesystem::path& path, const EventStream& events,
+                      const TxtWriteOptions& options = {});
 
 }  // namespace evflow::io

@@ -36,18 +36,16 @@ constexpr const char* kScale = "KHR_gaussian_splatting:SCALE";
 constexpr const char* kOpacity = "KHR_gaussian_splatting:OPACITY";
 constexpr const char* kShPrefix = "KHR_gaussian_splatting:SH_DEGREE_";
 constexpr double kShC0 = 0.28209479177387814;
-constexpr uint32_t kGlbMagic = 0x46546C67;      // "glTF"
-constexpr uint32_t kChunkJson = 0x4E4F534A;     // "JSON"
-constexpr uint32_t kChunkBin = 0x004E4942;      // "BIN\0"
+constexpr uint32_t kGlbMagic = 0x46546C67;   // "glTF"
+constexpr uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
+constexpr uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
 constexpr int kFloat = 5126, kByte = 5120, kUByte = 5121, kShort = 5122, kUShort = 5123;
 constexpr int kArrayBuffer = 34962;
 // Opacity is clamped into [kOpacityEps, 1 - kOpacityEps] before the logit on import.
 constexpr double kOpacityEps = 1e-6;
 constexpr double kMinScale = 1e-30;  // scale 0 imports as log(kMinScale)
 
-std::string sh_name(int l, int n) {
-  return std::string(kShPrefix) + std::to_string(l) + "_COEF_" + std::to_string(n);
-}
+std::string sh_name(int l, int n) { return std::string(kShPrefix) + std::to_string(l) + "_COEF_" + std::to_string(n); }
 
 const char* color_space_name(GltfColorSpace c) {
   return c == GltfColorSpace::lin_rec709_display ? "lin_rec709_display" : "srgb_rec709_display";
@@ -86,13 +84,21 @@ bool base64_decode(std::string_view in, std::vector<uint8_t>& out) {
   size_t pad = 0;
   for (char ch : in) {
     int v;
-    if (ch >= 'A' && ch <= 'Z') v = ch - 'A';
-    else if (ch >= 'a' && ch <= 'z') v = ch - 'a' + 26;
-    else if (ch >= '0' && ch <= '9') v = ch - '0' + 52;
-    else if (ch == '+') v = 62;
-    else if (ch == '/') v = 63;
-    else if (ch == '=') { ++pad; continue; }
-    else return false;
+    if (ch >= 'A' && ch <= 'Z')
+      v = ch - 'A';
+    else if (ch >= 'a' && ch <= 'z')
+      v = ch - 'a' + 26;
+    else if (ch >= '0' && ch <= '9')
+      v = ch - '0' + 52;
+    else if (ch == '+')
+      v = 62;
+    else if (ch == '/')
+      v = 63;
+    else if (ch == '=') {
+      ++pad;
+      continue;
+    } else
+      return false;
     if (pad) return false;  // data after padding
     acc = (acc << 6) | uint32_t(v);
     bits += 6;
@@ -118,11 +124,15 @@ struct BinaryBuilder {
     const size_t offset = bin.size();  // always a multiple of 4: only floats are written
     bin.resize(offset + values.size() * sizeof(float));
     std::memcpy(bin.data() + offset, values.data(), values.size() * sizeof(float));
-    buffer_views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", values.size() * sizeof(float)},
+    buffer_views.push_back({{"buffer", 0},
+                            {"byteOffset", offset},
+                            {"byteLength", values.size() * sizeof(float)},
                             {"target", kArrayBuffer}});
-    ordered_json acc = {{"bufferView", buffer_views.size() - 1}, {"componentType", kFloat}, {"count", count}, {"type", type}};
+    ordered_json acc = {
+        {"bufferView", buffer_views.size() - 1}, {"componentType", kFloat}, {"count", count}, {"type", type}};
     if (with_min_max) {
-      std::vector<float> lo(components, std::numeric_limits<float>::infinity()), hi(components, -std::numeric_limits<float>::infinity());
+      std::vector<float> lo(components, std::numeric_limits<float>::infinity()),
+          hi(components, -std::numeric_limits<float>::infinity());
       for (size_t i = 0; i < count; ++i)
         for (int c = 0; c < components; ++c) {
           lo[c] = std::min(lo[c], values[i * components + c]);
@@ -154,7 +164,8 @@ GltfContent build_gltf(const fs::path& path, const GaussianCloud& cloud, const G
   std::vector<float> rot(n * 4), scale(n * 3), opacity(n);
   for (size_t g = 0; g < n; ++g) {
     const float* q = &cloud.quats[g * 4];  // w x y z
-    const double norm = std::sqrt(double(q[0]) * q[0] + double(q[1]) * q[1] + double(q[2]) * q[2] + double(q[3]) * q[3]);
+    const double norm =
+        std::sqrt(double(q[0]) * q[0] + double(q[1]) * q[1] + double(q[2]) * q[2] + double(q[3]) * q[3]);
     if (norm > 1e-30) {
       for (int a = 0; a < 3; ++a) rot[g * 4 + a] = static_cast<float>(q[a + 1] / norm);
       rot[g * 4 + 3] = static_cast<float>(q[0] / norm);
@@ -197,15 +208,14 @@ GltfContent build_gltf(const fs::path& path, const GaussianCloud& cloud, const G
     attributes["COLOR_0"] = b.add(color, n, "VEC4", 4, false);
   }
 
-  ordered_json primitive = {
-      {"mode", 0},
-      {"attributes", attributes},
-      {"extensions",
-       {{kExt,
-         {{"kernel", "ellipse"},
-          {"colorSpace", color_space_name(options.color_space)},
-          {"projection", "perspective"},
-          {"sortingMethod", "cameraDistance"}}}}}};
+  ordered_json primitive = {{"mode", 0},
+                            {"attributes", attributes},
+                            {"extensions",
+                             {{kExt,
+                               {{"kernel", "ellipse"},
+                                {"colorSpace", color_space_name(options.color_space)},
+                                {"projection", "perspective"},
+                                {"sortingMethod", "cameraDistance"}}}}}};
   GltfContent out;
   out.doc = {{"asset", {{"version", "2.0"}, {"generator", "EvFlow"}}},
              {"extensionsUsed", ordered_json::array({kExt})},
@@ -304,7 +314,8 @@ const std::vector<uint8_t>& buffer_data(Document& d, uint64_t index, const std::
       const size_t comma = uri.find(',');
       if (comma == std::string::npos || uri.substr(0, comma).find(";base64") == std::string::npos)
         throw GltfError(where + ".uri is a data URI without base64 payload");
-      if (!base64_decode(std::string_view(uri).substr(comma + 1), data)) throw GltfError(where + ".uri has invalid base64 data");
+      if (!base64_decode(std::string_view(uri).substr(comma + 1), data))
+        throw GltfError(where + ".uri has invalid base64 data");
     } else {
       // A relative URI reference, percent-encoded (RFC 3986).
       std::string decoded;
@@ -341,10 +352,16 @@ int type_components(const std::string& t) {
 
 size_t component_size(int ct) {
   switch (ct) {
-    case kByte: case kUByte: return 1;
-    case kShort: case kUShort: return 2;
-    case kFloat: return 4;
-    default: return 0;
+    case kByte:
+    case kUByte:
+      return 1;
+    case kShort:
+    case kUShort:
+      return 2;
+    case kFloat:
+      return 4;
+    default:
+      return 0;
   }
 }
 
@@ -398,12 +415,14 @@ std::vector<float> read_accessor(Document& d, uint64_t index, const std::string&
   const uint64_t bv_length = as_uint(member(bv, "byteLength", bv_where), bv_where + ".byteLength");
   const uint64_t stride = uint_or(bv, "byteStride", 0, bv_where);
   const uint64_t step = stride ? stride : elem;
-  if (step < elem) throw GltfError(bv_where + ".byteStride " + std::to_string(stride) + " is smaller than an element of " + where);
+  if (step < elem)
+    throw GltfError(bv_where + ".byteStride " + std::to_string(stride) + " is smaller than an element of " + where);
   const uint64_t acc_offset = uint_or(acc, "byteOffset", 0, where);
   const std::vector<uint8_t>& data = buffer_data(d, buffer, bv_where);
   if (bv_offset > data.size() || bv_length > data.size() - bv_offset)
     throw GltfError(bv_where + " (offset " + std::to_string(bv_offset) + ", length " + std::to_string(bv_length) +
-                    ") runs past the end of buffers[" + std::to_string(buffer) + "] (" + std::to_string(data.size()) + " bytes)");
+                    ") runs past the end of buffers[" + std::to_string(buffer) + "] (" + std::to_string(data.size()) +
+                    " bytes)");
   // count <= 2^32 and step <= 2^40 keep this product far from overflow; offsets were bounded above.
   if (step > (uint64_t(1) << 40) || acc_offset > bv_length || (count - 1) * step + elem > bv_length - acc_offset)
     throw GltfError(where + " (" + std::to_string(count) + " elements, offset " + std::to_string(acc_offset) +
@@ -415,14 +434,37 @@ std::vector<float> read_accessor(Document& d, uint64_t index, const std::string&
       const uint8_t* q = p + c * csize;
       double v = 0;
       switch (ct) {
-        case kFloat: { float f; std::memcpy(&f, q, 4); v = f; break; }
-        case kByte: { int8_t x; std::memcpy(&x, q, 1); v = normalized ? std::max(x / 127.0, -1.0) : x; break; }
-        case kUByte: v = normalized ? q[0] / 255.0 : q[0]; break;
-        case kShort: { int16_t x; std::memcpy(&x, q, 2); v = normalized ? std::max(x / 32767.0, -1.0) : x; break; }
-        case kUShort: { uint16_t x; std::memcpy(&x, q, 2); v = normalized ? x / 65535.0 : x; break; }
+        case kFloat: {
+          float f;
+          std::memcpy(&f, q, 4);
+          v = f;
+          break;
+        }
+        case kByte: {
+          int8_t x;
+          std::memcpy(&x, q, 1);
+          v = normalized ? std::max(x / 127.0, -1.0) : x;
+          break;
+        }
+        case kUByte:
+          v = normalized ? q[0] / 255.0 : q[0];
+          break;
+        case kShort: {
+          int16_t x;
+          std::memcpy(&x, q, 2);
+          v = normalized ? std::max(x / 32767.0, -1.0) : x;
+          break;
+        }
+        case kUShort: {
+          uint16_t x;
+          std::memcpy(&x, q, 2);
+          v = normalized ? x / 65535.0 : x;
+          break;
+        }
       }
       if (!std::isfinite(v))
-        throw GltfError(where + ": element " + std::to_string(i) + " component " + std::to_string(c) + " is not finite");
+        throw GltfError(where + ": element " + std::to_string(i) + " component " + std::to_string(c) +
+                        " is not finite");
       out[static_cast<size_t>(i * components + c)] = static_cast<float>(v);
     }
   }
@@ -442,13 +484,16 @@ SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& 
   if (!kernel.is_string() || kernel.get<std::string>() != "ellipse")
     throw GltfError(ext_where + ".kernel is " + kernel.dump().substr(0, 40) + "; EvFlow reads only \"ellipse\"");
   const json& cs = member(ext, "colorSpace", ext_where);
-  if (!cs.is_string() || (cs.get<std::string>() != "srgb_rec709_display" && cs.get<std::string>() != "lin_rec709_display"))
+  if (!cs.is_string() ||
+      (cs.get<std::string>() != "srgb_rec709_display" && cs.get<std::string>() != "lin_rec709_display"))
     throw GltfError(ext_where + ".colorSpace is " + cs.dump().substr(0, 40) +
                     "; expected \"srgb_rec709_display\" or \"lin_rec709_display\"");
   if (ext.contains("projection") && ext["projection"] != "perspective")
-    throw GltfError(ext_where + ".projection is " + ext["projection"].dump().substr(0, 40) + "; EvFlow renders only \"perspective\"");
+    throw GltfError(ext_where + ".projection is " + ext["projection"].dump().substr(0, 40) +
+                    "; EvFlow renders only \"perspective\"");
   const uint64_t mode = uint_or(prim, "mode", 4, where);
-  if (mode != 0) throw GltfError(where + " has mode " + std::to_string(mode) + "; KHR_gaussian_splatting requires POINTS (0)");
+  if (mode != 0)
+    throw GltfError(where + " has mode " + std::to_string(mode) + "; KHR_gaussian_splatting requires POINTS (0)");
   const json& attrs = member(prim, "attributes", where);
   if (!attrs.is_object()) throw GltfError(where + ".attributes is not an object");
 
@@ -467,7 +512,8 @@ SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& 
     if (sep == std::string_view::npos || !parse(rest.substr(0, sep), l) || !parse(rest.substr(sep + 6), n) || l < 0 ||
         n < 0 || n > 2 * l || key != sh_name(l, n))
       throw GltfError(where + ".attributes has malformed SH attribute '" + key + "'");
-    if (l > kMaxShDegree) throw GltfError(where + ".attributes has SH degree " + std::to_string(l) + "; EvFlow supports up to 3");
+    if (l > kMaxShDegree)
+      throw GltfError(where + ".attributes has SH degree " + std::to_string(l) + "; EvFlow supports up to 3");
     present[l][n] = true;
   }
   int degree = -1;
@@ -477,14 +523,15 @@ SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& 
     if (l == 0 && have == 0) throw GltfError(where + " lacks the required attribute " + sh_name(0, 0));
     if (have == 0) break;
     if (have != 2 * l + 1)
-      throw GltfError(where + ": SH degree " + std::to_string(l) + " is partially defined (" + std::to_string(have) + " of " +
-                      std::to_string(2 * l + 1) + " coefficients)");
+      throw GltfError(where + ": SH degree " + std::to_string(l) + " is partially defined (" + std::to_string(have) +
+                      " of " + std::to_string(2 * l + 1) + " coefficients)");
     degree = l;
   }
   for (int l = degree + 1; l <= kMaxShDegree; ++l)
     for (int n = 0; n <= 2 * l; ++n)
       if (present[l][n])
-        throw GltfError(where + ": SH degree " + std::to_string(l) + " is present but degree " + std::to_string(degree + 1) + " is not");
+        throw GltfError(where + ": SH degree " + std::to_string(l) + " is present but degree " +
+                        std::to_string(degree + 1) + " is not");
 
   auto index_of = [&](const std::string& semantic) -> uint64_t {
     const auto it = attrs.find(semantic);
@@ -495,14 +542,15 @@ SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& 
   const std::vector<float> pos = read_accessor(d, index_of("POSITION"), "POSITION", "VEC3", {{kFloat, false}}, n);
   auto same_count = [&](const char* semantic) {
     if (c != n)
-      throw GltfError(where + ": attribute " + semantic + " has " + std::to_string(c) + " elements but POSITION has " + std::to_string(n));
+      throw GltfError(where + ": attribute " + semantic + " has " + std::to_string(c) + " elements but POSITION has " +
+                      std::to_string(n));
   };
   const std::vector<float> rot =
       read_accessor(d, index_of(kRotation), kRotation, "VEC4", {{kFloat, false}, {kByte, true}, {kShort, true}}, c);
   same_count(kRotation);
-  const std::vector<float> scale = read_accessor(
-      d, index_of(kScale), kScale, "VEC3",
-      {{kFloat, false}, {kUByte, false}, {kUByte, true}, {kUShort, false}, {kUShort, true}}, c);
+  const std::vector<float> scale =
+      read_accessor(d, index_of(kScale), kScale, "VEC3",
+                    {{kFloat, false}, {kUByte, false}, {kUByte, true}, {kUShort, false}, {kUShort, true}}, c);
   same_count(kScale);
   const std::vector<float> opacity =
       read_accessor(d, index_of(kOpacity), kOpacity, "SCALAR", {{kFloat, false}, {kUByte, true}, {kUShort, true}}, c);
@@ -519,11 +567,15 @@ SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& 
     for (int a = 0; a < 3; ++a) cloud.quats[g * 4 + 1 + a] = rot[g * 4 + a];
     for (int a = 0; a < 3; ++a) {
       const float s = scale[g * 3 + a];
-      if (s < 0) throw GltfError(std::string(kScale) + " of splat " + std::to_string(g) + " is negative (" + std::to_string(s) + ")");
+      if (s < 0)
+        throw GltfError(std::string(kScale) + " of splat " + std::to_string(g) + " is negative (" + std::to_string(s) +
+                        ")");
       cloud.log_scales[g * 3 + a] = static_cast<float>(std::log(std::max<double>(s, kMinScale)));
     }
     const double o = opacity[g];
-    if (o < 0 || o > 1) throw GltfError(std::string(kOpacity) + " of splat " + std::to_string(g) + " is outside [0, 1] (" + std::to_string(o) + ")");
+    if (o < 0 || o > 1)
+      throw GltfError(std::string(kOpacity) + " of splat " + std::to_string(g) + " is outside [0, 1] (" +
+                      std::to_string(o) + ")");
     const double oc = std::clamp(o, kOpacityEps, 1.0 - kOpacityEps);
     cloud.opacity_logits[g] = static_cast<float>(std::log(oc / (1.0 - oc)));
   }
@@ -547,7 +599,8 @@ GaussianCloud parse_gltf(const fs::path& path, const std::vector<uint8_t>& bytes
     const uint32_t version = get_u32(bytes, 4), length = get_u32(bytes, 8);
     if (version != 2) throw GltfError("GLB version " + std::to_string(version) + ", expected 2");
     if (length > bytes.size())
-      throw GltfError("GLB header declares " + std::to_string(length) + " bytes but the file has " + std::to_string(bytes.size()) + " (truncated)");
+      throw GltfError("GLB header declares " + std::to_string(length) + " bytes but the file has " +
+                      std::to_string(bytes.size()) + " (truncated)");
     const uint32_t json_len = get_u32(bytes, 12), json_type = get_u32(bytes, 16);
     if (json_type != kChunkJson) throw GltfError("the first GLB chunk is not JSON");
     if (json_len > length - 20) throw GltfError("the GLB JSON chunk runs past the end of the file (truncated)");
@@ -579,7 +632,8 @@ GaussianCloud parse_gltf(const fs::path& path, const std::vector<uint8_t>& bytes
     const json& req = doc["extensionsRequired"];
     if (!req.is_array()) throw GltfError("extensionsRequired is not an array");
     for (const auto& e : req)
-      if (e != kExt) throw GltfError("the file requires extension " + e.dump().substr(0, 60) + ", which EvFlow cannot read");
+      if (e != kExt)
+        throw GltfError("the file requires extension " + e.dump().substr(0, 60) + ", which EvFlow cannot read");
   }
 
   std::vector<SplatPrimitive> prims;
@@ -593,18 +647,23 @@ GaussianCloud parse_gltf(const fs::path& path, const std::vector<uint8_t>& bytes
       if (!primitives.is_array()) throw GltfError(mw + ".primitives is not an array");
       for (size_t pi = 0; pi < primitives.size(); ++pi) {
         const json& prim = primitives[pi];
-        if (!prim.is_object() || !prim.contains("extensions") || !prim["extensions"].is_object() || !prim["extensions"].contains(kExt))
+        if (!prim.is_object() || !prim.contains("extensions") || !prim["extensions"].is_object() ||
+            !prim["extensions"].contains(kExt))
           continue;
         prims.push_back(read_primitive(d, prim, mw + ".primitives[" + std::to_string(pi) + "]"));
         const std::string cs = prim["extensions"][kExt]["colorSpace"].get<std::string>();
-        if (first_color_space.empty()) first_color_space = cs;
-        else if (cs != first_color_space) throw GltfError("splat primitives disagree on colorSpace (" + first_color_space + " vs " + cs + ")");
+        if (first_color_space.empty())
+          first_color_space = cs;
+        else if (cs != first_color_space)
+          throw GltfError("splat primitives disagree on colorSpace (" + first_color_space + " vs " + cs + ")");
       }
     }
   }
   if (prims.empty()) throw GltfError("no mesh primitive carries KHR_gaussian_splatting: not a Gaussian-splat glTF");
   if (prims.size() == 1) {
-    if (color_space) *color_space = first_color_space == "lin_rec709_display" ? GltfColorSpace::lin_rec709_display : GltfColorSpace::srgb_rec709_display;
+    if (color_space)
+      *color_space = first_color_space == "lin_rec709_display" ? GltfColorSpace::lin_rec709_display
+                                                               : GltfColorSpace::srgb_rec709_display;
     return std::move(prims[0].cloud);
   }
   // Several primitives: concatenate at the highest SH degree, missing coefficients zero.
@@ -631,7 +690,9 @@ GaussianCloud parse_gltf(const fs::path& path, const std::vector<uint8_t>& bytes
         for (int ch = 0; ch < 3; ++ch) cloud.sh[((at + g) * K + k) * 3 + ch] = c.sh[(g * Kc + k) * 3 + ch];
     at += n;
   }
-  if (color_space) *color_space = first_color_space == "lin_rec709_display" ? GltfColorSpace::lin_rec709_display : GltfColorSpace::srgb_rec709_display;
+  if (color_space)
+    *color_space = first_color_space == "lin_rec709_display" ? GltfColorSpace::lin_rec709_display
+                                                             : GltfColorSpace::srgb_rec709_display;
   return cloud;
 }
 
@@ -639,7 +700,8 @@ GaussianCloud parse_gltf(const fs::path& path, const std::vector<uint8_t>& bytes
 
 void write_gltf_splats(const fs::path& path, const GaussianCloud& cloud, const GltfExportOptions& options) {
   cloud.validate(path.string());
-  if (cloud.size() == 0) throw std::invalid_argument(path.string() + ": cannot export an empty cloud to glTF (accessors need count >= 1)");
+  if (cloud.size() == 0)
+    throw std::invalid_argument(path.string() + ": cannot export an empty cloud to glTF (accessors need count >= 1)");
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
   if (ext != ".glb" && ext != ".gltf")
@@ -655,7 +717,8 @@ void write_gltf_splats(const fs::path& path, const GaussianCloud& cloud, const G
   while (json_text.size() % 4) json_text += ' ';
   const uint64_t total = 12 + 8 + json_text.size() + 8 + content.bin.size();
   if (total > std::numeric_limits<uint32_t>::max())
-    throw std::invalid_argument(path.string() + ": the cloud needs " + std::to_string(total) + " bytes, more than GLB's 4 GiB limit");
+    throw std::invalid_argument(path.string() + ": the cloud needs " + std::to_string(total) +
+                                " bytes, more than GLB's 4 GiB limit");
   std::string head;
   head.reserve(20 + json_text.size() + 8);
   put_u32(head, kGlbMagic);
@@ -680,9 +743,7 @@ GaussianCloud read_gltf_splats(const fs::path& path, GltfColorSpace* color_space
     throw std::runtime_error(path.string() + ": " + e.what());
   } catch (const json::exception& e) {
     throw std::runtime_error(path.string() + ": malformed glTF JSON: " + e.what());
-  } catch (const std::bad_alloc&) {
-    throw std::runtime_error(path.string() + ": glTF too large to load");
-  }
+  } catch (const std::bad_alloc&) { throw std::runtime_error(path.string() + ": glTF too large to load"); }
 }
 
 }  // namespace evflow::io

@@ -113,7 +113,8 @@ void write_png(const fs::path& path, const Image& im) {
   write_with_oiio(path, im.width, im.height, im.channels, OIIO::TypeDesc::UINT8, px.data());
 }
 
-void write_png8(const fs::path& path, uint32_t width, uint32_t height, uint32_t channels, const std::vector<uint8_t>& interleaved) {
+void write_png8(const fs::path& path, uint32_t width, uint32_t height, uint32_t channels,
+                const std::vector<uint8_t>& interleaved) {
   if (channels != 1 && channels != 3 && channels != 4)
     fail(path, "cannot write an image with " + std::to_string(channels) + " channels (1, 3 or 4)");
   if (width == 0 || height == 0) fail(path, "cannot write an empty image");

@@ -11,7 +11,8 @@ struct Image {
   std::vector<float> data;  // interleaved HWC, linear intensity (nominally 0..1)
 
   Image() = default;
-  Image(uint32_t w, uint32_t h, uint32_t c, float fill = 0.f) : width(w), height(h), channels(c), data(size_t(w) * h * c, fill) {}
+  Image(uint32_t w, uint32_t h, uint32_t c, float fill = 0.f)
+      : width(w), height(h), channels(c), data(size_t(w) * h * c, fill) {}
   float& at(uint32_t x, uint32_t y, uint32_t c) { return data[(size_t(y) * width + x) * channels + c]; }
   float at(uint32_t x, uint32_t y, uint32_t c) const { return data[(size_t(y) * width + x) * channels + c]; }
   bool empty() const { return data.empty(); }

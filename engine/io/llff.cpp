@@ -57,12 +57,15 @@ PosesBounds read_poses_bounds(const fs::path& path) {
     throw std::runtime_error(path.string() + ": poses_bounds must be float64 (or float32), found dtype " +
                              dtype_descr(a.dtype));
   size_t n;
-  if (a.shape.size() == 2 && a.shape[1] == 17) n = a.shape[0];
-  else if (a.shape.size() == 1 && a.shape[0] == 17) n = 1;
+  if (a.shape.size() == 2 && a.shape[1] == 17)
+    n = a.shape[0];
+  else if (a.shape.size() == 1 && a.shape[0] == 17)
+    n = 1;
   else {
     std::string s;
     for (size_t i = 0; i < a.shape.size(); ++i) s += (i ? " x " : "") + std::to_string(a.shape[i]);
-    throw std::runtime_error(path.string() + ": poses_bounds must be an N x 17 array, found shape " + (s.empty() ? "()" : s));
+    throw std::runtime_error(path.string() + ": poses_bounds must be an N x 17 array, found shape " +
+                             (s.empty() ? "()" : s));
   }
   std::vector<double> v = a.to_double();
   PosesBounds pb;

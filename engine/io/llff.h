@@ -13,9 +13,9 @@ namespace evflow::io {
 using LlffRow = std::array<double, 17>;
 
 struct PosesBounds {
-  std::vector<LlffRow> rows;       // exactly as stored in the file
-  std::vector<Camera> cameras;     // converted rows (see llff_row_to_camera)
-  std::vector<double> near, far;   // per row
+  std::vector<LlffRow> rows;      // exactly as stored in the file
+  std::vector<Camera> cameras;    // converted rows (see llff_row_to_camera)
+  std::vector<double> near, far;  // per row
 };
 
 // Row -> OpenCV camera (x right, y down, z forward; world_to_camera R, t):

@@ -14,27 +14,49 @@ static_assert(std::endian::native == std::endian::little, "npy I/O assumes a lit
 
 size_t dtype_size(DType d) {
   switch (d) {
-    case DType::f4: case DType::i4: case DType::u4: return 4;
-    case DType::f8: case DType::i8: case DType::u8: return 8;
-    case DType::i2: case DType::u2: return 2;
-    case DType::i1: case DType::u1: case DType::b1: return 1;
+    case DType::f4:
+    case DType::i4:
+    case DType::u4:
+      return 4;
+    case DType::f8:
+    case DType::i8:
+    case DType::u8:
+      return 8;
+    case DType::i2:
+    case DType::u2:
+      return 2;
+    case DType::i1:
+    case DType::u1:
+    case DType::b1:
+      return 1;
   }
   return 0;
 }
 
 std::string dtype_descr(DType d) {
   switch (d) {
-    case DType::f4: return "<f4";
-    case DType::f8: return "<f8";
-    case DType::i1: return "|i1";
-    case DType::i2: return "<i2";
-    case DType::i4: return "<i4";
-    case DType::i8: return "<i8";
-    case DType::u1: return "|u1";
-    case DType::u2: return "<u2";
-    case DType::u4: return "<u4";
-    case DType::u8: return "<u8";
-    case DType::b1: return "|b1";
+    case DType::f4:
+      return "<f4";
+    case DType::f8:
+      return "<f8";
+    case DType::i1:
+      return "|i1";
+    case DType::i2:
+      return "<i2";
+    case DType::i4:
+      return "<i4";
+    case DType::i8:
+      return "<i8";
+    case DType::u1:
+      return "|u1";
+    case DType::u2:
+      return "<u2";
+    case DType::u4:
+      return "<u4";
+    case DType::u8:
+      return "<u8";
+    case DType::b1:
+      return "|b1";
   }
   return "?";
 }
@@ -47,29 +69,53 @@ size_t NpyArray::count() const {
 
 namespace {
 
-template <typename T> T load(const uint8_t* p) {
+template <typename T>
+T load(const uint8_t* p) {
   T v;
   std::memcpy(&v, p, sizeof(T));
   return v;
 }
 
-template <typename Out> std::vector<Out> convert(const NpyArray& a) {
+template <typename Out>
+std::vector<Out> convert(const NpyArray& a) {
   const size_t n = a.count();
   std::vector<Out> out(n);
   const uint8_t* b = a.bytes.data();
   for (size_t i = 0; i < n; ++i) {
     switch (a.dtype) {
-      case DType::f4: out[i] = Out(load<float>(b + 4 * i)); break;
-      case DType::f8: out[i] = Out(load<double>(b + 8 * i)); break;
-      case DType::i1: out[i] = Out(load<int8_t>(b + i)); break;
-      case DType::i2: out[i] = Out(load<int16_t>(b + 2 * i)); break;
-      case DType::i4: out[i] = Out(load<int32_t>(b + 4 * i)); break;
-      case DType::i8: out[i] = Out(load<int64_t>(b + 8 * i)); break;
-      case DType::u1: out[i] = Out(load<uint8_t>(b + i)); break;
-      case DType::u2: out[i] = Out(load<uint16_t>(b + 2 * i)); break;
-      case DType::u4: out[i] = Out(load<uint32_t>(b + 4 * i)); break;
-      case DType::u8: out[i] = Out(load<uint64_t>(b + 8 * i)); break;
-      case DType::b1: out[i] = Out(b[i] ? 1 : 0); break;
+      case DType::f4:
+        out[i] = Out(load<float>(b + 4 * i));
+        break;
+      case DType::f8:
+        out[i] = Out(load<double>(b + 8 * i));
+        break;
+      case DType::i1:
+        out[i] = Out(load<int8_t>(b + i));
+        break;
+      case DType::i2:
+        out[i] = Out(load<int16_t>(b + 2 * i));
+        break;
+      case DType::i4:
+        out[i] = Out(load<int32_t>(b + 4 * i));
+        break;
+      case DType::i8:
+        out[i] = Out(load<int64_t>(b + 8 * i));
+        break;
+      case DType::u1:
+        out[i] = Out(load<uint8_t>(b + i));
+        break;
+      case DType::u2:
+        out[i] = Out(load<uint16_t>(b + 2 * i));
+        break;
+      case DType::u4:
+        out[i] = Out(load<uint32_t>(b + 4 * i));
+        break;
+      case DType::u8:
+        out[i] = Out(load<uint64_t>(b + 8 * i));
+        break;
+      case DType::b1:
+        out[i] = Out(b[i] ? 1 : 0);
+        break;
     }
   }
   return out;
@@ -150,9 +196,11 @@ std::vector<size_t> parse_shape(const fs::path& path, const std::string& s) {
 std::vector<double> NpyArray::to_double() const { return convert<double>(*this); }
 std::vector<float> NpyArray::to_float() const { return convert<float>(*this); }
 
-template <typename T> std::vector<T> NpyArray::as() const {
+template <typename T>
+std::vector<T> NpyArray::as() const {
   if (dtype != dtype_of<T>())
-    throw std::runtime_error(source + ": npy dtype is " + dtype_descr(dtype) + ", expected " + dtype_descr(dtype_of<T>()));
+    throw std::runtime_error(source + ": npy dtype is " + dtype_descr(dtype) + ", expected " +
+                             dtype_descr(dtype_of<T>()));
   std::vector<T> out(count());
   if (!out.empty()) std::memcpy(out.data(), bytes.data(), out.size() * sizeof(T));
   return out;
@@ -233,7 +281,10 @@ void write_npy(const fs::path& path, DType dtype, const std::vector<size_t>& sha
   // Pad with spaces so that magic + length + header + '\n' is a multiple of 64 bytes.
   int version = 1;
   size_t pre = 10;
-  if (header.size() + 1 + pre > 65535 + 10) { version = 2; pre = 12; }
+  if (header.size() + 1 + pre > 65535 + 10) {
+    version = 2;
+    pre = 12;
+  }
   size_t total = pre + header.size() + 1;
   header.append((64 - total % 64) % 64, ' ');
   header += '\n';
@@ -274,8 +325,8 @@ void write_npy(const fs::path& path, const std::vector<size_t>& shape, const std
   }
 }
 
-#define EVF_NPY_INSTANTIATE(T)                                \
-  template std::vector<T> NpyArray::as<T>() const;            \
+#define EVF_NPY_INSTANTIATE(T)                     \
+  template std::vector<T> NpyArray::as<T>() const; \
   template void write_npy<T>(const fs::path&, const std::vector<size_t>&, const std::vector<T>&);
 EVF_NPY_INSTANTIATE(float)
 EVF_NPY_INSTANTIATE(double)
@@ -290,7 +341,8 @@ EVF_NPY_INSTANTIATE(uint64_t)
 #undef EVF_NPY_INSTANTIATE
 
 // std::vector<bool> is bit-packed: specialise as<bool>.
-template <> std::vector<bool> NpyArray::as<bool>() const {
+template <>
+std::vector<bool> NpyArray::as<bool>() const {
   if (dtype != DType::b1) throw std::runtime_error(source + ": npy dtype is " + dtype_descr(dtype) + ", expected |b1");
   std::vector<bool> out(count());
   for (size_t i = 0; i < out.size(); ++i) out[i] = bytes[i] != 0;

@@ -14,21 +14,55 @@ size_t dtype_size(DType);
 std::string dtype_descr(DType);  // NumPy descr, e.g. "<f8", "|u1", "|b1"
 
 // Compile-time mapping C++ type -> DType (bool maps to b1).
-template <typename T> constexpr DType dtype_of();
-template <> constexpr DType dtype_of<float>() { return DType::f4; }
-template <> constexpr DType dtype_of<double>() { return DType::f8; }
-template <> constexpr DType dtype_of<int8_t>() { return DType::i1; }
-template <> constexpr DType dtype_of<int16_t>() { return DType::i2; }
-template <> constexpr DType dtype_of<int32_t>() { return DType::i4; }
-template <> constexpr DType dtype_of<int64_t>() { return DType::i8; }
-template <> constexpr DType dtype_of<uint8_t>() { return DType::u1; }
-template <> constexpr DType dtype_of<uint16_t>() { return DType::u2; }
-template <> constexpr DType dtype_of<uint32_t>() { return DType::u4; }
-template <> constexpr DType dtype_of<uint64_t>() { return DType::u8; }
-template <> constexpr DType dtype_of<bool>() { return DType::b1; }
+template <typename T>
+constexpr DType dtype_of();
+template <>
+constexpr DType dtype_of<float>() {
+  return DType::f4;
+}
+template <>
+constexpr DType dtype_of<double>() {
+  return DType::f8;
+}
+template <>
+constexpr DType dtype_of<int8_t>() {
+  return DType::i1;
+}
+template <>
+constexpr DType dtype_of<int16_t>() {
+  return DType::i2;
+}
+template <>
+constexpr DType dtype_of<int32_t>() {
+  return DType::i4;
+}
+template <>
+constexpr DType dtype_of<int64_t>() {
+  return DType::i8;
+}
+template <>
+constexpr DType dtype_of<uint8_t>() {
+  return DType::u1;
+}
+template <>
+constexpr DType dtype_of<uint16_t>() {
+  return DType::u2;
+}
+template <>
+constexpr DType dtype_of<uint32_t>() {
+  return DType::u4;
+}
+template <>
+constexpr DType dtype_of<uint64_t>() {
+  return DType::u8;
+}
+template <>
+constexpr DType dtype_of<bool>() {
+  return DType::b1;
+}
 
 struct NpyArray {
-  std::string source;          // file it was read from (for error messages)
+  std::string source;  // file it was read from (for error messages)
   DType dtype = DType::f8;
   std::vector<size_t> shape;   // empty = scalar (one element)
   std::vector<uint8_t> bytes;  // raw little-endian data, C order
@@ -38,10 +72,12 @@ struct NpyArray {
   std::vector<double> to_double() const;
   std::vector<float> to_float() const;
   // The data as T; throws std::runtime_error naming `source` unless dtype == dtype_of<T>().
-  template <typename T> std::vector<T> as() const;
+  template <typename T>
+  std::vector<T> as() const;
 };
 
-template <> std::vector<bool> NpyArray::as<bool>() const;
+template <>
+std::vector<bool> NpyArray::as<bool>() const;
 
 // Throws std::runtime_error naming the file on: unreadable file, bad magic, unsupported version,
 // malformed header, big-endian / structured / unsupported dtype, Fortran order, and data whose

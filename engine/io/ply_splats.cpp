@@ -65,7 +65,8 @@ void write_ply_file(const fs::path& tmp, const GaussianCloud& cloud) {
     for (int a = 0; a < 4; ++a) tail[4 + a] = cloud.quats[g * 4 + a];
     batch.insert(batch.end(), row.begin(), row.end());
     if (batch.size() >= kBatch * per || g + 1 == n) {
-      out.write(reinterpret_cast<const char*>(batch.data()), static_cast<std::streamsize>(batch.size() * sizeof(float)));
+      out.write(reinterpret_cast<const char*>(batch.data()),
+                static_cast<std::streamsize>(batch.size() * sizeof(float)));
       batch.clear();
     }
   }
@@ -97,24 +98,40 @@ std::optional<PType> parse_type(std::string_view s) {
 
 size_t type_size(PType t) {
   switch (t) {
-    case PType::i8: case PType::u8: return 1;
-    case PType::i16: case PType::u16: return 2;
-    case PType::i32: case PType::u32: case PType::f32: return 4;
-    case PType::f64: return 8;
+    case PType::i8:
+    case PType::u8:
+      return 1;
+    case PType::i16:
+    case PType::u16:
+      return 2;
+    case PType::i32:
+    case PType::u32:
+    case PType::f32:
+      return 4;
+    case PType::f64:
+      return 8;
   }
   return 0;
 }
 
 const char* type_name(PType t) {
   switch (t) {
-    case PType::i8: return "char";
-    case PType::u8: return "uchar";
-    case PType::i16: return "short";
-    case PType::u16: return "ushort";
-    case PType::i32: return "int";
-    case PType::u32: return "uint";
-    case PType::f32: return "float";
-    case PType::f64: return "double";
+    case PType::i8:
+      return "char";
+    case PType::u8:
+      return "uchar";
+    case PType::i16:
+      return "short";
+    case PType::u16:
+      return "ushort";
+    case PType::i32:
+      return "int";
+    case PType::u32:
+      return "uint";
+    case PType::f32:
+      return "float";
+    case PType::f64:
+      return "double";
   }
   return "?";
 }
@@ -171,14 +188,43 @@ class DataReader {
     if (format_ == Format::binary_be)
       for (size_t i = 0; i < s / 2; ++i) std::swap(b[i], b[s - 1 - i]);
     switch (t) {
-      case PType::i8: { int8_t v; std::memcpy(&v, b, 1); return v; }
-      case PType::u8: return b[0];
-      case PType::i16: { int16_t v; std::memcpy(&v, b, 2); return v; }
-      case PType::u16: { uint16_t v; std::memcpy(&v, b, 2); return v; }
-      case PType::i32: { int32_t v; std::memcpy(&v, b, 4); return v; }
-      case PType::u32: { uint32_t v; std::memcpy(&v, b, 4); return v; }
-      case PType::f32: { float v; std::memcpy(&v, b, 4); return v; }
-      case PType::f64: { double v; std::memcpy(&v, b, 8); return v; }
+      case PType::i8: {
+        int8_t v;
+        std::memcpy(&v, b, 1);
+        return v;
+      }
+      case PType::u8:
+        return b[0];
+      case PType::i16: {
+        int16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+      }
+      case PType::u16: {
+        uint16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+      }
+      case PType::i32: {
+        int32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case PType::u32: {
+        uint32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case PType::f32: {
+        float v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case PType::f64: {
+        double v;
+        std::memcpy(&v, b, 8);
+        return v;
+      }
     }
     return 0;
   }
@@ -195,7 +241,8 @@ class DataReader {
     const auto [ptr, ec] = std::from_chars(first, last, v);
     if (ec == std::errc::result_out_of_range) return std::numeric_limits<double>::infinity();  // caught as non-finite
     if (ec != std::errc() || ptr != last)
-      throw PlyError("bad ascii value '" + std::string(reinterpret_cast<const char*>(data_ + start), std::min<size_t>(pos_ - start, 40)) +
+      throw PlyError("bad ascii value '" +
+                     std::string(reinterpret_cast<const char*>(data_ + start), std::min<size_t>(pos_ - start, 40)) +
                      "' at offset " + std::to_string(start));
     return v;
   }
@@ -231,7 +278,8 @@ Header parse_header(const std::vector<uint8_t>& bytes) {
   auto first = next_line();
   if (!first || *first != "ply") throw PlyError("not a PLY file (it does not start with the line 'ply')");
   while (auto line = next_line()) {
-    if (line->size() > 4096) throw PlyError("header line " + std::to_string(line_no) + " is too long (binary data without end_header?)");
+    if (line->size() > 4096)
+      throw PlyError("header line " + std::to_string(line_no) + " is too long (binary data without end_header?)");
     const auto w = split_words(*line);
     const std::string at = "header line " + std::to_string(line_no) + ": ";
     if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
@@ -241,10 +289,14 @@ Header parse_header(const std::vector<uint8_t>& bytes) {
     }
     if (w[0] == "format") {
       if (w.size() != 3) throw PlyError(at + "malformed format line");
-      if (w[1] == "ascii") h.format = Format::ascii;
-      else if (w[1] == "binary_little_endian") h.format = Format::binary_le;
-      else if (w[1] == "binary_big_endian") h.format = Format::binary_be;
-      else throw PlyError(at + "unknown format '" + std::string(w[1]) + "'");
+      if (w[1] == "ascii")
+        h.format = Format::ascii;
+      else if (w[1] == "binary_little_endian")
+        h.format = Format::binary_le;
+      else if (w[1] == "binary_big_endian")
+        h.format = Format::binary_be;
+      else
+        throw PlyError(at + "unknown format '" + std::string(w[1]) + "'");
       if (w[2] != "1.0") throw PlyError(at + "unsupported PLY version '" + std::string(w[2]) + "'");
       have_format = true;
     } else if (w[0] == "element") {
@@ -275,7 +327,8 @@ Header parse_header(const std::vector<uint8_t>& bytes) {
         p.name = std::string(w[2]);
       }
       for (const auto& q : h.elements.back().props)
-        if (q.name == p.name) throw PlyError(at + "duplicate property '" + p.name + "' in element '" + h.elements.back().name + "'");
+        if (q.name == p.name)
+          throw PlyError(at + "duplicate property '" + p.name + "' in element '" + h.elements.back().name + "'");
       h.elements.back().props.push_back(std::move(p));
     } else {
       throw PlyError(at + "unexpected keyword '" + std::string(w[0].substr(0, 40)) + "'");
@@ -323,9 +376,10 @@ GaussianCloud parse_ply(const std::vector<uint8_t>& bytes) {
     if (p.name.rfind("f_rest_", 0) == 0) ++rest_count;
   rest_seen.assign(rest_count, false);
   if (rest_count != 0 && rest_count != 9 && rest_count != 24 && rest_count != 45)
-    throw PlyError("found " + std::to_string(rest_count) + " f_rest_* properties; expected 0, 9, 24 or 45 (SH degree 0..3)");
-  const char* fixed_names[kRest] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
-                                    "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
+    throw PlyError("found " + std::to_string(rest_count) +
+                   " f_rest_* properties; expected 0, 9, 24 or 45 (SH degree 0..3)");
+  const char* fixed_names[kRest] = {"x",       "y",       "z",       "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
+                                    "scale_0", "scale_1", "scale_2", "rot_0",  "rot_1",  "rot_2",  "rot_3"};
   bool fixed_seen[kRest] = {};
   for (size_t i = 0; i < ve.props.size(); ++i) {
     const Property& p = ve.props[i];
@@ -378,10 +432,12 @@ GaussianCloud parse_ply(const std::vector<uint8_t>& bytes) {
   // Bound the vertex count by the data left before allocating anything.
   const uint64_t n = ve.count;
   uint64_t min_bytes_per_vertex = 0;
-  for (const auto& p : ve.props) min_bytes_per_vertex += h.format == Format::ascii ? 1 : type_size(p.is_list ? p.count_type : p.type);
+  for (const auto& p : ve.props)
+    min_bytes_per_vertex += h.format == Format::ascii ? 1 : type_size(p.is_list ? p.count_type : p.type);
   if (min_bytes_per_vertex == 0 || n > r.remaining() / min_bytes_per_vertex)
-    throw PlyError("truncated data: the header declares " + std::to_string(n) + " vertices of " + std::to_string(ve.props.size()) +
-                   " properties but only " + std::to_string(r.remaining()) + " bytes of data follow");
+    throw PlyError("truncated data: the header declares " + std::to_string(n) + " vertices of " +
+                   std::to_string(ve.props.size()) + " properties but only " + std::to_string(r.remaining()) +
+                   " bytes of data follow");
 
   const int degree = rest_count == 0 ? 0 : rest_count == 9 ? 1 : rest_count == 24 ? 2 : 3;
   const int K = sh_coeff_count(degree);
@@ -400,7 +456,8 @@ GaussianCloud parse_ply(const std::vector<uint8_t>& bytes) {
       const double x = r.read(p.type);
       if (slot_of[i] < 0) continue;
       if (!std::isfinite(x) || std::fabs(x) > std::numeric_limits<float>::max())
-        throw PlyError("vertex " + std::to_string(g) + ": property '" + p.name + "' is not a finite float (" + std::to_string(x) + ")");
+        throw PlyError("vertex " + std::to_string(g) + ": property '" + p.name + "' is not a finite float (" +
+                       std::to_string(x) + ")");
       v[slot_of[i]] = x;
     }
     for (int a = 0; a < 3; ++a) cloud.means[g * 3 + a] = static_cast<float>(v[kX + a]);
@@ -431,9 +488,7 @@ GaussianCloud read_ply(const fs::path& path) {
     return parse_ply(bytes);
   } catch (const PlyError& e) {
     throw std::runtime_error(path.string() + ": " + e.what());
-  } catch (const std::bad_alloc&) {
-    throw std::runtime_error(path.string() + ": PLY too large to load");
-  }
+  } catch (const std::bad_alloc&) { throw std::runtime_error(path.string() + ": PLY too large to load"); }
 }
 
 }  // namespace evflow::io

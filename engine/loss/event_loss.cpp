@@ -9,9 +9,15 @@
 namespace evflow {
 
 EventLoss::EventLoss(gpu::Context& ctx, const GpuEvents& events, float weight, EventLossOptions options)
-    : ExposureLossTerm(ctx, "events", weight, 1), events_(events), options_(options), counts_(ctx, 16, "event_counts"),
-      scratch_(ctx, 16, "event_scratch"), partials_(ctx, 16, "event_partials"), sums_(ctx, 16, "event_sums") {
-  if (!(options.theta_pos > 0 && options.theta_neg > 0)) throw std::invalid_argument("event loss: thresholds must be > 0");
+    : ExposureLossTerm(ctx, "events", weight, 1),
+      events_(events),
+      options_(options),
+      counts_(ctx, 16, "event_counts"),
+      scratch_(ctx, 16, "event_scratch"),
+      partials_(ctx, 16, "event_partials"),
+      sums_(ctx, 16, "event_sums") {
+  if (!(options.theta_pos > 0 && options.theta_neg > 0))
+    throw std::invalid_argument("event loss: thresholds must be > 0");
   if (!(options.eps > 0)) throw std::invalid_argument("event loss: eps must be > 0");
   if (!(options.norm_floor_rms > 0)) throw std::invalid_argument("event loss: norm_floor_rms must be > 0");
 }
@@ -23,7 +29,9 @@ std::vector<std::pair<uint32_t, uint32_t>> EventLoss::sample_pairs(uint32_t fram
   return pairs;
 }
 
-void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) { record_pairs(cmd, f, weight, true); }
+void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
+  record_pairs(cmd, f, weight, true);
+}
 
 void EventLoss::record_value(gpu::Commands& cmd, const ExposureFrames& f) { record_pairs(cmd, f, 0.0f, false); }
 
@@ -31,8 +39,9 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
   const uint32_t F = uint32_t(f.u.size());
   if (F < 2) throw std::invalid_argument("event loss: needs at least 2 virtual frames, got " + std::to_string(F));
   if (f.rgb.size() != F || (gradients && f.grad.size() != F))
-    throw std::invalid_argument("event loss: " + std::to_string(F) + " frame times but " + std::to_string(f.rgb.size()) +
-                                " renders and " + std::to_string(f.grad.size()) + " gradient images");
+    throw std::invalid_argument("event loss: " + std::to_string(F) + " frame times but " +
+                                std::to_string(f.rgb.size()) + " renders and " + std::to_string(f.grad.size()) +
+                                " gradient images");
   if (f.width != events_.width() || f.height != events_.height())
     throw std::invalid_argument("event loss: frames are " + std::to_string(f.width) + "x" + std::to_string(f.height) +
                                 " but the events' sensor is " + std::to_string(events_.width()) + "x" +
@@ -42,7 +51,8 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
   const uint64_t hw = uint64_t(f.width) * f.height;
   for (uint32_t i = 0; i < F; ++i)
     if (f.rgb[i]->size() < hw * 12 || (gradients && f.grad[i]->size() < hw * 12))
-      throw std::invalid_argument("event loss: frame " + std::to_string(i) + " buffers hold less than 3 x H x W floats");
+      throw std::invalid_argument("event loss: frame " + std::to_string(i) +
+                                  " buffers hold less than 3 x H x W floats");
   const uint32_t intervals = F - 1;
   const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
   counts_.ensure(uint64_t(intervals) * 2 * hw * 4);
@@ -80,11 +90,13 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     pc.value_accumulate = q > 0 ? 1u : 0u;
     pc.value_index = value_offset();
     pc.pair = q;
-    cmd.dispatch("loss/event_pair", {{shaderio::kEventPairBindCounts, counts_},
-                                     {shaderio::kEventPairBindFrameS, *f.rgb[s]},
-                                     {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
-                                     {shaderio::kEventPairBindScratch, scratch_},
-                                     {shaderio::kEventPairBindPartials, partials_}}, pc, g);
+    cmd.dispatch("loss/event_pair",
+                 {{shaderio::kEventPairBindCounts, counts_},
+                  {shaderio::kEventPairBindFrameS, *f.rgb[s]},
+                  {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
+                  {shaderio::kEventPairBindScratch, scratch_},
+                  {shaderio::kEventPairBindPartials, partials_}},
+                 pc, g);
     shaderio::ReducePC r{};
     r.coeff0 = glm::vec4(1, 0, 0, 0);
     r.coeff1 = glm::vec4(0, 1, 0, 0);
@@ -92,19 +104,21 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     r.n_partials = groups;
     r.dst = 4 * q;
     r.n_out = 3;
-    cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}},
-                 r, gpu::Groups{1, 1, 1});
+    cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}}, r,
+                 gpu::Groups{1, 1, 1});
     if (gradients)
-      cmd.dispatch("loss/event_pair_bwd", {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},
-                                           {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
-                                           {shaderio::kEventPairBwdBindScratch, scratch_},
-                                           {shaderio::kEventPairBwdBindSums, sums_},
-                                           {shaderio::kEventPairBwdBindGradS, *f.grad[s]},
-                                           {shaderio::kEventPairBwdBindGradJ, *f.grad[j]},
-                                           {shaderio::kEventPairBwdBindValues, value_buffer()}}, pc, g);
+      cmd.dispatch("loss/event_pair_bwd",
+                   {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},
+                    {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
+                    {shaderio::kEventPairBwdBindScratch, scratch_},
+                    {shaderio::kEventPairBwdBindSums, sums_},
+                    {shaderio::kEventPairBwdBindGradS, *f.grad[s]},
+                    {shaderio::kEventPairBwdBindGradJ, *f.grad[j]},
+                    {shaderio::kEventPairBwdBindValues, value_buffer()}},
+                   pc, g);
     else
-      cmd.dispatch("loss/event_pair_value", {{shaderio::kEventPairValueBindSums, sums_},
-                                             {shaderio::kEventPairValueBindValues, value_buffer()}},
+      cmd.dispatch("loss/event_pair_value",
+                   {{shaderio::kEventPairValueBindSums, sums_}, {shaderio::kEventPairValueBindValues, value_buffer()}},
                    pc, gpu::Groups{1, 1, 1});
   }
 }

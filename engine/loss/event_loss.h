@@ -27,8 +27,8 @@ namespace evflow {
 
 struct EventLossOptions {
   float theta_pos = 0.2f, theta_neg = 0.2f;  // log units per positive / negative event
-  float eps = 1e-3f;                          // L = log(eps + Y), the event model's eps
-  float norm_floor_rms = 1e-3f;               // per-pixel RMS below which a norm is floored
+  float eps = 1e-3f;                         // L = log(eps + Y), the event model's eps
+  float norm_floor_rms = 1e-3f;              // per-pixel RMS below which a norm is floored
 };
 
 class EventLoss : public ExposureLossTerm {

@@ -15,16 +15,18 @@ void check_image(const gpu::Buffer& b, const ImageShape& s, const std::string& w
   if (s.count() == 0) throw std::invalid_argument(what + ": empty image shape");
   if (s.count() > 0xFFFFFFFFull / 5) throw std::invalid_argument(what + ": image too large");
   if (b.size() < s.count() * 4)
-    throw std::invalid_argument(what + ": buffer " + b.name() + " holds " + std::to_string(b.size()) + " bytes, needs " +
-                                std::to_string(s.count() * 4));
+    throw std::invalid_argument(what + ": buffer " + b.name() + " holds " + std::to_string(b.size()) +
+                                " bytes, needs " + std::to_string(s.count() * 4));
 }
 
 uint32_t groups_for(const ImageShape& s) { return gpu::Commands::div_up(s.count(), kLossGroupSize); }
 
 // One reduction of vec4 partials into affine outputs.
-void record_reduce(gpu::Commands& cmd, const gpu::Buffer& partials, uint32_t n_partials, const SsimPipeline::Outputs& o) {
+void record_reduce(gpu::Commands& cmd, const gpu::Buffer& partials, uint32_t n_partials,
+                   const SsimPipeline::Outputs& o) {
   if (o.count == 0 || o.count > shaderio::kReduceMaxOutputs) throw std::invalid_argument("loss reduce: 1..4 outputs");
-  if (o.values->size() < (uint64_t(o.first) + o.count) * 4) throw std::invalid_argument("loss reduce: value slot out of range");
+  if (o.values->size() < (uint64_t(o.first) + o.count) * 4)
+    throw std::invalid_argument("loss reduce: value slot out of range");
   shaderio::ReducePC pc{};
   glm::vec4* coeff[4] = {&pc.coeff0, &pc.coeff1, &pc.coeff2, &pc.coeff3};
   for (uint32_t j = 0; j < 4; ++j) {
@@ -35,8 +37,8 @@ void record_reduce(gpu::Commands& cmd, const gpu::Buffer& partials, uint32_t n_p
   pc.dst = o.first;
   pc.n_out = o.count;
   pc.log_mask = o.log_mask;
-  cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials}, {shaderio::kReduceBindOut, *o.values}},
-               pc, gpu::Groups{1, 1, 1});
+  cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials}, {shaderio::kReduceBindOut, *o.values}}, pc,
+               gpu::Groups{1, 1, 1});
 }
 
 }  // namespace
@@ -75,15 +77,24 @@ void SsimPipeline::record(gpu::Commands& cmd, const ImageShape& shape, const gpu
   pc.ssim_grad_scale = ssim_grad_scale;
   pc.pixel_grad_scale = pixel_grad_scale;
   const gpu::Groups g = cmd.linear_groups(h_groups), gv = cmd.linear_groups(v_groups);
-  cmd.dispatch("loss/ssim_h", {{shaderio::kSsimHBindA, a}, {shaderio::kSsimHBindB, b}, {shaderio::kSsimHBindH, h_}},
-               pc, g);
-  cmd.dispatch("loss/ssim_v", {{shaderio::kSsimVBindA, a}, {shaderio::kSsimVBindB, b}, {shaderio::kSsimVBindH, h_},
-                               {shaderio::kSsimVBindD, d_}, {shaderio::kSsimVBindPartials, partials_}}, pc, gv);
+  cmd.dispatch("loss/ssim_h", {{shaderio::kSsimHBindA, a}, {shaderio::kSsimHBindB, b}, {shaderio::kSsimHBindH, h_}}, pc,
+               g);
+  cmd.dispatch("loss/ssim_v",
+               {{shaderio::kSsimVBindA, a},
+                {shaderio::kSsimVBindB, b},
+                {shaderio::kSsimVBindH, h_},
+                {shaderio::kSsimVBindD, d_},
+                {shaderio::kSsimVBindPartials, partials_}},
+               pc, gv);
   record_reduce(cmd, partials_, v_groups, out);
   if (grad) {
     cmd.dispatch("loss/ssim_bwd_h", {{shaderio::kSsimBwdHBindD, d_}, {shaderio::kSsimBwdHBindH, h_}}, pc, g);
-    cmd.dispatch("loss/ssim_bwd_v", {{shaderio::kSsimBwdVBindA, a}, {shaderio::kSsimBwdVBindB, b},
-                                     {shaderio::kSsimBwdVBindH, h_}, {shaderio::kSsimBwdVBindGrad, *grad}}, pc, gv);
+    cmd.dispatch("loss/ssim_bwd_v",
+                 {{shaderio::kSsimBwdVBindA, a},
+                  {shaderio::kSsimBwdVBindB, b},
+                  {shaderio::kSsimBwdVBindH, h_},
+                  {shaderio::kSsimBwdVBindGrad, *grad}},
+                 pc, gv);
   }
 }
 
@@ -103,8 +114,11 @@ void L1Loss::record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buff
   pc.count = static_cast<uint32_t>(n);
   pc.flags = shaderio::kLossWriteGrad | (accumulate ? shaderio::kLossAccumulate : 0u);
   pc.grad_scale = static_cast<float>(double(weight) / double(n));
-  cmd.dispatch("loss/pixel", {{shaderio::kPixelLossBindA, pred}, {shaderio::kPixelLossBindB, target},
-                              {shaderio::kPixelLossBindGrad, grad_out}, {shaderio::kPixelLossBindPartials, partials_}},
+  cmd.dispatch("loss/pixel",
+               {{shaderio::kPixelLossBindA, pred},
+                {shaderio::kPixelLossBindB, target},
+                {shaderio::kPixelLossBindGrad, grad_out},
+                {shaderio::kPixelLossBindPartials, partials_}},
                pc, cmd.linear_groups(groups));
   SsimPipeline::Outputs o;
   o.values = &value_buffer();
@@ -127,7 +141,7 @@ void SsimLoss::record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Bu
   o.count = 2;
   o.coeff[0][1] = static_cast<float>(-inv_n);  // 1 - SSIM
   o.offset[0] = 1.0f;
-  o.coeff[1][1] = static_cast<float>(inv_n);   // SSIM
+  o.coeff[1][1] = static_cast<float>(inv_n);  // SSIM
   pipe_.record(cmd, shape_, pred, target, &grad_out, static_cast<float>(-double(weight) * inv_n), 0.0f, accumulate,
                false, o);
 }

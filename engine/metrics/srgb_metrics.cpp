@@ -19,8 +19,8 @@ uint8_t to_byte(float v) {
 
 Image8 make(uint32_t w, uint32_t h, uint32_t c, size_t n) {
   if (size_t(w) * h * c != n)
-    throw std::invalid_argument("metrics: " + std::to_string(n) + " values for a " + std::to_string(w) + "x" + std::to_string(h) +
-                                "x" + std::to_string(c) + " image");
+    throw std::invalid_argument("metrics: " + std::to_string(n) + " values for a " + std::to_string(w) + "x" +
+                                std::to_string(h) + "x" + std::to_string(c) + " image");
   Image8 im;
   im.width = w, im.height = h, im.channels = c;
   im.data.resize(n);
@@ -29,9 +29,10 @@ Image8 make(uint32_t w, uint32_t h, uint32_t c, size_t n) {
 
 void check_pair(const Image8& a, const Image8& b) {
   if (a.width != b.width || a.height != b.height || a.channels != b.channels || a.data.empty())
-    throw std::invalid_argument("metrics: the images differ in size (" + std::to_string(a.width) + "x" + std::to_string(a.height) +
-                                "x" + std::to_string(a.channels) + " vs " + std::to_string(b.width) + "x" +
-                                std::to_string(b.height) + "x" + std::to_string(b.channels) + ") or are empty");
+    throw std::invalid_argument("metrics: the images differ in size (" + std::to_string(a.width) + "x" +
+                                std::to_string(a.height) + "x" + std::to_string(a.channels) + " vs " +
+                                std::to_string(b.width) + "x" + std::to_string(b.height) + "x" +
+                                std::to_string(b.channels) + ") or are empty");
 }
 
 constexpr int kRadius = 5;  // 11 taps
@@ -117,7 +118,8 @@ double ssim(const Image8& a, const Image8& b) {
                                 std::to_string(a.height));
   const size_t plane = size_t(a.width) * a.height;
   double sum = 0;
-  for (uint32_t c = 0; c < a.channels; ++c) sum += ssim_plane(a.data.data() + c * plane, b.data.data() + c * plane, a.width, a.height);
+  for (uint32_t c = 0; c < a.channels; ++c)
+    sum += ssim_plane(a.data.data() + c * plane, b.data.data() + c * plane, a.width, a.height);
   return sum / a.channels;
 }
 

@@ -24,13 +24,15 @@ void check_floats(const gpu::Buffer* b, uint64_t count, const std::string& what)
 Adam::Adam(gpu::Context& ctx, AdamOptions opts) : ctx_(ctx), opts_(opts) {}
 
 size_t Adam::add_group(const AdamGroup& g) {
-  if (g.row_width == 0 || g.count % g.row_width) throw std::invalid_argument("adam: group " + g.name + ": count not a multiple of row_width");
+  if (g.row_width == 0 || g.count % g.row_width)
+    throw std::invalid_argument("adam: group " + g.name + ": count not a multiple of row_width");
   for (auto& s : groups_)
     if (s->desc.name == g.name) throw std::invalid_argument("adam: duplicate group " + g.name);
   auto s = std::make_unique<State>();
   s->desc = g;
   const uint64_t bytes = std::max<uint64_t>(uint64_t(g.count) * 4, 16);
-  for (int k = 0; k < 4; ++k) s->buf[k] = gpu::Buffer(ctx_, k < 2 ? bytes : 16, "adam_" + g.name + (k % 2 ? "_v" : "_m"));
+  for (int k = 0; k < 4; ++k)
+    s->buf[k] = gpu::Buffer(ctx_, k < 2 ? bytes : 16, "adam_" + g.name + (k % 2 ? "_v" : "_m"));
   s->m = &s->buf[0];
   s->v = &s->buf[1];
   groups_.push_back(std::move(s));
@@ -91,9 +93,12 @@ void Adam::step_group(gpu::Commands& cmd, size_t i) {
   pc.one_minus_beta2 = static_cast<float>(1.0 - opts_.beta2);
   pc.step_size = static_cast<float>(double(g.lr) / bc1);
   pc.inv_sqrt_bc2 = static_cast<float>(1.0 / std::sqrt(bc2));
-  cmd.dispatch("optim/adam", {{shaderio::kAdamBindParam, *g.param}, {shaderio::kAdamBindGrad, *g.grad},
-                              {shaderio::kAdamBindM, *s.m}, {shaderio::kAdamBindV, *s.v}}, pc,
-               cmd.linear_groups(gpu::Commands::div_up(g.count, kOptimGroupSize)));
+  cmd.dispatch("optim/adam",
+               {{shaderio::kAdamBindParam, *g.param},
+                {shaderio::kAdamBindGrad, *g.grad},
+                {shaderio::kAdamBindM, *s.m},
+                {shaderio::kAdamBindV, *s.v}},
+               pc, cmd.linear_groups(gpu::Commands::div_up(g.count, kOptimGroupSize)));
 }
 
 void Adam::reset_rows(gpu::Commands& cmd, size_t i, const gpu::Buffer& rows, uint32_t n) {
@@ -102,9 +107,10 @@ void Adam::reset_rows(gpu::Commands& cmd, size_t i, const gpu::Buffer& rows, uin
   if (n == 0) return;
   check_floats(&rows, n, s.desc.name + " reset rows");
   shaderio::RowsPC pc{n, s.desc.row_width, 1u, s.desc.count / s.desc.row_width};
-  cmd.dispatch("optim/reset", {{shaderio::kOptimResetBindM, *s.m}, {shaderio::kOptimResetBindV, *s.v},
-                               {shaderio::kOptimResetBindSelect, rows}}, pc,
-               cmd.linear_groups(gpu::Commands::div_up(uint64_t(n) * s.desc.row_width, kOptimGroupSize)));
+  cmd.dispatch(
+      "optim/reset",
+      {{shaderio::kOptimResetBindM, *s.m}, {shaderio::kOptimResetBindV, *s.v}, {shaderio::kOptimResetBindSelect, rows}},
+      pc, cmd.linear_groups(gpu::Commands::div_up(uint64_t(n) * s.desc.row_width, kOptimGroupSize)));
 }
 
 void Adam::reset_masked(gpu::Commands& cmd, size_t i, const gpu::Buffer& mask) {
@@ -114,9 +120,10 @@ void Adam::reset_masked(gpu::Commands& cmd, size_t i, const gpu::Buffer& mask) {
   if (rows == 0) return;
   check_floats(&mask, rows, s.desc.name + " reset mask");
   shaderio::RowsPC pc{rows, s.desc.row_width, 0u, rows};
-  cmd.dispatch("optim/reset", {{shaderio::kOptimResetBindM, *s.m}, {shaderio::kOptimResetBindV, *s.v},
-                               {shaderio::kOptimResetBindSelect, mask}}, pc,
-               cmd.linear_groups(gpu::Commands::div_up(s.desc.count, kOptimGroupSize)));
+  cmd.dispatch(
+      "optim/reset",
+      {{shaderio::kOptimResetBindM, *s.m}, {shaderio::kOptimResetBindV, *s.v}, {shaderio::kOptimResetBindSelect, mask}},
+      pc, cmd.linear_groups(gpu::Commands::div_up(s.desc.count, kOptimGroupSize)));
 }
 
 void Adam::gather_rows(gpu::Commands& cmd, const gpu::Buffer& src, const gpu::Buffer& dst, const gpu::Buffer& index,
@@ -125,9 +132,11 @@ void Adam::gather_rows(gpu::Commands& cmd, const gpu::Buffer& src, const gpu::Bu
   check_floats(&dst, uint64_t(rows) * width, "gather dst");
   check_floats(&index, rows, "gather index");
   shaderio::RowsPC pc{rows, width, 0u, 0u};
-  cmd.dispatch("optim/gather", {{shaderio::kOptimGatherBindSrc, src}, {shaderio::kOptimGatherBindDst, dst},
-                                {shaderio::kOptimGatherBindIndex, index}}, pc,
-               cmd.linear_groups(gpu::Commands::div_up(uint64_t(rows) * width, kOptimGroupSize)));
+  cmd.dispatch("optim/gather",
+               {{shaderio::kOptimGatherBindSrc, src},
+                {shaderio::kOptimGatherBindDst, dst},
+                {shaderio::kOptimGatherBindIndex, index}},
+               pc, cmd.linear_groups(gpu::Commands::div_up(uint64_t(rows) * width, kOptimGroupSize)));
 }
 
 void Adam::gather(gpu::Commands& cmd, size_t i, const gpu::Buffer& index, uint32_t new_rows) {

@@ -25,7 +25,7 @@ struct AdamGroup {
   const gpu::Buffer* grad = nullptr;   // read; at least count floats
   uint32_t count = 0;                  // floats
   float lr = 1e-3f;
-  uint32_t row_width = 1;              // floats per row; count must be a multiple
+  uint32_t row_width = 1;  // floats per row; count must be a multiple
 };
 
 struct AdamOptions {

@@ -6,7 +6,8 @@ namespace evflow {
 
 using shaderio::kScanBlock;
 
-void PrefixSum::record(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in, uint32_t n_out) {
+void PrefixSum::record(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in,
+                       uint32_t n_out) {
   if (n_out == 0) return;
   record_level(cmd, in, out, n_in, n_out, 0);
 }
@@ -18,12 +19,14 @@ void PrefixSum::record_level(gpu::Commands& cmd, const gpu::Buffer& in, const gp
   sums_[level].ensure(uint64_t(blocks + 1) * 4);
   const gpu::Buffer& sums = sums_[level];
   shaderio::ScanPC pc{n_out, n_in, 0, 0};
-  cmd.dispatch("scan/scan_block", {{shaderio::kScanBlockBindIn, in}, {shaderio::kScanBlockBindOut, out},
-                                   {shaderio::kScanBlockBindSums, sums}}, pc, cmd.linear_groups(blocks));
+  cmd.dispatch(
+      "scan/scan_block",
+      {{shaderio::kScanBlockBindIn, in}, {shaderio::kScanBlockBindOut, out}, {shaderio::kScanBlockBindSums, sums}}, pc,
+      cmd.linear_groups(blocks));
   if (blocks > 1) {
     record_level(cmd, sums, sums, blocks, blocks, level + 1);
-    cmd.dispatch("scan/scan_add", {{shaderio::kScanAddBindValues, out}, {shaderio::kScanAddBindOffsets, sums}},
-                 pc, cmd.linear_groups(blocks));
+    cmd.dispatch("scan/scan_add", {{shaderio::kScanAddBindValues, out}, {shaderio::kScanAddBindOffsets, sums}}, pc,
+                 cmd.linear_groups(blocks));
   }
 }
 

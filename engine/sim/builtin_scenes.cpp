@@ -18,9 +18,9 @@ Scene make_room(const std::string& source, std::vector<Texture> textures) {
     s.materials.push_back(Material{name, f, tex});
     return uint32_t(s.materials.size() - 1);
   };
-  const uint32_t m_text = mat("poster", 0), m_floor = mat("floor", 1), m_brick = mat("brick", 2), m_noise = mat("noise", 3),
-                 m_grating = mat("grating", 4), m_dark = mat("dark", 5), m_sign = mat("sign", 6),
-                 m_white = mat("white", 0, {1.1f, 1.1f, 1.1f, 1});
+  const uint32_t m_text = mat("poster", 0), m_floor = mat("floor", 1), m_brick = mat("brick", 2),
+                 m_noise = mat("noise", 3), m_grating = mat("grating", 4), m_dark = mat("dark", 5),
+                 m_sign = mat("sign", 6), m_white = mat("white", 0, {1.1f, 1.1f, 1.1f, 1});
   // Room: floor, back wall, left (dark) and right (brick) walls; open top and front.
   s.add_quad({-4, -1, 3}, {4, -1, 3}, {4, -1, -4}, {-4, -1, -4}, m_floor, 4, 3.5f);
   s.add_quad({-4, -1, -4}, {4, -1, -4}, {4, 3, -4}, {-4, 3, -4}, m_text, 2, 1);
@@ -46,8 +46,9 @@ Scene make_room(const std::string& source, std::vector<Texture> textures) {
 }  // namespace
 
 Scene make_default_scene() {
-  return make_room("default", {text_texture(1, 0.85, 0.03, {1.0, 0.97, 0.9}), checker_texture(), brick_texture(),
-                               noise_texture(3), grating_texture(), dark_texture(), text_texture(2, 0.04, 0.9, {1.0, 0.85, 0.5})});
+  return make_room("default",
+                   {text_texture(1, 0.85, 0.03, {1.0, 0.97, 0.9}), checker_texture(), brick_texture(), noise_texture(3),
+                    grating_texture(), dark_texture(), text_texture(2, 0.04, 0.9, {1.0, 0.85, 0.5})});
 }
 
 std::vector<std::string> builtin_scene_names() { return {"default", "gallery", "workshop"}; }
@@ -56,12 +57,13 @@ Scene make_builtin_scene(const std::string& name) {
   if (name == "default") return make_default_scene();
   // Same room, other surfaces: fine print everywhere and bright noise (high-frequency texture).
   if (name == "gallery")
-    return make_room("gallery", {text_texture(11, 0.9, 0.05, {0.95, 0.95, 1.0}), noise_texture(17), text_texture(12, 0.1, 0.95, {0.7, 1.0, 0.8}),
-                                 brick_texture(), text_texture(13, 0.8, 0.1, {1.0, 0.9, 0.8}), noise_texture(23), grating_texture()});
+    return make_room("gallery", {text_texture(11, 0.9, 0.05, {0.95, 0.95, 1.0}), noise_texture(17),
+                                 text_texture(12, 0.1, 0.95, {0.7, 1.0, 0.8}), brick_texture(),
+                                 text_texture(13, 0.8, 0.1, {1.0, 0.9, 0.8}), noise_texture(23), grating_texture()});
   // Same room, other surfaces: large smooth shapes, coarse bricks and gratings, dark corners.
   if (name == "workshop")
-    return make_room("workshop", {brick_texture(), grating_texture(), checker_texture(), dark_texture(), checker_texture(),
-                                  brick_texture(), noise_texture(31)});
+    return make_room("workshop", {brick_texture(), grating_texture(), checker_texture(), dark_texture(),
+                                  checker_texture(), brick_texture(), noise_texture(31)});
   throw std::invalid_argument("unknown built-in scene '" + name + "' (default, gallery, workshop)");
 }
 

@@ -37,15 +37,35 @@ Mat4 node_matrix(const tinygltf::Node& n) {
     return m;
   }
   Mat4 T = identity(), R = identity(), S = identity();
-  if (n.translation.size() == 3) { T[12] = n.translation[0]; T[13] = n.translation[1]; T[14] = n.translation[2]; }
+  if (n.translation.size() == 3) {
+    T[12] = n.translation[0];
+    T[13] = n.translation[1];
+    T[14] = n.translation[2];
+  }
   if (n.rotation.size() == 4) {
     const double x = n.rotation[0], y = n.rotation[1], z = n.rotation[2], w = n.rotation[3];
-    R = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w), 0,
-         2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w), 0,
-         2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y), 0,
-         0, 0, 0, 1};
+    R = {1 - 2 * (y * y + z * z),
+         2 * (x * y + z * w),
+         2 * (x * z - y * w),
+         0,
+         2 * (x * y - z * w),
+         1 - 2 * (x * x + z * z),
+         2 * (y * z + x * w),
+         0,
+         2 * (x * z + y * w),
+         2 * (y * z - x * w),
+         1 - 2 * (x * x + y * y),
+         0,
+         0,
+         0,
+         0,
+         1};
   }
-  if (n.scale.size() == 3) { S[0] = n.scale[0]; S[5] = n.scale[1]; S[10] = n.scale[2]; }
+  if (n.scale.size() == 3) {
+    S[0] = n.scale[0];
+    S[5] = n.scale[1];
+    S[10] = n.scale[2];
+  }
   return mul(T, mul(R, S));
 }
 
@@ -61,7 +81,8 @@ struct Reader {
     const auto& a = m.accessors[index];
     if (a.sparse.isSparse) fail(std::string(what) + ": sparse accessors are not supported");
     const int nc = tinygltf::GetNumComponentsInType(a.type);
-    if (nc != comps) fail(std::string(what) + ": expected " + std::to_string(comps) + " components, got " + std::to_string(nc));
+    if (nc != comps)
+      fail(std::string(what) + ": expected " + std::to_string(comps) + " components, got " + std::to_string(nc));
     std::vector<float> out(a.count * comps, 0.f);
     if (a.bufferView < 0) return out;  // all zeros (glTF: no bufferView = zeros)
     const uint8_t* base = data(a, what);
@@ -72,12 +93,29 @@ struct Reader {
         const uint8_t* p = base + i * stride + c * csize;
         float v;
         switch (a.componentType) {
-          case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, p, 4); break;
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = *p / 255.f; break;
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t u; std::memcpy(&u, p, 2); v = u / 65535.f; break; }
-          case TINYGLTF_COMPONENT_TYPE_BYTE: v = std::max(int8_t(*p) / 127.f, -1.f); break;
-          case TINYGLTF_COMPONENT_TYPE_SHORT: { int16_t s; std::memcpy(&s, p, 2); v = std::max(s / 32767.f, -1.f); break; }
-          default: fail(std::string(what) + ": unsupported component type " + std::to_string(a.componentType));
+          case TINYGLTF_COMPONENT_TYPE_FLOAT:
+            std::memcpy(&v, p, 4);
+            break;
+          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+            v = *p / 255.f;
+            break;
+          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+            uint16_t u;
+            std::memcpy(&u, p, 2);
+            v = u / 65535.f;
+            break;
+          }
+          case TINYGLTF_COMPONENT_TYPE_BYTE:
+            v = std::max(int8_t(*p) / 127.f, -1.f);
+            break;
+          case TINYGLTF_COMPONENT_TYPE_SHORT: {
+            int16_t s;
+            std::memcpy(&s, p, 2);
+            v = std::max(s / 32767.f, -1.f);
+            break;
+          }
+          default:
+            fail(std::string(what) + ": unsupported component type " + std::to_string(a.componentType));
         }
         out[i * comps + c] = v;
       }
@@ -96,10 +134,20 @@ struct Reader {
     for (size_t i = 0; i < a.count; ++i) {
       const uint8_t* p = base + i * stride;
       switch (a.componentType) {
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: out[i] = *p; break;
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t u; std::memcpy(&u, p, 2); out[i] = u; break; }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: std::memcpy(&out[i], p, 4); break;
-        default: fail("indices: unsupported component type " + std::to_string(a.componentType));
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+          out[i] = *p;
+          break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+          uint16_t u;
+          std::memcpy(&u, p, 2);
+          out[i] = u;
+          break;
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+          std::memcpy(&out[i], p, 4);
+          break;
+        default:
+          fail("indices: unsupported component type " + std::to_string(a.componentType));
       }
     }
     return out;
@@ -142,10 +190,9 @@ tinygltf::Model read_model(const fs::path& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   bool ok = false;
   try {
-    ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model, &err, &warn, file) : loader.LoadASCIIFromFile(&model, &err, &warn, file);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(file + ": malformed glTF: " + e.what());
-  }
+    ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model, &err, &warn, file)
+                       : loader.LoadASCIIFromFile(&model, &err, &warn, file);
+  } catch (const std::exception& e) { throw std::runtime_error(file + ": malformed glTF: " + e.what()); }
   if (!ok) throw std::runtime_error(file + ": cannot read glTF: " + (err.empty() ? std::string("unknown error") : err));
   return model;
 }
@@ -172,7 +219,10 @@ Texture decode_texture(const Reader& rd, int ti) {
       const size_t o = (i * comp + c) * bytes;
       ch[c] = bytes == 2 ? img.image[o + 1] : img.image[o];  // little-endian 16-bit: high byte
     }
-    if (comp <= 2) { ch[3] = comp == 2 ? ch[1] : 255; ch[1] = ch[2] = ch[0]; }
+    if (comp <= 2) {
+      ch[3] = comp == 2 ? ch[1] : 255;
+      ch[1] = ch[2] = ch[0];
+    }
     tx.rgba[i] = ch[0] | ch[1] << 8 | ch[2] << 16 | ch[3] << 24;
   }
   if (t.sampler >= 0 && t.sampler < int(model.samplers.size())) {
@@ -204,7 +254,8 @@ struct SceneBuilder {
       Material mt;
       mt.name = gm.name;
       const auto& pbr = gm.pbrMetallicRoughness;
-      for (int c = 0; c < 4 && c < int(pbr.baseColorFactor.size()); ++c) mt.base_color[c] = float(pbr.baseColorFactor[c]);
+      for (int c = 0; c < 4 && c < int(pbr.baseColorFactor.size()); ++c)
+        mt.base_color[c] = float(pbr.baseColorFactor[c]);
       if (pbr.baseColorTexture.index >= 0) {
         if (pbr.baseColorTexture.texCoord != 0) rd.fail("material '" + gm.name + "': only TEXCOORD_0 is supported");
         mt.texture = texture(pbr.baseColorTexture.index);
@@ -227,14 +278,20 @@ struct SceneBuilder {
       if (uv.size() != nv * 2) rd.fail("TEXCOORD_0 count differs from POSITION count");
     }
     std::vector<uint32_t> idx;
-    if (prim.indices >= 0) idx = rd.indices(prim.indices);
-    else { idx.resize(nv); for (size_t i = 0; i < nv; ++i) idx[i] = uint32_t(i); }
-    if (idx.size() % 3) rd.fail("triangle primitive with " + std::to_string(idx.size()) + " indices (not a multiple of 3)");
+    if (prim.indices >= 0)
+      idx = rd.indices(prim.indices);
+    else {
+      idx.resize(nv);
+      for (size_t i = 0; i < nv; ++i) idx[i] = uint32_t(i);
+    }
+    if (idx.size() % 3)
+      rd.fail("triangle primitive with " + std::to_string(idx.size()) + " indices (not a multiple of 3)");
     uint32_t mat = default_material;
     if (prim.material >= 0) {
       if (prim.material >= int(s.materials.size())) rd.fail("material index out of range");
       mat = uint32_t(prim.material);
-    } else used_default = true;
+    } else
+      used_default = true;
     for (size_t k = 0; k < idx.size(); k += 3) {
       for (int j = 0; j < 3; ++j) {
         const uint32_t v = idx[k + j];
@@ -283,8 +340,9 @@ struct SceneBuilder {
 // glTF writing
 
 int gl_wrap(uint32_t w) {
-  return w == Texture::Clamp ? TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE
-                             : w == Texture::Mirror ? TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT : TINYGLTF_TEXTURE_WRAP_REPEAT;
+  return w == Texture::Clamp    ? TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE
+         : w == Texture::Mirror ? TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT
+                                : TINYGLTF_TEXTURE_WRAP_REPEAT;
 }
 
 // One PNG image, sampler and texture per scene texture (same indices).
@@ -347,7 +405,10 @@ int add_float_accessor(tinygltf::Model& m, tinygltf::Buffer& buf, const std::vec
   a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
   a.count = nv;
   a.type = type;
-  if (lo) { a.minValues = {(*lo)[0], (*lo)[1], (*lo)[2]}; a.maxValues = {(*hi)[0], (*hi)[1], (*hi)[2]}; }
+  if (lo) {
+    a.minValues = {(*lo)[0], (*lo)[1], (*lo)[2]};
+    a.maxValues = {(*hi)[0], (*hi)[1], (*hi)[2]};
+  }
   m.accessors.push_back(a);
   return int(m.accessors.size()) - 1;
 }
@@ -365,7 +426,10 @@ tinygltf::Mesh add_geometry(tinygltf::Model& m, tinygltf::Buffer& buf, const Sce
     if (pos.empty()) continue;
     const size_t nv = pos.size() / 3;
     std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < pos.size(); ++i) { lo[i % 3] = std::min(lo[i % 3], double(pos[i])); hi[i % 3] = std::max(hi[i % 3], double(pos[i])); }
+    for (size_t i = 0; i < pos.size(); ++i) {
+      lo[i % 3] = std::min(lo[i % 3], double(pos[i]));
+      hi[i % 3] = std::max(hi[i % 3], double(pos[i]));
+    }
     tinygltf::Primitive prim;
     prim.mode = TINYGLTF_MODE_TRIANGLES;
     prim.attributes["POSITION"] = add_float_accessor(m, buf, pos, nv, TINYGLTF_TYPE_VEC3, &lo, &hi);

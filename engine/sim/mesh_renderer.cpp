@@ -72,7 +72,8 @@ MeshRenderer::MeshRenderer(gpu::Context& ctx, const Scene& scene, const ShadingP
     mats[i].factor = glm::vec4(m.base_color[0], m.base_color[1], m.base_color[2], m.base_color[3]);
     if (m.texture >= 0) {
       const auto& t = scene.textures[m.texture];
-      mats[i].tex = glm::uvec4(tex_offset[m.texture], t.width, t.height, t.wrap_s | (t.wrap_t << 2) | (tex_levels[m.texture] << 8));
+      mats[i].tex = glm::uvec4(tex_offset[m.texture], t.width, t.height,
+                               t.wrap_s | (t.wrap_t << 2) | (tex_levels[m.texture] << 8));
     } else {
       mats[i].tex = glm::uvec4(kSimNoTexture, 1, 1, 1u << 8);
     }
@@ -113,8 +114,11 @@ Frame MeshRenderer::render(const Camera& c) {
   pc.dims = glm::uvec4(W, H, n_tris_, 0);
   pc.misc = glm::vec4(float(std::max(c.near_plane, 1e-6)), float(shading_.texture_samples >= 4 ? 4 : 1), 0.f, 0.f);
 
-  cmd_.dispatch("sim/tri_setup", {{kSimTriSetupBindTris, tris_}, {kSimTriSetupBindCamVerts, cam_},
-                                  {kSimTriSetupBindBoxes, boxes_}, {kSimTriSetupBindCounts, counts_}},
+  cmd_.dispatch("sim/tri_setup",
+                {{kSimTriSetupBindTris, tris_},
+                 {kSimTriSetupBindCamVerts, cam_},
+                 {kSimTriSetupBindBoxes, boxes_},
+                 {kSimTriSetupBindCounts, counts_}},
                 pc, cmd_.linear_groups(gpu::Commands::div_up(n_tris_, kSimSetupGroupSize)));
   scan_.record(cmd_, counts_, offsets_, n_tris_, n_tris_ + 1);
   cmd_.fill(depth_, 0xFFFFFFFFu, 0, P * 4);
@@ -122,18 +126,30 @@ Frame MeshRenderer::render(const Camera& c) {
   cmd_.submit();
   const uint32_t items = offsets_.read_one<uint32_t>(n_tris_);
   if (items > 0) {
-    cmd_.dispatch("sim/raster", {{kSimRasterBindCamVerts, cam_}, {kSimRasterBindBoxes, boxes_},
-                                 {kSimRasterBindOffsets, offsets_}, {kSimRasterBindDepth, depth_},
-                                 {kSimRasterBindIds, ids_}}, pc, cmd_.linear_groups(items));
+    cmd_.dispatch("sim/raster",
+                  {{kSimRasterBindCamVerts, cam_},
+                   {kSimRasterBindBoxes, boxes_},
+                   {kSimRasterBindOffsets, offsets_},
+                   {kSimRasterBindDepth, depth_},
+                   {kSimRasterBindIds, ids_}},
+                  pc, cmd_.linear_groups(items));
     pc.dims.w = 1;
-    cmd_.dispatch("sim/raster", {{kSimRasterBindCamVerts, cam_}, {kSimRasterBindBoxes, boxes_},
-                                 {kSimRasterBindOffsets, offsets_}, {kSimRasterBindDepth, depth_},
-                                 {kSimRasterBindIds, ids_}}, pc, cmd_.linear_groups(items));
+    cmd_.dispatch("sim/raster",
+                  {{kSimRasterBindCamVerts, cam_},
+                   {kSimRasterBindBoxes, boxes_},
+                   {kSimRasterBindOffsets, offsets_},
+                   {kSimRasterBindDepth, depth_},
+                   {kSimRasterBindIds, ids_}},
+                  pc, cmd_.linear_groups(items));
   }
-  cmd_.dispatch("sim/shade", {{kSimShadeBindTris, tris_}, {kSimShadeBindCamVerts, cam_}, {kSimShadeBindIds, ids_},
-                              {kSimShadeBindMaterials, materials_}, {kSimShadeBindTexels, texels_},
-                              {kSimShadeBindOut, image_}}, pc,
-                cmd_.linear_groups(gpu::Commands::div_up(P, kSimShadeGroupSize)));
+  cmd_.dispatch("sim/shade",
+                {{kSimShadeBindTris, tris_},
+                 {kSimShadeBindCamVerts, cam_},
+                 {kSimShadeBindIds, ids_},
+                 {kSimShadeBindMaterials, materials_},
+                 {kSimShadeBindTexels, texels_},
+                 {kSimShadeBindOut, image_}},
+                pc, cmd_.linear_groups(gpu::Commands::div_up(P, kSimShadeGroupSize)));
   cmd_.submit();
   std::vector<float> px = image_.read<float>(P * 4);
   Frame f;

@@ -25,10 +25,10 @@ struct Material {
 
 // Triangles in world space (glTF convention: y up, right-handed; units arbitrary).
 struct Scene {
-  std::string source;                 // file name or "default"
-  std::vector<float> positions;       // [T][3][3]
-  std::vector<float> uvs;             // [T][3][2]
-  std::vector<uint32_t> material;     // [T]
+  std::string source;              // file name or "default"
+  std::vector<float> positions;    // [T][3][3]
+  std::vector<float> uvs;          // [T][3][2]
+  std::vector<uint32_t> material;  // [T]
   std::vector<Material> materials;
   std::vector<Texture> textures;
   // Optional camera-rig hint (the default scene sets it): cameras circle `view_target` at

@@ -51,16 +51,14 @@ io::Dataset to_dataset(const SimResult& res) {
   d.far = res.far;
   nlohmann::json sim = res.params.to_json();
   sim["scene"] = res.scene_source;
-  sim["statistics"] = {{"seconds", res.stats.seconds},
-                       {"events", res.stats.events},
-                       {"subframes", res.stats.subframes},
-                       {"mean_blur_px", res.stats.mean_blur_px},
-                       {"max_step_px", res.stats.max_step_px},
-                       {"psnr_blurry_db", res.stats.psnr_blurry},
-                       {"psnr_edi_db", res.stats.psnr_edi},
-                       {"ssim_blurry", res.stats.ssim_blurry},
+  sim["statistics"] = {{"seconds", res.stats.seconds},         {"events", res.stats.events},
+                       {"subframes", res.stats.subframes},     {"mean_blur_px", res.stats.mean_blur_px},
+                       {"max_step_px", res.stats.max_step_px}, {"psnr_blurry_db", res.stats.psnr_blurry},
+                       {"psnr_edi_db", res.stats.psnr_edi},    {"ssim_blurry", res.stats.ssim_blurry},
                        {"ssim_edi", res.stats.ssim_edi}};
-  sim["ground_truth"] = {{"trajectories", "gt/trajectories.json"}, {"depth", "gt/depth/<view>.npy"}, {"flow_mid", "gt/flow/<view>_mid.npy"}};
+  sim["ground_truth"] = {{"trajectories", "gt/trajectories.json"},
+                         {"depth", "gt/depth/<view>.npy"},
+                         {"flow_mid", "gt/flow/<view>_mid.npy"}};
   d.manifest["simulator"] = sim;
   return d;
 }
@@ -74,7 +72,8 @@ void write_simulation(const SimResult& res, const fs::path& dir) {
   nlohmann::json traj = nlohmann::json::array();
   for (auto& r : res.train) {
     nlohmann::json sub = nlohmann::json::array();
-    for (size_t i = 0; i < r.times.size(); ++i) sub.push_back({{"t", r.times[i]}, {"R", r.poses[i].R}, {"T", r.poses[i].t}});
+    for (size_t i = 0; i < r.times.size(); ++i)
+      sub.push_back({{"t", r.times[i]}, {"R", r.poses[i].R}, {"T", r.poses[i].t}});
     traj.push_back({{"name", r.name},
                     {"exposure", {r.t0, r.t1}},
                     {"gt_camera", camera_json(r.gt_camera)},
@@ -86,7 +85,8 @@ void write_simulation(const SimResult& res, const fs::path& dir) {
     if (!r.mid_flow.empty()) io::write_npy<float>(dir / "gt" / "flow" / (r.name + "_mid.npy"), {H, W, 2}, r.mid_flow);
   }
   for (auto& n : res.novel) io::write_npy<float>(dir / "gt" / "depth" / (n.name + ".npy"), {H, W}, n.frame.depth);
-  nlohmann::json j = {{"convention", "world_to_camera p_c = R p_w + T, OpenCV axes; times in seconds"}, {"train", traj}};
+  nlohmann::json j = {{"convention", "world_to_camera p_c = R p_w + T, OpenCV axes; times in seconds"},
+                      {"train", traj}};
   io::write_file_atomic(dir / "gt" / "trajectories.json", [&](const fs::path& tmp) {
     std::ofstream f(tmp);
     f << j.dump(1) << "\n";

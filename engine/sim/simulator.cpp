@@ -68,7 +68,8 @@ inline Vec3 unproject(const Camera& c, double px, double py, double depth, bool&
   const double dx = (px - c.cx) / c.fx, dy = (py - c.cy) / c.fy;
   direction = !(depth > 0);
   const double z = direction ? 1.0 : depth;
-  const double pc[3] = {dx * z - (direction ? 0 : c.t[0]), dy * z - (direction ? 0 : c.t[1]), z - (direction ? 0 : c.t[2])};
+  const double pc[3] = {dx * z - (direction ? 0 : c.t[0]), dy * z - (direction ? 0 : c.t[1]),
+                        z - (direction ? 0 : c.t[2])};
   return {c.R[0] * pc[0] + c.R[3] * pc[1] + c.R[6] * pc[2], c.R[1] * pc[0] + c.R[4] * pc[1] + c.R[7] * pc[2],
           c.R[2] * pc[0] + c.R[5] * pc[1] + c.R[8] * pc[2]};
 }
@@ -103,7 +104,8 @@ double srgb_byte_roundtrip(float v) {
 
 std::vector<float> ground_truth_flow(const std::vector<float>& depth_a, const Camera& a, const Camera& b) {
   const uint32_t W = a.width, H = a.height;
-  if (depth_a.size() != size_t(W) * H) throw std::invalid_argument("ground_truth_flow: depth size differs from the camera's");
+  if (depth_a.size() != size_t(W) * H)
+    throw std::invalid_argument("ground_truth_flow: depth size differs from the camera's");
   std::vector<float> flow(size_t(W) * H * 2);
   for (uint32_t y = 0; y < H; ++y)
     for (uint32_t x = 0; x < W; ++x) {
@@ -117,7 +119,8 @@ std::vector<float> ground_truth_flow(const std::vector<float>& depth_a, const Ca
   return flow;
 }
 
-std::vector<float> warp_by_flow(const std::vector<float>& img, uint32_t W, uint32_t H, uint32_t C, const std::vector<float>& flow) {
+std::vector<float> warp_by_flow(const std::vector<float>& img, uint32_t W, uint32_t H, uint32_t C,
+                                const std::vector<float>& flow) {
   std::vector<float> out(size_t(W) * H * C, 0.f);
   for (uint32_t y = 0; y < H; ++y)
     for (uint32_t x = 0; x < W; ++x) {
@@ -130,7 +133,8 @@ std::vector<float> warp_by_flow(const std::vector<float>& img, uint32_t W, uint3
       const double ax = sx - x0, ay = sy - y0;
       for (uint32_t c = 0; c < C; ++c) {
         auto at = [&](uint32_t xx, uint32_t yy) { return double(img[(size_t(yy) * W + xx) * C + c]); };
-        out[i * C + c] = float((at(x0, y0) * (1 - ax) + at(x1, y0) * ax) * (1 - ay) + (at(x0, y1) * (1 - ax) + at(x1, y1) * ax) * ay);
+        out[i * C + c] = float((at(x0, y0) * (1 - ax) + at(x1, y0) * ax) * (1 - ay) +
+                               (at(x0, y1) * (1 - ax) + at(x1, y1) * ax) * ay);
       }
     }
   return out;
@@ -138,7 +142,8 @@ std::vector<float> warp_by_flow(const std::vector<float>& img, uint32_t W, uint3
 
 double psnr_srgb(const std::vector<float>& a, const std::vector<float>& b) {
   if (a.size() != b.size() || a.empty()) throw std::invalid_argument("psnr_srgb: size mismatch");
-  return metrics::psnr(metrics::encode_linear(a, uint32_t(a.size()), 1, 1), metrics::encode_linear(b, uint32_t(b.size()), 1, 1));
+  return metrics::psnr(metrics::encode_linear(a, uint32_t(a.size()), 1, 1),
+                       metrics::encode_linear(b, uint32_t(b.size()), 1, 1));
 }
 
 metrics::Scores scores_srgb(const std::vector<float>& a, const std::vector<float>& b, uint32_t width, uint32_t height) {
@@ -151,17 +156,18 @@ metrics::Scores scores_srgb(const std::vector<float>& a, const std::vector<float
   return metrics::score(planar(a), planar(b));
 }
 
-
 // ---------------------------------------------------------------------------------------------
 // Simulator
 
 Simulator::Simulator(gpu::Context& ctx, const Scene& scene, const SimParams& p)
     : ctx_(ctx), p_(p), renderer_(ctx, scene, p.shading) {
-  if (p.width == 0 || p.height == 0 || p.width > 65535 || p.height > 65535) throw std::invalid_argument("simulate: bad image size");
+  if (p.width == 0 || p.height == 0 || p.width > 65535 || p.height > 65535)
+    throw std::invalid_argument("simulate: bad image size");
   if (p.train_views < 1 || p.novel_views < 0) throw std::invalid_argument("simulate: need at least one training view");
   if (!(p.exposure_s > 0) || !(p.view_spacing_s > p.exposure_s))
     throw std::invalid_argument("simulate: need 0 < exposure_s < view_spacing_s");
-  if (!(p.blur_px >= 0) || !(p.max_step_px > 0) || !(p.plan_step_px > 0)) throw std::invalid_argument("simulate: bad blur/step parameters");
+  if (!(p.blur_px >= 0) || !(p.max_step_px > 0) || !(p.plan_step_px > 0))
+    throw std::invalid_argument("simulate: bad blur/step parameters");
   if (!(p.fov_y_deg > 1 && p.fov_y_deg < 170)) throw std::invalid_argument("simulate: fov_y_deg must be in (1, 170)");
   p_.events.validate();
 
@@ -185,7 +191,9 @@ Simulator::Simulator(gpu::Context& ctx, const Scene& scene, const SimParams& p)
   }
   target_dist_ = std::hypot(radius, height);
   const double arc = p.arc_deg * M_PI / 180.0;
-  auto eye_at = [&](double a, double r, double h) { return Vec3{target[0] + r * std::sin(a), target[1] + h, target[2] + r * std::cos(a)}; };
+  auto eye_at = [&](double a, double r, double h) {
+    return Vec3{target[0] + r * std::sin(a), target[1] + h, target[2] + r * std::cos(a)};
+  };
   for (int i = 0; i < p.train_views; ++i) {
     const double f = p.train_views > 1 ? double(i) / (p.train_views - 1) : 0.5;
     const double a = -0.5 * arc + arc * f;
@@ -256,7 +264,10 @@ double Simulator::calibrate_shake(int v, const Frame& mid) const {
     double s = 0;
     size_t n = 0;
     for (size_t j = 0; j < len.size(); ++j)
-      if (ok[j]) { s += len[j]; ++n; }
+      if (ok[j]) {
+        s += len[j];
+        ++n;
+      }
     return n ? s / n : 0.0;
   };
   const double probe = 1e-2;
@@ -301,8 +312,8 @@ std::vector<double> Simulator::plan_subframes(int v, const Frame& mid, double sc
     }
     prev = std::move(cur);
     if (int(samples.size()) > p_.max_subframes)
-      throw std::runtime_error("simulate: view " + std::to_string(v) + " needs more than " + std::to_string(p_.max_subframes) +
-                               " sub-frames (blur too large?)");
+      throw std::runtime_error("simulate: view " + std::to_string(v) + " needs more than " +
+                               std::to_string(p_.max_subframes) + " sub-frames (blur too large?)");
   }
   return samples;
 }
@@ -336,12 +347,17 @@ TrainViewResult Simulator::simulate_view(int v, events::EventSimulator& ev, cons
     size_t n = 0;
     for (size_t j = 0; j < P; ++j) {
       const double m = std::hypot(flow[j * 2], flow[j * 2 + 1]);
-      if (std::isfinite(m)) { maxm = std::max(maxm, m); summ += m; ++n; }
+      if (std::isfinite(m)) {
+        maxm = std::max(maxm, m);
+        summ += m;
+        ++n;
+      }
     }
     if (maxm > p_.max_step_px && s[i] - s[i - 1] > 1e-7) {
       s.insert(s.begin() + i, 0.5 * (s[i - 1] + s[i]));
       if (int(s.size()) > p_.max_subframes)
-        throw std::runtime_error("simulate: view " + std::to_string(v) + " needs more than " + std::to_string(p_.max_subframes) + " sub-frames");
+        throw std::runtime_error("simulate: view " + std::to_string(v) + " needs more than " +
+                                 std::to_string(p_.max_subframes) + " sub-frames");
       continue;
     }
     Frame cur = s[i] == 0.5 ? r.sharp_mid : renderer_.render(cam);
@@ -373,7 +389,10 @@ SimResult Simulator::run(const IntervalCallback& cb, bool verbose) {
   double near = INFINITY, far = 0;
   auto bounds = [&](const Frame& f) {
     for (float d : f.depth)
-      if (d > 0) { near = std::min(near, double(d)); far = std::max(far, double(d)); }
+      if (d > 0) {
+        near = std::min(near, double(d));
+        far = std::max(far, double(d));
+      }
   };
   for (int v = 0; v < p_.train_views; ++v) {
     events::EventSimulator ev(p_.width, p_.height, p_.events, p_.seed + uint64_t(v));
@@ -389,14 +408,15 @@ SimResult Simulator::run(const IntervalCallback& cb, bool verbose) {
     res.stats.mean_blur_px += r.mean_blur_px / p_.train_views;
     res.stats.max_step_px = std::max(res.stats.max_step_px, r.max_step_px);
     if (verbose)
-      std::printf("  view %s: %zu sub-frames, blur %.2f px, max step %.3f px, %zu events\n", r.name.c_str(), r.times.size(),
-                  r.mean_blur_px, r.max_step_px, es.size());
+      std::printf("  view %s: %zu sub-frames, blur %.2f px, max step %.3f px, %zu events\n", r.name.c_str(),
+                  r.times.size(), r.mean_blur_px, r.max_step_px, es.size());
     // Recorded pose: ground truth with pose noise.
     std::mt19937_64 g(p_.seed * 0xD1B54A32D192ED03ull + 777 + v);
     std::array<double, 6> noise{};
     for (int d = 0; d < 6; ++d)
       noise[d] = events::normal01(g) * (d < 3 ? p_.pose_noise_trans : p_.pose_noise_rot_deg * M_PI / 180.0);
-    r.recorded_camera = (p_.pose_noise_trans > 0 || p_.pose_noise_rot_deg > 0) ? r.gt_camera.perturbed(noise) : r.gt_camera;
+    r.recorded_camera =
+        (p_.pose_noise_trans > 0 || p_.pose_noise_rot_deg > 0) ? r.gt_camera.perturbed(noise) : r.gt_camera;
     res.train.push_back(std::move(r));
   }
   for (int j = 0; j < p_.novel_views; ++j) {
@@ -409,7 +429,10 @@ SimResult Simulator::run(const IntervalCallback& cb, bool verbose) {
     bounds(nv.frame);
     res.novel.push_back(std::move(nv));
   }
-  if (!(near < INFINITY)) { near = 0.01; far = 100; }
+  if (!(near < INFINITY)) {
+    near = 0.01;
+    far = 100;
+  }
   res.near = 0.9 * near;
   res.far = 1.1 * far;
   res.events.validate("simulate");
@@ -421,7 +444,8 @@ SimResult Simulator::run(const IntervalCallback& cb, bool verbose) {
     std::vector<float> bq(r.blurry.size());
     for (size_t j = 0; j < bq.size(); ++j) bq[j] = float(srgb_byte_roundtrip(r.blurry[j]));
     const auto edi = events::edi_deblur(bq.data(), 3, res.events, r.t0, r.t1, th);
-    const auto sb = scores_srgb(bq, r.sharp_mid.rgb, p_.width, p_.height), se = scores_srgb(edi, r.sharp_mid.rgb, p_.width, p_.height);
+    const auto sb = scores_srgb(bq, r.sharp_mid.rgb, p_.width, p_.height),
+               se = scores_srgb(edi, r.sharp_mid.rgb, p_.width, p_.height);
     res.stats.psnr_blurry += sb.psnr / res.train.size();
     res.stats.psnr_edi += se.psnr / res.train.size();
     res.stats.ssim_blurry += sb.ssim / res.train.size();

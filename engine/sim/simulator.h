@@ -16,13 +16,13 @@
 // the sharp sub-frame at s = 0.5. Events: an EventSimulator per view fed with every sub-frame
 // (linear RGB -> luma), seed = seed + view; the per-view streams are concatenated.
 #pragma once
-#include "metrics/srgb_metrics.h"
 #include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
+#include "metrics/srgb_metrics.h"
 
 #include <nlohmann/json.hpp>
 
@@ -39,16 +39,16 @@ struct SimParams {
   double fov_y_deg = 50;
   int train_views = 16;
   int novel_views = 8;
-  double arc_deg = 50;           // angular span of the training cameras around the target
-  double exposure_s = 0.04;      // exposure window of a training view
-  double view_spacing_s = 0.1;   // start-to-start time between training views
-  double blur_px = 12;           // target mean pixel path length during an exposure
+  double arc_deg = 50;             // angular span of the training cameras around the target
+  double exposure_s = 0.04;        // exposure window of a training view
+  double view_spacing_s = 0.1;     // start-to-start time between training views
+  double blur_px = 12;             // target mean pixel path length during an exposure
   double translation_share = 0.3;  // translation shake amplitude per unit of rotation, times the target distance
-  double max_step_px = 0.5;      // hard bound on any pixel's motion between sub-frames
-  double plan_step_px = 0.4;     // planning bound (on sampled points) before the hard check
-  int max_subframes = 2000;      // per view; exceeding it is an error (blur too large)
-  double pose_noise_rot_deg = 0;  // std dev of the recorded poses' rotation noise
-  double pose_noise_trans = 0;    // std dev of the recorded poses' translation noise (scene units)
+  double max_step_px = 0.5;        // hard bound on any pixel's motion between sub-frames
+  double plan_step_px = 0.4;       // planning bound (on sampled points) before the hard check
+  int max_subframes = 2000;        // per view; exceeding it is an error (blur too large)
+  double pose_noise_rot_deg = 0;   // std dev of the recorded poses' rotation noise
+  double pose_noise_trans = 0;     // std dev of the recorded poses' translation noise (scene units)
   uint64_t seed = 1;
   events::EventModelParams events = events::EventModelParams::defaults();
   ShadingParams shading;
@@ -69,7 +69,7 @@ double psnr_srgb(const std::vector<float>& a, const std::vector<float>& b);
 // PSNR and SSIM of two linear H*W*3 interleaved images as 8-bit sRGB PNGs hold them.
 metrics::Scores scores_srgb(const std::vector<float>& a, const std::vector<float>& b, uint32_t width, uint32_t height);
 
-struct Interval {  // passed to the interval callback
+struct Interval {   // passed to the interval callback
   int view, index;  // training view, interval k (frames k -> k + 1)
   double s0, s1, t0, t1;
   const Frame& a;

@@ -11,22 +11,33 @@ namespace {
 
 struct Rng {
   uint64_t s;
-  uint64_t next() { s += 0x9E3779B97F4A7C15ull; uint64_t z = s; z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull; z = (z ^ (z >> 27)) * 0x94D049BB133111EBull; return z ^ (z >> 31); }
+  uint64_t next() {
+    s += 0x9E3779B97F4A7C15ull;
+    uint64_t z = s;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
   double uni() { return (next() >> 11) * (1.0 / 9007199254740992.0); }
 };
 
 uint32_t hash2(int x, int y, uint32_t seed) {
   uint32_t h = uint32_t(x) * 0x8da6b343u ^ uint32_t(y) * 0xd8163841u ^ seed * 0xcb1ab31fu;
-  h ^= h >> 13; h *= 0x5bd1e995u; h ^= h >> 15;
+  h ^= h >> 13;
+  h *= 0x5bd1e995u;
+  h ^= h >> 15;
   return h;
 }
 // Smooth value noise in [0, 1] with period `period` cells.
 double value_noise(double x, double y, uint32_t seed, int period) {
   const int xi = int(std::floor(x)), yi = int(std::floor(y));
   const double fx = x - xi, fy = y - yi;
-  auto v = [&](int a, int b) { return (hash2(((a % period) + period) % period, ((b % period) + period) % period, seed) & 0xFFFF) / 65535.0; };
+  auto v = [&](int a, int b) {
+    return (hash2(((a % period) + period) % period, ((b % period) + period) % period, seed) & 0xFFFF) / 65535.0;
+  };
   const double sx = fx * fx * (3 - 2 * fx), sy = fy * fy * (3 - 2 * fy);
-  return (v(xi, yi) * (1 - sx) + v(xi + 1, yi) * sx) * (1 - sy) + (v(xi, yi + 1) * (1 - sx) + v(xi + 1, yi + 1) * sx) * sy;
+  return (v(xi, yi) * (1 - sx) + v(xi + 1, yi) * sx) * (1 - sy) +
+         (v(xi, yi + 1) * (1 - sx) + v(xi + 1, yi + 1) * sx) * sy;
 }
 double fbm(double u, double v, uint32_t seed, int base_period) {
   double s = 0, a = 0.5;
@@ -41,7 +52,9 @@ struct LinearTex {
   LinearTex(uint32_t W, uint32_t H) : w(W), h(H), rgb(size_t(W) * H * 3) {}
   void set(uint32_t x, uint32_t y, double r, double g, double b) {
     float* p = &rgb[(size_t(y) * w + x) * 3];
-    p[0] = float(r); p[1] = float(g); p[2] = float(b);
+    p[0] = float(r);
+    p[1] = float(g);
+    p[2] = float(b);
   }
   Texture encode(const std::string& name) const {
     Texture t;
@@ -52,7 +65,8 @@ struct LinearTex {
     for (size_t i = 0; i < t.rgba.size(); ++i) {
       uint32_t c[3];
       for (int k = 0; k < 3; ++k)
-        c[k] = uint32_t(std::lround(std::clamp(io::linear_to_srgb(std::clamp(rgb[i * 3 + k], 0.f, 1.f)), 0.f, 1.f) * 255.f));
+        c[k] = uint32_t(
+            std::lround(std::clamp(io::linear_to_srgb(std::clamp(rgb[i * 3 + k], 0.f, 1.f)), 0.f, 1.f) * 255.f));
       t.rgba[i] = c[0] | c[1] << 8 | c[2] << 16 | 0xFF000000u;
     }
     return t;
@@ -72,7 +86,8 @@ Texture text_texture(uint32_t seed, double paper, double ink, const std::array<d
     const int strokes = 2 + int(rng.uni() * 3);
     for (int s = 0; s < strokes; ++s) {
       const bool horiz = rng.uni() < 0.5;
-      const int a = int(rng.uni() * (horiz ? 7 : 5)), b0 = int(rng.uni() * 3), len = 2 + int(rng.uni() * (horiz ? 3 : 5));
+      const int a = int(rng.uni() * (horiz ? 7 : 5)), b0 = int(rng.uni() * 3),
+                len = 2 + int(rng.uni() * (horiz ? 3 : 5));
       for (int k = 0; k < len; ++k) {
         const int gx = horiz ? b0 + k : a, gy = horiz ? a : b0 + k;
         if (gx >= 5 || gy >= 7) continue;
@@ -135,8 +150,10 @@ Texture brick_texture() {
       const uint32_t h = hash2(col, row, 5);
       const double base = 0.35 + 0.3 * ((h & 0xFF) / 255.0);
       const double n = 0.75 + 0.5 * fbm(x / double(N), y / double(N), 3, 16);
-      if (mortar) t.set(x, y, 0.8, 0.78, 0.72);
-      else t.set(x, y, base * n, 0.35 * base * n, 0.25 * base * n);
+      if (mortar)
+        t.set(x, y, 0.8, 0.78, 0.72);
+      else
+        t.set(x, y, base * n, 0.35 * base * n, 0.25 * base * n);
     }
   return t.encode("brick");
 }

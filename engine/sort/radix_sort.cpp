@@ -9,19 +9,25 @@ namespace evflow {
 using namespace shaderio;
 
 RadixSort::RadixSort(gpu::Context& ctx)
-    : ctx_(ctx), scan_(ctx), keys_tmp_(ctx, 16, "sort_keys_tmp"), values_tmp_(ctx, 16, "sort_values_tmp"),
-      counts_(ctx, 16, "sort_counts"), items_(ctx.options().sort_items) {}
+    : ctx_(ctx),
+      scan_(ctx),
+      keys_tmp_(ctx, 16, "sort_keys_tmp"),
+      values_tmp_(ctx, 16, "sort_values_tmp"),
+      counts_(ctx, 16, "sort_counts"),
+      items_(ctx.options().sort_items) {}
 
 void RadixSort::set_items(uint32_t items) { items_ = items ? std::clamp<uint32_t>(items, 1u, 256u) : 0u; }
 
 std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Commands& cmd, const gpu::Buffer& keys,
-                                                                     const gpu::Buffer& values, uint32_t n, uint32_t bits) {
+                                                                    const gpu::Buffer& values, uint32_t n,
+                                                                    uint32_t bits) {
   return record(cmd, keys, values, keys_tmp_, values_tmp_, n, bits);
 }
 
 std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Commands& cmd, const gpu::Buffer& keys,
-                                                                     const gpu::Buffer& values, gpu::Buffer& keys_alt,
-                                                                     gpu::Buffer& values_alt, uint32_t n, uint32_t bits) {
+                                                                    const gpu::Buffer& values, gpu::Buffer& keys_alt,
+                                                                    gpu::Buffer& values_alt, uint32_t n,
+                                                                    uint32_t bits) {
   if (n <= 1 || bits == 0) return {&keys, &values};
   keys_alt.ensure(uint64_t(n) * 4);
   values_alt.ensure(uint64_t(n) * 4);
@@ -39,12 +45,16 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Command
   const gpu::Buffer* vout = &values_alt;
   for (uint32_t shift = 0; shift < bits; shift += 4) {
     SortPC pc{n, shift, blocks, items};
-    cmd.dispatch("sort/radix_count", {{kRadixCountBindKeys, *kin}, {kRadixCountBindCounts, counts_}},
-                 pc, cmd.linear_groups(blocks));
+    cmd.dispatch("sort/radix_count", {{kRadixCountBindKeys, *kin}, {kRadixCountBindCounts, counts_}}, pc,
+                 cmd.linear_groups(blocks));
     scan_.record(cmd, counts_, counts_, n_counts, n_counts);
-    cmd.dispatch("sort/radix_scatter", {{kRadixScatterBindKeysIn, *kin}, {kRadixScatterBindValuesIn, *vin},
-                                        {kRadixScatterBindKeysOut, *kout}, {kRadixScatterBindValuesOut, *vout},
-                                        {kRadixScatterBindOffsets, counts_}}, pc, cmd.linear_groups(blocks));
+    cmd.dispatch("sort/radix_scatter",
+                 {{kRadixScatterBindKeysIn, *kin},
+                  {kRadixScatterBindValuesIn, *vin},
+                  {kRadixScatterBindKeysOut, *kout},
+                  {kRadixScatterBindValuesOut, *vout},
+                  {kRadixScatterBindOffsets, counts_}},
+                 pc, cmd.linear_groups(blocks));
     std::swap(kin, kout);
     std::swap(vin, vout);
   }

@@ -1,6 +1,6 @@
 // Stable LSD radix sort of (key, value) uint pairs on the GPU, 4 bits per pass, sorting only the
-// low `bits` bits of the keys (rounded up to a multiple of 4: bits above must be zero). Ping-pongs between the caller's buffers and internal ones; the
-// result is in the buffers returned by record().
+// low `bits` bits of the keys (rounded up to a multiple of 4: bits above must be zero). Ping-pongs between the caller's
+// buffers and internal ones; the result is in the buffers returned by record().
 #pragma once
 #include <utility>
 
@@ -18,12 +18,12 @@ class RadixSort {
   // Records the passes; returns the buffers holding the sorted keys and values (either the
   // inputs or the internal scratch buffers, depending on the pass count).
   std::pair<const gpu::Buffer*, const gpu::Buffer*> record(gpu::Commands& cmd, const gpu::Buffer& keys,
-                                                            const gpu::Buffer& values, uint32_t n, uint32_t bits);
+                                                           const gpu::Buffer& values, uint32_t n, uint32_t bits);
   // The same, ping-ponging with the caller's buffers keys_alt / values_alt (grown to n values)
   // instead of internal ones: the result then lives in buffers the caller owns.
   std::pair<const gpu::Buffer*, const gpu::Buffer*> record(gpu::Commands& cmd, const gpu::Buffer& keys,
-                                                            const gpu::Buffer& values, gpu::Buffer& keys_alt,
-                                                            gpu::Buffer& values_alt, uint32_t n, uint32_t bits);
+                                                           const gpu::Buffer& values, gpu::Buffer& keys_alt,
+                                                           gpu::Buffer& values_alt, uint32_t n, uint32_t bits);
 
  private:
   gpu::Context& ctx_;

@@ -12,7 +12,9 @@ using namespace shaderio;
 
 static constexpr uint32_t kBandCoeffs[4] = {1, 3, 5, 7};
 
-static gpu::Buffer make(gpu::Context& ctx, uint64_t bytes, const std::string& name) { return gpu::Buffer(ctx, bytes, name); }
+static gpu::Buffer make(gpu::Context& ctx, uint64_t bytes, const std::string& name) {
+  return gpu::Buffer(ctx, bytes, name);
+}
 
 GaussianBuffers::GaussianBuffers(gpu::Context& ctx, size_t n, int degree, const std::string& prefix)
     : count(n),
@@ -127,17 +129,23 @@ static const gpu::Buffer& sh_band(const GaussianBuffers& b, int l) { return l <=
 
 static uint32_t bit_width(uint32_t v) {
   uint32_t b = 0;
-  while (v) { ++b; v >>= 1; }
+  while (v) {
+    ++b;
+    v >>= 1;
+  }
   return b;
 }
 
-void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const RenderSettings& s, RenderState& st) const {
+void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const RenderSettings& s,
+                        RenderState& st) const {
   if (cam.width == 0 || cam.height == 0) throw gpu::Error("render: camera has zero size");
   st.width_ = cam.width;
   st.height_ = cam.height;
   const uint32_t tiles_x = (st.width_ + kTileSize - 1) / kTileSize, tiles_y = (st.height_ + kTileSize - 1) / kTileSize;
   const uint32_t tile_bits = bit_width(tiles_x * tiles_y);  // 2^tile_bits > number of tiles
-  if (tile_bits > 24) throw gpu::Error("render: image of " + std::to_string(st.width_) + "x" + std::to_string(st.height_) + " has too many tiles");
+  if (tile_bits > 24)
+    throw gpu::Error("render: image of " + std::to_string(st.width_) + "x" + std::to_string(st.height_) +
+                     " has too many tiles");
   const uint32_t depth_bits = std::min(23u, 32u - tile_bits);
   st.sort_bits_ = tile_bits + depth_bits;
   const int degree = s.sh_degree < 0 ? params.sh_degree : std::min(s.sh_degree, params.sh_degree);
@@ -193,7 +201,8 @@ RenderState Rasterizer::forward(const GaussianBuffers& params, const Camera& cam
   return st;
 }
 
-void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings, RenderState& st) {
+void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings,
+                         RenderState& st) {
   set_pc(params, cam, settings, st);
   stage_ms_.clear();
   st.count_ = params.count;
@@ -201,13 +210,20 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   ensure_forward_buffers(st);
   ProjectPC& pp = st.project_pc_;
   cmd_.dispatch("splat/project",
-                {{kParamBindMeans, params.means}, {kParamBindLogScales, params.log_scales},
-                 {kParamBindQuats, params.quats}, {kParamBindOpacities, params.opacity_logits},
-                 {kParamBindSh0, sh_band(params, 0)}, {kParamBindSh1, sh_band(params, 1)},
-                 {kParamBindSh2, sh_band(params, 2)}, {kParamBindSh3, sh_band(params, 3)},
-                 {kProjectBindProjA, st.proj_mean_conic_}, {kProjectBindProjB, st.proj_misc_},
-                 {kProjectBindProjC, st.proj_color_}, {kProjectBindRect, st.tile_rect_},
-                 {kProjectBindCount, st.tiles_touched_}, {kProjectBindDColor, st.proj_dcolor_}},
+                {{kParamBindMeans, params.means},
+                 {kParamBindLogScales, params.log_scales},
+                 {kParamBindQuats, params.quats},
+                 {kParamBindOpacities, params.opacity_logits},
+                 {kParamBindSh0, sh_band(params, 0)},
+                 {kParamBindSh1, sh_band(params, 1)},
+                 {kParamBindSh2, sh_band(params, 2)},
+                 {kParamBindSh3, sh_band(params, 3)},
+                 {kProjectBindProjA, st.proj_mean_conic_},
+                 {kProjectBindProjB, st.proj_misc_},
+                 {kProjectBindProjC, st.proj_color_},
+                 {kProjectBindRect, st.tile_rect_},
+                 {kProjectBindCount, st.tiles_touched_},
+                 {kProjectBindDColor, st.proj_dcolor_}},
                 pp, cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
   cmd_.mark("project");
   scan_.record(cmd_, st.tiles_touched_, st.isect_offset_, uint32_t(n), uint32_t(n + 1));
@@ -227,25 +243,34 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   st.gaussian_id_from_slot_.ensure(uint64_t(m) * 4);
   if (m) {
     cmd_.dispatch("splat/emit",
-                  {{kEmitBindProjA, st.proj_mean_conic_}, {kEmitBindProjB, st.proj_misc_},
-                   {kEmitBindRect, st.tile_rect_}, {kEmitBindOffsets, st.isect_offset_}, {kEmitBindKeys, st.keys_},
-                   {kEmitBindValues, st.slot_from_isect_}, {kEmitBindGid, st.gaussian_id_from_slot_}},
+                  {{kEmitBindProjA, st.proj_mean_conic_},
+                   {kEmitBindProjB, st.proj_misc_},
+                   {kEmitBindRect, st.tile_rect_},
+                   {kEmitBindOffsets, st.isect_offset_},
+                   {kEmitBindKeys, st.keys_},
+                   {kEmitBindValues, st.slot_from_isect_},
+                   {kEmitBindGid, st.gaussian_id_from_slot_}},
                   pp, cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
   }
   cmd_.mark("emit");
-  auto [sorted_keys, sorted_slots] = sort_.record(cmd_, st.keys_, st.slot_from_isect_, st.keys_alt_, st.slots_alt_, m, st.sort_bits_);
+  auto [sorted_keys, sorted_slots] =
+      sort_.record(cmd_, st.keys_, st.slot_from_isect_, st.keys_alt_, st.slots_alt_, m, st.sort_bits_);
   st.sorted_in_alt_ = sorted_slots == &st.slots_alt_;
   cmd_.mark("sort");
   cmd_.fill(st.tile_range_, 0);
   cmd_.dispatch("splat/tile_ranges", {{kTileRangesBindKeys, *sorted_keys}, {kTileRangesBindRanges, st.tile_range_}},
-                st.raster_pc_,
-                cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
+                st.raster_pc_, cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
   cmd_.dispatch("splat/rasterize" + block_suffix_,
-                {{kRasterBindRanges, st.tile_range_}, {kRasterBindSlots, st.sorted_slots()},
-                 {kRasterBindGid, st.gaussian_id_from_slot_}, {kRasterBindProjA, st.proj_mean_conic_},
-                 {kRasterBindProjB, st.proj_misc_}, {kRasterBindProjC, st.proj_color_},
-                 {kRasterizeBindOutRgb, st.out_.rgb}, {kRasterizeBindOutAlpha, st.out_.alpha},
-                 {kRasterizeBindOutDepth, st.out_.depth}, {kRasterizeBindOutT, st.final_T_},
+                {{kRasterBindRanges, st.tile_range_},
+                 {kRasterBindSlots, st.sorted_slots()},
+                 {kRasterBindGid, st.gaussian_id_from_slot_},
+                 {kRasterBindProjA, st.proj_mean_conic_},
+                 {kRasterBindProjB, st.proj_misc_},
+                 {kRasterBindProjC, st.proj_color_},
+                 {kRasterizeBindOutRgb, st.out_.rgb},
+                 {kRasterizeBindOutAlpha, st.out_.alpha},
+                 {kRasterizeBindOutDepth, st.out_.depth},
+                 {kRasterizeBindOutT, st.final_T_},
                  {kRasterizeBindOutLast, st.last_isect_}},
                 st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize");
@@ -273,37 +298,64 @@ void Rasterizer::backward(const RenderState& st, const GaussianBuffers& params, 
                                  [](auto& s) { return s.first.find("backward") != std::string::npos; }),
                   stage_ms_.end());
 
-  const std::string raster_bwd = "splat/rasterize_bwd" + block_suffix_ + (ctx_.caps().shared_float_atomic_add ? "" : "_cas");
+  const std::string raster_bwd =
+      "splat/rasterize_bwd" + block_suffix_ + (ctx_.caps().shared_float_atomic_add ? "" : "_cas");
   cmd_.dispatch(raster_bwd,
-                {{kRasterBindRanges, st.tile_range_}, {kRasterBindSlots, st.sorted_slots()},
-                 {kRasterBindGid, st.gaussian_id_from_slot_}, {kRasterBindProjA, st.proj_mean_conic_},
-                 {kRasterBindProjB, st.proj_misc_}, {kRasterBindProjC, st.proj_color_},
-                 {kRasterizeBwdBindInT, st.final_T_}, {kRasterizeBwdBindInLast, st.last_isect_},
-                 {kRasterizeBwdBindVRgb, v_rgb}, {kRasterizeBwdBindVAlpha, v_alpha}, {kRasterizeBwdBindG0, plane(0)},
-                 {kRasterizeBwdBindG1, plane(1)}, {kRasterizeBwdBindG2, plane(2)}, {kRasterizeBwdBindG3, plane(3)},
-                 {kRasterizeBwdBindG4, plane(4)}, {kRasterizeBwdBindG5, plane(5)}, {kRasterizeBwdBindG6, plane(6)},
-                 {kRasterizeBwdBindG7, plane(7)}, {kRasterizeBwdBindG8, plane(8)}},
+                {{kRasterBindRanges, st.tile_range_},
+                 {kRasterBindSlots, st.sorted_slots()},
+                 {kRasterBindGid, st.gaussian_id_from_slot_},
+                 {kRasterBindProjA, st.proj_mean_conic_},
+                 {kRasterBindProjB, st.proj_misc_},
+                 {kRasterBindProjC, st.proj_color_},
+                 {kRasterizeBwdBindInT, st.final_T_},
+                 {kRasterizeBwdBindInLast, st.last_isect_},
+                 {kRasterizeBwdBindVRgb, v_rgb},
+                 {kRasterizeBwdBindVAlpha, v_alpha},
+                 {kRasterizeBwdBindG0, plane(0)},
+                 {kRasterizeBwdBindG1, plane(1)},
+                 {kRasterizeBwdBindG2, plane(2)},
+                 {kRasterizeBwdBindG3, plane(3)},
+                 {kRasterizeBwdBindG4, plane(4)},
+                 {kRasterizeBwdBindG5, plane(5)},
+                 {kRasterizeBwdBindG6, plane(6)},
+                 {kRasterizeBwdBindG7, plane(7)},
+                 {kRasterizeBwdBindG8, plane(8)}},
                 st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize backward");
   ProjectPC pp = st.project_pc_;
   pp.flags = accumulate ? (pp.flags | kFlagAccumulate) : (pp.flags & ~kFlagAccumulate);
   cmd_.dispatch(accumulate ? "splat/project_bwd_acc" : "splat/project_bwd",
-                {{kParamBindMeans, params.means}, {kParamBindLogScales, params.log_scales},
-                 {kParamBindQuats, params.quats}, {kParamBindOpacities, params.opacity_logits},
-                 {kProjectBwdBindOffsets, st.isect_offset_}, {kProjectBwdBindGid, st.gaussian_id_from_slot_},
-                 {kProjectBwdBindG0, plane(0)}, {kProjectBwdBindG1, plane(1)}, {kProjectBwdBindG2, plane(2)},
-                 {kProjectBwdBindG3, plane(3)}, {kProjectBwdBindG4, plane(4)}, {kProjectBwdBindG5, plane(5)},
-                 {kProjectBwdBindG6, plane(6)}, {kProjectBwdBindG7, plane(7)}, {kProjectBwdBindG8, plane(8)},
-                 {kProjectBwdBindVMeans, grads.means}, {kProjectBwdBindVLogScales, grads.log_scales},
-                 {kProjectBwdBindVQuats, grads.quats}, {kProjectBwdBindVOpacities, grads.opacity_logits},
-                 {kProjectBwdBindVSh0, sh_band(grads, 0)}, {kProjectBwdBindVSh1, sh_band(grads, 1)},
-                 {kProjectBwdBindVSh2, sh_band(grads, 2)}, {kProjectBwdBindVSh3, sh_band(grads, 3)},
-                 {kProjectBwdBindGrad2d, grad2d_norm_}, {kProjectBwdBindPosePartial, pose_partial_},
-                 {kProjectBwdBindProjC, st.proj_color_}, {kProjectBwdBindDColor, st.proj_dcolor_}},
+                {{kParamBindMeans, params.means},
+                 {kParamBindLogScales, params.log_scales},
+                 {kParamBindQuats, params.quats},
+                 {kParamBindOpacities, params.opacity_logits},
+                 {kProjectBwdBindOffsets, st.isect_offset_},
+                 {kProjectBwdBindGid, st.gaussian_id_from_slot_},
+                 {kProjectBwdBindG0, plane(0)},
+                 {kProjectBwdBindG1, plane(1)},
+                 {kProjectBwdBindG2, plane(2)},
+                 {kProjectBwdBindG3, plane(3)},
+                 {kProjectBwdBindG4, plane(4)},
+                 {kProjectBwdBindG5, plane(5)},
+                 {kProjectBwdBindG6, plane(6)},
+                 {kProjectBwdBindG7, plane(7)},
+                 {kProjectBwdBindG8, plane(8)},
+                 {kProjectBwdBindVMeans, grads.means},
+                 {kProjectBwdBindVLogScales, grads.log_scales},
+                 {kProjectBwdBindVQuats, grads.quats},
+                 {kProjectBwdBindVOpacities, grads.opacity_logits},
+                 {kProjectBwdBindVSh0, sh_band(grads, 0)},
+                 {kProjectBwdBindVSh1, sh_band(grads, 1)},
+                 {kProjectBwdBindVSh2, sh_band(grads, 2)},
+                 {kProjectBwdBindVSh3, sh_band(grads, 3)},
+                 {kProjectBwdBindGrad2d, grad2d_norm_},
+                 {kProjectBwdBindPosePartial, pose_partial_},
+                 {kProjectBwdBindProjC, st.proj_color_},
+                 {kProjectBwdBindDColor, st.proj_dcolor_}},
                 pp, cmd_.linear_groups(groups));
   ReducePC rp{groups, 0, 0, 0};
-  cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, pose_}},
-                rp, gpu::Groups{1, 1, 1});
+  cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, pose_}}, rp,
+                gpu::Groups{1, 1, 1});
   cmd_.mark("project backward");
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);

@@ -27,7 +27,10 @@ GaussianCloud synthetic_cloud(uint64_t seed, size_t n, int degree, const Camera&
     const double base = std::log(sigma_px * z / cam.fx);
     for (int k = 0; k < 3; ++k) c.log_scales[i * 3 + k] = float(base + uni(-0.7, 0.7));
     double q[4], qn = 0;
-    for (double& v : q) { v = normal(); qn += v * v; }
+    for (double& v : q) {
+      v = normal();
+      qn += v * v;
+    }
     for (int k = 0; k < 4; ++k) c.quats[i * 4 + k] = float(q[k] / std::sqrt(qn));
     c.opacity_logits[i] = float(uni(-2.0, 3.0));
     for (int k = 0; k < K; ++k)

@@ -36,14 +36,19 @@ Camera CameraModel::frame_camera(uint32_t view, uint32_t frame) const {
 
 Camera CameraModel::training_camera(uint32_t v) const {
   switch (kind_) {
-    case Kind::Trajectory: return trajectories_.at(v).camera_at(0.5);
-    case Kind::PoseRefine: return data_.train.at(v).camera.perturbed(deltas_.at(v));
-    case Kind::Fixed: break;
+    case Kind::Trajectory:
+      return trajectories_.at(v).camera_at(0.5);
+    case Kind::PoseRefine:
+      return data_.train.at(v).camera.perturbed(deltas_.at(v));
+    case Kind::Fixed:
+      break;
   }
   return data_.train.at(v).camera;
 }
 
-double* CameraModel::params(uint32_t v) { return kind_ == Kind::Trajectory ? trajectories_[v].data() : deltas_[v].data(); }
+double* CameraModel::params(uint32_t v) {
+  return kind_ == Kind::Trajectory ? trajectories_[v].data() : deltas_[v].data();
+}
 const double* CameraModel::params(uint32_t v) const {
   return kind_ == Kind::Trajectory ? trajectories_[v].data() : deltas_[v].data();
 }

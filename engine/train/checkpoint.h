@@ -27,7 +27,8 @@ struct Checkpoint {
   uint32_t step = 0;
   GaussianCloud cloud;
   std::vector<OptimizerGroupState> optimizer;  // empty: fresh optimizer state
-  std::vector<TrajectoryState> trajectories;   // one per training view (blur mode, or plain mode with pose_refine); else empty
+  std::vector<TrajectoryState>
+      trajectories;  // one per training view (blur mode, or plain mode with pose_refine); else empty
 };
 
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& ckpt);

@@ -21,8 +21,8 @@ std::vector<const gpu::Buffer*> ExposureRender::images() const {
 }
 
 std::vector<lie::Vec6> ExposureRender::backward(Rasterizer& raster, const GaussianBuffers& params,
-                                                const std::vector<const gpu::Buffer*>& v_rgb, const gpu::Buffer& v_alpha,
-                                                GaussianBuffers& grads) const {
+                                                const std::vector<const gpu::Buffer*>& v_rgb,
+                                                const gpu::Buffer& v_alpha, GaussianBuffers& grads) const {
   std::vector<lie::Vec6> pose;
   for (size_t i = 0; i < states_.size(); ++i) {
     raster.backward(states_[i], params, *v_rgb[i], v_alpha, grads, i > 0);

@@ -65,7 +65,8 @@ void GaussianOptimizer::add_groups(const TrainConfig& cfg) {
   adam_->add_group({"sh0", &p.sh[0], &g.sh[0], n * 3, float(cfg.lr_sh_dc), 3});
   static const uint32_t band[4] = {1, 3, 5, 7};
   for (int l = 1; l <= p.sh_degree; ++l)
-    adam_->add_group({"sh" + std::to_string(l), &p.sh[l], &g.sh[l], n * band[l] * 3, float(cfg.lr_sh_rest), band[l] * 3});
+    adam_->add_group(
+        {"sh" + std::to_string(l), &p.sh[l], &g.sh[l], n * band[l] * 3, float(cfg.lr_sh_rest), band[l] * 3});
 }
 
 void GaussianOptimizer::step(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm, const Camera& camera, uint32_t step) {

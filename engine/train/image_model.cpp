@@ -7,8 +7,12 @@
 namespace evflow {
 
 ImageModel::ImageModel(gpu::Context& ctx, uint32_t frames, size_t values, LossSpace space)
-    : ctx_(ctx), frames_(frames), values_(values), space_(space),
-      identity_(frames == 1 && space == LossSpace::Srgb), v_prediction_(ctx, values * 4, "v_prediction") {
+    : ctx_(ctx),
+      frames_(frames),
+      values_(values),
+      space_(space),
+      identity_(frames == 1 && space == LossSpace::Srgb),
+      v_prediction_(ctx, values * 4, "v_prediction") {
   if (frames == 0) throw std::invalid_argument("image model: no frames");
   if (identity_) return;
   for (uint32_t i = 0; i < frames; ++i) {
@@ -22,7 +26,8 @@ ImageModel::ImageModel(gpu::Context& ctx, uint32_t frames, size_t values, LossSp
   }
 }
 
-void ImageModel::colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y) {
+void ImageModel::colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g,
+                        const gpu::Buffer& y) {
   shaderio::ColourPC pc{uint32_t(values_), op, 0, 0};
   cmd.dispatch("train/colour", {{shaderio::kColourBindX, x}, {shaderio::kColourBindG, g}, {shaderio::kColourBindY, y}},
                pc, cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kColourGroupSize)));
@@ -36,8 +41,8 @@ void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer
   if (frames_ > 1)
     for (uint32_t i = 0; i < frames_; ++i) {
       shaderio::AccumulatePC pc{uint32_t(values_), 1.0f / float(frames_), i > 0 ? 1u : 0u, 0};
-      cmd.dispatch("train/accumulate", {{shaderio::kTrainAccumulateBindX, linear_[i]},
-                                        {shaderio::kTrainAccumulateBindY, mean_}}, pc,
+      cmd.dispatch("train/accumulate",
+                   {{shaderio::kTrainAccumulateBindX, linear_[i]}, {shaderio::kTrainAccumulateBindY, mean_}}, pc,
                    cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kAccumulateGroupSize)));
     }
   const gpu::Buffer& m = frames_ > 1 ? mean_ : linear_[0];
@@ -59,7 +64,8 @@ const gpu::Buffer& ImageModel::mean_grad(gpu::Commands& cmd) {
 
 void ImageModel::render_grads(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads) {
   if (identity_) return;
-  if (!frame_grads.empty() && frame_grads.size() != frames_) throw std::invalid_argument("image model: wrong number of frame gradients");
+  if (!frame_grads.empty() && frame_grads.size() != frames_)
+    throw std::invalid_argument("image model: wrong number of frame gradients");
   const gpu::Buffer* shared = frame_grads.empty() ? &mean_grad(cmd) : nullptr;
   for (uint32_t i = 0; i < frames_; ++i)
     colour(cmd, shaderio::kColourDecodeBwd, *renders_[i], shared ? *shared : *frame_grads[i], v_render_[i]);

@@ -14,8 +14,8 @@
 namespace evflow {
 
 struct LossValues {
-  std::vector<double> terms;  // unweighted, in the order added; 0 for a term not recorded this step
-  double total = 0;           // sum of weight * value
+  std::vector<double> terms;            // unweighted, in the order added; 0 for a term not recorded this step
+  double total = 0;                     // sum of weight * value
   const LossTerm* first_bad = nullptr;  // the first term whose value is not finite
 };
 

@@ -34,7 +34,8 @@ PoseRefineResult refine_pose(gpu::Context& ctx, Rasterizer& raster, const Gaussi
     if (it == o.iterations) break;
     raster.backward(raster_state, params, v_rgb, v_alpha, grads, false);
     auto g = raster.pose_gradient();
-    const lie::Vec6 gd = lie::mul_transposed(lie::se3_right_jacobian(delta), lie::Vec6{g[0], g[1], g[2], g[3], g[4], g[5]});
+    const lie::Vec6 gd =
+        lie::mul_transposed(lie::se3_right_jacobian(delta), lie::Vec6{g[0], g[1], g[2], g[3], g[4], g[5]});
     host_adam_step(delta.data(), gd.data(), m.data(), v.data(), 6, it + 1, o.lr);
   }
   return best;

@@ -13,13 +13,13 @@ namespace evflow {
 
 struct PoseRefineOptions {
   uint32_t iterations = 60;
-  double lr = 2e-3;         // Adam step on the se(3) delta (translation in scene units, rotation in rad)
+  double lr = 2e-3;  // Adam step on the se(3) delta (translation in scene units, rotation in rad)
   float ssim_lambda = 0.2f;
   RenderSettings settings;
 };
 
 struct PoseRefineResult {
-  Camera camera;            // the refined camera
+  Camera camera;  // the refined camera
   double first_loss = 0, last_loss = 0;
   std::array<double, 6> delta{};
 };

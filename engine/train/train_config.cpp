@@ -14,12 +14,22 @@ namespace {
 
 // Parsing of a key's text value; each error names the key and what it expects.
 double to_double(const std::string& k, const std::string& v) {
-  try { size_t p; double d = std::stod(v, &p); if (p != v.size()) throw 1; return d; }
-  catch (...) { throw std::invalid_argument("config key '" + k + "' expects a number, got '" + v + "'"); }
+  try {
+    size_t p;
+    double d = std::stod(v, &p);
+    if (p != v.size()) throw 1;
+    return d;
+  } catch (...) { throw std::invalid_argument("config key '" + k + "' expects a number, got '" + v + "'"); }
 }
 uint64_t to_uint(const std::string& k, const std::string& v) {
-  try { size_t p; long long d = std::stoll(v, &p); if (p != v.size() || d < 0) throw 1; return uint64_t(d); }
-  catch (...) { throw std::invalid_argument("config key '" + k + "' expects a non-negative integer, got '" + v + "'"); }
+  try {
+    size_t p;
+    long long d = std::stoll(v, &p);
+    if (p != v.size() || d < 0) throw 1;
+    return uint64_t(d);
+  } catch (...) {
+    throw std::invalid_argument("config key '" + k + "' expects a non-negative integer, got '" + v + "'");
+  }
 }
 bool to_bool(const std::string& k, const std::string& v) {
   if (v == "1" || v == "true" || v == "yes") return true;
@@ -40,20 +50,26 @@ E to_enum(const std::string& k, const std::string& v, std::initializer_list<E> v
 }
 
 // How a member type is read from a key's text and written to JSON.
-template <typename T> struct Codec;
-template <> struct Codec<double> {
+template <typename T>
+struct Codec;
+template <>
+struct Codec<double> {
   static double parse(const std::string& k, const std::string& v) { return to_double(k, v); }
 };
-template <> struct Codec<uint32_t> {
+template <>
+struct Codec<uint32_t> {
   static uint32_t parse(const std::string& k, const std::string& v) { return uint32_t(to_uint(k, v)); }
 };
-template <> struct Codec<uint64_t> {
+template <>
+struct Codec<uint64_t> {
   static uint64_t parse(const std::string& k, const std::string& v) { return to_uint(k, v); }
 };
-template <> struct Codec<bool> {
+template <>
+struct Codec<bool> {
   static bool parse(const std::string& k, const std::string& v) { return to_bool(k, v); }
 };
-template <> struct Codec<std::array<float, 3>> {
+template <>
+struct Codec<std::array<float, 3>> {
   static std::array<float, 3> parse(const std::string& k, const std::string& v) {
     float r, g, b;
     if (std::sscanf(v.c_str(), "%f,%f,%f", &r, &g, &b) != 3)
@@ -61,19 +77,26 @@ template <> struct Codec<std::array<float, 3>> {
     return {r, g, b};
   }
 };
-template <typename E, const char* (*Name)(E), E... Values> struct EnumCodec {
+template <typename E, const char* (*Name)(E), E... Values>
+struct EnumCodec {
   static E parse(const std::string& k, const std::string& v) { return to_enum(k, v, {Values...}, Name); }
   static nlohmann::json json(E e) { return Name(e); }
 };
-template <> struct Codec<LossSpace> : EnumCodec<LossSpace, loss_space_name, LossSpace::Linear, LossSpace::Srgb> {};
-template <> struct Codec<TrainMode> : EnumCodec<TrainMode, mode_name, TrainMode::Plain, TrainMode::Blur> {};
-template <> struct Codec<TrainTarget>
+template <>
+struct Codec<LossSpace> : EnumCodec<LossSpace, loss_space_name, LossSpace::Linear, LossSpace::Srgb> {};
+template <>
+struct Codec<TrainMode> : EnumCodec<TrainMode, mode_name, TrainMode::Plain, TrainMode::Blur> {};
+template <>
+struct Codec<TrainTarget>
     : EnumCodec<TrainTarget, target_name, TrainTarget::Blurry, TrainTarget::Sharp, TrainTarget::Edi> {};
 
 // Enums are written by name, everything else as its JSON number, bool or array.
-template <typename T> nlohmann::json json_of(const T& x) {
-  if constexpr (std::is_enum_v<T>) return Codec<T>::json(x);
-  else return x;
+template <typename T>
+nlohmann::json json_of(const T& x) {
+  if constexpr (std::is_enum_v<T>)
+    return Codec<T>::json(x);
+  else
+    return x;
 }
 
 // One key: how its text sets the config, its JSON value (empty `get`: a key that only sets
@@ -90,7 +113,8 @@ struct Group {
 };
 
 // A key stored in one member, read and written by the member type's Codec.
-template <typename T> Setting field(const char* key, T TrainConfig::*m, const char* doc) {
+template <typename T>
+Setting field(const char* key, T TrainConfig::*m, const char* doc) {
   return {key, [key, m](TrainConfig& c, const std::string& v) { c.*m = Codec<T>::parse(key, v); },
           [m](const TrainConfig& c) { return json_of(c.*m); }, doc};
 }
@@ -113,8 +137,12 @@ std::vector<Setting> run_settings() {
       field("init_gaussians", &TrainConfig::init_gaussians,
             "random Gaussians seeded in the training views' frustums between near and far, coloured from their pixel"),
       field("seed", &TrainConfig::seed, "initialisation and view order"),
-      {"log_every", [](TrainConfig& c, const std::string& v) { c.log_every = uint32_t(std::max<uint64_t>(1, to_uint("log_every", v))); },
-       [](const TrainConfig& c) { return nlohmann::json(c.log_every); }, "a log line every this many steps (0 reads as 1)"},
+      {"log_every",
+       [](TrainConfig& c, const std::string& v) {
+         c.log_every = uint32_t(std::max<uint64_t>(1, to_uint("log_every", v)));
+       },
+       [](const TrainConfig& c) { return nlohmann::json(c.log_every); },
+       "a log line every this many steps (0 reads as 1)"},
       field("checkpoint_every", &TrainConfig::checkpoint_every,
             "`RUN/checkpoint.ckpt` every this many steps (0: only at the end); also on Ctrl-C"),
   };
@@ -129,9 +157,12 @@ std::vector<Setting> image_settings() {
          c.sh_degree = int(d);
        },
        [](const TrainConfig& c) { return nlohmann::json(c.sh_degree); }, "largest spherical-harmonics degree (0..3)"},
-      field("sh_increase_every", &TrainConfig::sh_increase_every, "the active SH degree grows by one every this many steps"),
-      field("lr_means_init", &TrainConfig::lr_means_init, "Adam learning rate of the means at the start, × the scene extent"),
-      field("lr_means_final", &TrainConfig::lr_means_final, "… at the end (exponential decay from `lr_means_init` over the run)"),
+      field("sh_increase_every", &TrainConfig::sh_increase_every,
+            "the active SH degree grows by one every this many steps"),
+      field("lr_means_init", &TrainConfig::lr_means_init,
+            "Adam learning rate of the means at the start, × the scene extent"),
+      field("lr_means_final", &TrainConfig::lr_means_final,
+            "… at the end (exponential decay from `lr_means_init` over the run)"),
       field("lr_sh_dc", &TrainConfig::lr_sh_dc, "learning rate of the SH degree-0 (base colour) coefficients"),
       field("lr_sh_rest", &TrainConfig::lr_sh_rest, "learning rate of the higher SH coefficients"),
       field("lr_opacity", &TrainConfig::lr_opacity, "learning rate of the opacity logits"),
@@ -246,7 +277,8 @@ std::string json_as_text(const nlohmann::json& v) {
   if (v.is_string()) return v.get<std::string>();
   if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
   if (v.is_array() && v.size() == 3)
-    return std::to_string(v[0].get<double>()) + "," + std::to_string(v[1].get<double>()) + "," + std::to_string(v[2].get<double>());
+    return std::to_string(v[0].get<double>()) + "," + std::to_string(v[1].get<double>()) + "," +
+           std::to_string(v[2].get<double>());
   if (v.is_number_integer() || v.is_number_unsigned()) return std::to_string(v.get<long long>());
   return v.dump();
 }
@@ -284,9 +316,12 @@ const char* loss_space_name(LossSpace s) { return s == LossSpace::Linear ? "line
 const char* mode_name(TrainMode m) { return m == TrainMode::Plain ? "plain" : "blur"; }
 const char* target_name(TrainTarget t) {
   switch (t) {
-    case TrainTarget::Blurry: return "blurry";
-    case TrainTarget::Sharp: return "sharp";
-    case TrainTarget::Edi: return "edi";
+    case TrainTarget::Blurry:
+      return "blurry";
+    case TrainTarget::Sharp:
+      return "sharp";
+    case TrainTarget::Edi:
+      return "edi";
   }
   return "?";
 }
@@ -311,11 +346,24 @@ TrainConfig TrainConfig::preset_named(const std::string& name) {
 }
 
 void TrainConfig::apply_method(const std::string& name) {
-  if (name == "plain") { mode = TrainMode::Plain; target = TrainTarget::Blurry; event_weight = 0; }
-  else if (name == "edi") { mode = TrainMode::Plain; target = TrainTarget::Edi; event_weight = 0; }
-  else if (name == "blur-only") { mode = TrainMode::Blur; target = TrainTarget::Blurry; event_weight = 0; }
-  else if (name == "blur+events") { mode = TrainMode::Blur; target = TrainTarget::Blurry; event_weight = 0.1; }
-  else throw std::invalid_argument("unknown method '" + name + "' (plain, edi, blur-only, blur+events)");
+  if (name == "plain") {
+    mode = TrainMode::Plain;
+    target = TrainTarget::Blurry;
+    event_weight = 0;
+  } else if (name == "edi") {
+    mode = TrainMode::Plain;
+    target = TrainTarget::Edi;
+    event_weight = 0;
+  } else if (name == "blur-only") {
+    mode = TrainMode::Blur;
+    target = TrainTarget::Blurry;
+    event_weight = 0;
+  } else if (name == "blur+events") {
+    mode = TrainMode::Blur;
+    target = TrainTarget::Blurry;
+    event_weight = 0.1;
+  } else
+    throw std::invalid_argument("unknown method '" + name + "' (plain, edi, blur-only, blur+events)");
 }
 
 void TrainConfig::set(const std::string& key, const std::string& value) {
@@ -367,7 +415,8 @@ std::string TrainConfig::describe_markdown() {
   std::string md, group;
   for (const SettingDoc& r : describe()) {
     if (r.group != group) {
-      md += (group.empty() ? "" : "\n") + std::string("#### ") + r.group + "\n\n| key | default | meaning |\n|---|---|---|\n";
+      md += (group.empty() ? "" : "\n") + std::string("#### ") + r.group +
+            "\n\n| key | default | meaning |\n|---|---|---|\n";
       group = r.group;
     }
     md += "| `" + r.key + "` | " + r.value + " | " + r.doc + " |\n";

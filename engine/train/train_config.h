@@ -71,7 +71,7 @@ struct TrainConfig {
   void set(const std::string& key, const std::string& value);  // throws naming the key and what it expects
   // "preset" first, then "method", then every other key (so explicit keys win).
   void apply_json(const nlohmann::json& j);
-  nlohmann::json to_json() const;  // every key but "method" (which only sets others)
+  nlohmann::json to_json() const;          // every key but "method" (which only sets others)
   static std::vector<std::string> keys();  // in the tables' order
   static std::vector<SettingDoc> describe();
   // describe() as markdown, one table per group: `evflow train --keys` prints it and

@@ -22,7 +22,9 @@ class StepClock {
     last_ = now;
     return ms;
   }
-  double total() const { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count(); }
+  double total() const {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+  }
 
  private:
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_ = start_;
@@ -42,14 +44,22 @@ Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg)
     : Trainer(ctx, data, cfg, Checkpoint{0, initial_cloud(data, cfg), {}}) {}
 
 Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, const Checkpoint& start)
-    : ctx_(ctx), data_(data), cfg_(std::move(cfg)), raster_(ctx), cmd_(ctx), v_alpha_(ctx, 16, "v_alpha"),
-      preview_(ctx), step_(start.step) {
+    : ctx_(ctx),
+      data_(data),
+      cfg_(std::move(cfg)),
+      raster_(ctx),
+      cmd_(ctx),
+      v_alpha_(ctx, 16, "v_alpha"),
+      preview_(ctx),
+      step_(start.step) {
   setup(start.cloud);
   optimizer_->load(start.optimizer);
   cameras_->load(start.trajectories, cfg_);
 }
 
-Checkpoint Trainer::checkpoint() const { return Checkpoint{step_, params_->download(), optimizer_->state(), cameras_->state()}; }
+Checkpoint Trainer::checkpoint() const {
+  return Checkpoint{step_, params_->download(), optimizer_->state(), cameras_->state()};
+}
 
 void Trainer::add_loss(std::unique_ptr<ExposureLossTerm> term) {
   if (cfg_.mode != TrainMode::Blur)
@@ -62,7 +72,8 @@ void Trainer::setup(const GaussianCloud& start) {
   const Camera& c0 = data_.train[0].camera;
   for (auto& v : data_.train)
     if (v.camera.width != c0.width || v.camera.height != c0.height)
-      throw std::invalid_argument("training views differ in size ('" + v.name + "'); one size per dataset is supported");
+      throw std::invalid_argument("training views differ in size ('" + v.name +
+                                  "'); one size per dataset is supported");
   start.validate("initial Gaussians");
   params_ = std::make_unique<GaussianBuffers>(ctx_, start.size(), start.sh_degree, "p_");
   grads_ = std::make_unique<GaussianBuffers>(ctx_, start.size(), start.sh_degree, "v_");
@@ -94,12 +105,14 @@ void Trainer::upload_targets() {
 // The event loss L_ev^gs on the training views' events, and the time-direction check it drives.
 void Trainer::add_event_term() {
   const Camera& c0 = data_.train[0].camera;
-  if (cfg_.mode != TrainMode::Blur) throw std::invalid_argument("event_weight > 0 needs mode=blur (the event loss compares virtual frames)");
-  if (data_.events.size() == 0) throw std::invalid_argument("event_weight > 0, but the dataset in '" + data_.root + "' has no events");
+  if (cfg_.mode != TrainMode::Blur)
+    throw std::invalid_argument("event_weight > 0 needs mode=blur (the event loss compares virtual frames)");
+  if (data_.events.size() == 0)
+    throw std::invalid_argument("event_weight > 0, but the dataset in '" + data_.root + "' has no events");
   if (data_.events.width != c0.width || data_.events.height != c0.height)
     throw std::invalid_argument("the events' sensor (" + std::to_string(data_.events.width) + "x" +
-                                std::to_string(data_.events.height) + ") differs from the images (" + std::to_string(c0.width) +
-                                "x" + std::to_string(c0.height) + ")");
+                                std::to_string(data_.events.height) + ") differs from the images (" +
+                                std::to_string(c0.width) + "x" + std::to_string(c0.height) + ")");
   std::vector<EventWindow> windows;
   for (auto& v : data_.train) {
     if (!(v.exposure_end > v.exposure_start))
@@ -120,7 +133,8 @@ RenderSettings Trainer::render_settings() const {
   RenderSettings s;
   s.background = cfg_.background;
   s.antialiased = cfg_.antialiased;
-  s.sh_degree = std::min<int>(params_->sh_degree, cfg_.sh_increase_every ? int(step_ / cfg_.sh_increase_every) : params_->sh_degree);
+  s.sh_degree = std::min<int>(params_->sh_degree,
+                              cfg_.sh_increase_every ? int(step_ / cfg_.sh_increase_every) : params_->sh_degree);
   return s;
 }
 
@@ -168,8 +182,15 @@ void Trainer::record_exposure_terms(StepStats& st) {
   const size_t n_pix = size_t(view.camera.width) * view.camera.height * 3;
   if (frame_grad_.size() != frames)
     for (uint32_t i = 0; i < frames; ++i) frame_grad_.emplace_back(ctx_, n_pix * 4, "frame_grad");
-  ExposureFrames ef{st.view, view.camera.width, view.camera.height, view.exposure_start, view.exposure_end,
-                    cameras_->frame_times(), {}, {}, cfg_.seed * 0x100000001B3ull + step_};
+  ExposureFrames ef{st.view,
+                    view.camera.width,
+                    view.camera.height,
+                    view.exposure_start,
+                    view.exposure_end,
+                    cameras_->frame_times(),
+                    {},
+                    {},
+                    cfg_.seed * 0x100000001B3ull + step_};
   for (uint32_t i = 0; i < frames; ++i) ef.rgb.push_back(&image_model_->linear_frame(i));
   const bool check = direction_ && direction_->active(step_);
   if (check) direction_->score_reversed(cmd_, ef);

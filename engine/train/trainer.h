@@ -43,10 +43,11 @@ struct StepStats {
 
 // Training view v as the model sees it between steps (for viewers).
 struct ViewSnapshot {
-  std::vector<double> times;               // the frames' exposure times u
-  std::vector<const gpu::Buffer*> frames;  // their renders, planar sRGB on the GPU (valid until the next step or snapshot)
-  std::vector<float> model;                // the image model's prediction (blur: the frames' mean), planar sRGB
-  std::vector<float> target;               // the training target, planar sRGB
+  std::vector<double> times;  // the frames' exposure times u
+  std::vector<const gpu::Buffer*>
+      frames;                 // their renders, planar sRGB on the GPU (valid until the next step or snapshot)
+  std::vector<float> model;   // the image model's prediction (blur: the frames' mean), planar sRGB
+  std::vector<float> target;  // the training target, planar sRGB
 };
 
 // The training view of a step: a seeded shuffle of the views per epoch (steps count from 1).

@@ -42,7 +42,8 @@ io::Image training_target(const io::Dataset& data, size_t view, const TrainConfi
   io::Image out = v.blurry;
   out.data = events::edi_deblur(v.blurry.data.data(), v.blurry.channels, data.events, v.exposure_start, v.exposure_end,
                                 events::EdiThresholds{pos, neg, {}, {}});
-  for (float& x : out.data) x = std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 0.0f;  // a training target lives in [0, 1]
+  for (float& x : out.data)
+    x = std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 0.0f;  // a training target lives in [0, 1]
   return out;
 }
 
@@ -61,16 +62,19 @@ GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg) {
     const double px = uni(0, cam.width), py = uni(0, cam.height);
     const double z = near * std::pow(far / near, uni(0.05, 0.9));  // log-uniform, away from the bounds
     const double pc[3] = {(px - cam.cx) / cam.fx * z - cam.t[0], (py - cam.cy) / cam.fy * z - cam.t[1], z - cam.t[2]};
-    for (int r = 0; r < 3; ++r) c.means[i * 3 + r] = float(cam.R[r] * pc[0] + cam.R[3 + r] * pc[1] + cam.R[6 + r] * pc[2]);
+    for (int r = 0; r < 3; ++r)
+      c.means[i * 3 + r] = float(cam.R[r] * pc[0] + cam.R[3 + r] * pc[1] + cam.R[6 + r] * pc[2]);
     const float ls = float(std::log(1.5 * z / cam.fx));  // ~1.5 px
     for (int k = 0; k < 3; ++k) c.log_scales[i * 3 + k] = ls;
     c.quats[i * 4] = 1;
     c.quats[i * 4 + 1] = c.quats[i * 4 + 2] = c.quats[i * 4 + 3] = 0;
     c.opacity_logits[i] = float(std::log(0.1 / 0.9));
-    const uint32_t ix = std::min<uint32_t>(uint32_t(px), img.width - 1), iy = std::min<uint32_t>(uint32_t(py), img.height - 1);
+    const uint32_t ix = std::min<uint32_t>(uint32_t(px), img.width - 1),
+                   iy = std::min<uint32_t>(uint32_t(py), img.height - 1);
     for (int ch = 0; ch < 3; ++ch) {
       // Splat colours are display-referred sRGB (image_model.h); images are linear in memory.
-      const float col = io::linear_to_srgb(img.data[(size_t(iy) * img.width + ix) * img.channels + std::min<uint32_t>(ch, img.channels - 1)]);
+      const float col = io::linear_to_srgb(
+          img.data[(size_t(iy) * img.width + ix) * img.channels + std::min<uint32_t>(ch, img.channels - 1)]);
       c.sh[(i * K) * 3 + ch] = float((col - 0.5) / 0.28209479177387814);
       for (int k = 1; k < K; ++k) c.sh[(i * K + k) * 3 + ch] = 0;
     }

@@ -20,7 +20,10 @@ double event_loss(const EventLossInputs& in) {
       D[p] = log_luma(in.frames[j], p) - log_luma(in.frames[s], p);
     }
     double ee = 0, dd = 0;
-    for (size_t p = 0; p < hw; ++p) { ee += E[p] * E[p]; dd += D[p] * D[p]; }
+    for (size_t p = 0; p < hw; ++p) {
+      ee += E[p] * E[p];
+      dd += D[p] * D[p];
+    }
     const double nE = std::sqrt(std::max(ee, floor2)), nD = std::sqrt(std::max(dd, floor2));
     double l = 0;
     for (size_t p = 0; p < hw; ++p) l += (E[p] / nE - D[p] / nD) * (E[p] / nE - D[p] / nD);

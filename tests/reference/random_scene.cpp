@@ -64,10 +64,18 @@ GaussianCloud random_scene(uint64_t seed, size_t n, int sh_degree, const Camera&
     } else if (kind == Kind::Beyond) {
       const double off = rng.uniform(0.05, 0.5);
       switch (rng.index(4)) {
-        case 0: u = -off * W; break;
-        case 1: u = W + off * W; break;
-        case 2: v = -off * H; break;
-        default: v = H + off * H; break;
+        case 0:
+          u = -off * W;
+          break;
+        case 1:
+          u = W + off * W;
+          break;
+        case 2:
+          v = -off * H;
+          break;
+        default:
+          v = H + off * H;
+          break;
       }
     }
     // Screen-space standard deviation -> world scale at this depth.

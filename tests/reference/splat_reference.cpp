@@ -12,7 +12,7 @@ namespace {
 
 constexpr double kShC2[5] = {1.0925484305920792, -1.0925484305920792, 0.31539156525252005, -1.0925484305920792,
                              0.5462742152960396};
-constexpr double kShC3[7] = {-0.5900435899266435, 2.890611442640554,  -0.4570457994644658, 0.3731763325901154,
+constexpr double kShC3[7] = {-0.5900435899266435, 2.890611442640554, -0.4570457994644658, 0.3731763325901154,
                              -0.4570457994644658, 1.445305721320277, -0.5900435899266435};
 constexpr double kMinAlpha = 1.0 / 255.0;
 constexpr double kMaxAlpha = 0.99;
@@ -112,10 +112,12 @@ Proj project(const GaussianD& g, const Context& ctx) {
   const auto& R = cam.R;
   // 1. camera-space mean
   double p[3];
-  for (int i = 0; i < 3; ++i) p[i] = R[i * 3] * g.mean[0] + R[i * 3 + 1] * g.mean[1] + R[i * 3 + 2] * g.mean[2] + cam.t[i];
+  for (int i = 0; i < 3; ++i)
+    p[i] = R[i * 3] * g.mean[0] + R[i * 3 + 1] * g.mean[1] + R[i * 3 + 2] * g.mean[2] + cam.t[i];
   if (!(p[2] >= cam.near_plane && p[2] <= cam.far_plane)) return P;
   // 2. covariance
-  const double qn = std::sqrt(g.quat[0] * g.quat[0] + g.quat[1] * g.quat[1] + g.quat[2] * g.quat[2] + g.quat[3] * g.quat[3]);
+  const double qn =
+      std::sqrt(g.quat[0] * g.quat[0] + g.quat[1] * g.quat[1] + g.quat[2] * g.quat[2] + g.quat[3] * g.quat[3]);
   const double w = g.quat[0] / qn, x = g.quat[1] / qn, y = g.quat[2] / qn, z = g.quat[3] / qn;
   const double Rq[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
                         2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
@@ -247,9 +249,7 @@ inline double alpha_at(const Proj& P, int x, int y) {
   return std::min(kMaxAlpha, P.opacity * std::exp(power));
 }
 
-inline bool in_box(const Proj& P, int x, int y) {
-  return P.valid && x >= P.x0 && x <= P.x1 && y >= P.y0 && y <= P.y1;
-}
+inline bool in_box(const Proj& P, int x, int y) { return P.valid && x >= P.x0 && x <= P.x1 && y >= P.y0 && y <= P.y1; }
 
 // Whether blending P at (x, y) does anything (otherwise it is skipped by the box or alpha test).
 inline bool touches(const Proj& P, int x, int y) { return in_box(P, x, y) && alpha_at(P, x, y) >= kMinAlpha; }
@@ -372,8 +372,13 @@ struct FiniteDifferences::Impl {
   std::vector<uint32_t> stop;  // per pixel: the Gaussian where the base render stopped, or UINT32_MAX
 
   Impl(const GaussianCloud& c, const Camera& cm, const RenderSettings& s, std::vector<float> vr, std::vector<float> va)
-      : cloud(c), cam(cm), settings(s), v_rgb(std::move(vr)), v_alpha(std::move(va)),
-        ctx(make_context(cam, settings, cloud.degree)), scene(cloud, ctx) {
+      : cloud(c),
+        cam(cm),
+        settings(s),
+        v_rgb(std::move(vr)),
+        v_alpha(std::move(va)),
+        ctx(make_context(cam, settings, cloud.degree)),
+        scene(cloud, ctx) {
     stop.resize(size_t(scene.W) * scene.H);
     for (uint32_t y = 0; y < scene.H; ++y)
       for (uint32_t x = 0; x < scene.W; ++x) stop[size_t(y) * scene.W + x] = composite(scene, int(x), int(y)).stop;
@@ -420,21 +425,31 @@ struct FiniteDifferences::Impl {
 
   static double& slot(Local& L, Param p, int comp) {
     switch (p) {
-      case Param::Mean: return L.mean[comp];
-      case Param::LogScale: return L.log_scale[comp];
-      case Param::Quat: return L.quat[comp];
-      case Param::OpacityLogit: return L.logit;
-      case Param::Sh: return L.sh[comp];
+      case Param::Mean:
+        return L.mean[comp];
+      case Param::LogScale:
+        return L.log_scale[comp];
+      case Param::Quat:
+        return L.quat[comp];
+      case Param::OpacityLogit:
+        return L.logit;
+      case Param::Sh:
+        return L.sh[comp];
     }
     throw std::logic_error("bad Param");
   }
   static double& slot(CloudD& c, Param p, size_t i, int comp) {
     switch (p) {
-      case Param::Mean: return c.means[i * 3 + comp];
-      case Param::LogScale: return c.log_scales[i * 3 + comp];
-      case Param::Quat: return c.quats[i * 4 + comp];
-      case Param::OpacityLogit: return c.logits[i];
-      case Param::Sh: return c.sh[i * c.coeffs * 3 + comp];
+      case Param::Mean:
+        return c.means[i * 3 + comp];
+      case Param::LogScale:
+        return c.log_scales[i * 3 + comp];
+      case Param::Quat:
+        return c.quats[i * 4 + comp];
+      case Param::OpacityLogit:
+        return c.logits[i];
+      case Param::Sh:
+        return c.sh[i * c.coeffs * 3 + comp];
     }
     throw std::logic_error("bad Param");
   }
@@ -484,7 +499,8 @@ double FiniteDifferences::param(Param p, size_t gaussian, int component, double 
       }
       PixelState sp, sm;
       composite_pair(I.scene, x, y, gaussian, Pp, Pm, sp, sm);
-      sum += pixel_loss(sp, pix, HW, I.ctx.bg, I.v_rgb, I.v_alpha) - pixel_loss(sm, pix, HW, I.ctx.bg, I.v_rgb, I.v_alpha);
+      sum +=
+          pixel_loss(sp, pix, HW, I.ctx.bg, I.v_rgb, I.v_alpha) - pixel_loss(sm, pix, HW, I.ctx.bg, I.v_rgb, I.v_alpha);
     }
   return sum / (2.0 * h);
 }
@@ -521,17 +537,22 @@ double FiniteDifferences::loss() const {
   double sum = 0;
   for (uint32_t y = 0; y < I.scene.H; ++y)
     for (uint32_t x = 0; x < I.scene.W; ++x)
-      sum += pixel_loss(composite(I.scene, int(x), int(y)), size_t(y) * I.scene.W + x, HW, I.ctx.bg, I.v_rgb, I.v_alpha);
+      sum +=
+          pixel_loss(composite(I.scene, int(x), int(y)), size_t(y) * I.scene.W + x, HW, I.ctx.bg, I.v_rgb, I.v_alpha);
   return sum;
 }
 
 int param_components(Param p, const GaussianCloud& cloud) {
   switch (p) {
     case Param::Mean:
-    case Param::LogScale: return 3;
-    case Param::Quat: return 4;
-    case Param::OpacityLogit: return 1;
-    case Param::Sh: return cloud.coeffs() * 3;
+    case Param::LogScale:
+      return 3;
+    case Param::Quat:
+      return 4;
+    case Param::OpacityLogit:
+      return 1;
+    case Param::Sh:
+      return cloud.coeffs() * 3;
   }
   return 0;
 }

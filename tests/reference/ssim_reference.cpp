@@ -105,8 +105,8 @@ double blend_loss(const std::vector<double>& a, const std::vector<double>& b, co
   return (1 - lambda) * l1_mean(a, b) + lambda * (1 - ssim_mean(a, b, d));
 }
 
-double fd_ssim_mean(const std::vector<double>& a, const std::vector<double>& b, const ImageDims& d, int c, int y,
-                    int x, double h) {
+double fd_ssim_mean(const std::vector<double>& a, const std::vector<double>& b, const ImageDims& d, int c, int y, int x,
+                    double h) {
   std::vector<double> p = a;
   const size_t i = d.index(c, y, x);
   p[i] = a[i] + h;

@@ -38,8 +38,8 @@ double blend_loss(const std::vector<double>& a, const std::vector<double>& b, co
 
 // Central finite differences (step h, in double) of the losses w.r.t. a[(c, y, x)], evaluated
 // locally (only the terms that depend on that pixel).
-double fd_ssim_mean(const std::vector<double>& a, const std::vector<double>& b, const ImageDims& d, int c, int y,
-                    int x, double h = 1e-5);
+double fd_ssim_mean(const std::vector<double>& a, const std::vector<double>& b, const ImageDims& d, int c, int y, int x,
+                    double h = 1e-5);
 double fd_l1_mean(const std::vector<double>& a, const std::vector<double>& b, const ImageDims& d, int c, int y, int x,
                   double h = 1e-6);
 double fd_blend_loss(const std::vector<double>& a, const std::vector<double>& b, const ImageDims& d, double lambda,
