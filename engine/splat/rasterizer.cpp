@@ -103,8 +103,8 @@ RasterKernels RasterKernels::for_context(const gpu::Context& ctx) {
   // Compositing kernels: one pixel per invocation (GPUs) or a block of pixels per invocation
   // (CPU drivers, where every shared-memory access is a loop over the SIMD lanes).
   k.block = o.raster_kernel.empty() ? cpu : o.raster_kernel == "block";
-  // Cross-lane operations are emulated on CPU drivers; measured 3x slower there than per-lane
-  // shared-memory adds (bench raster, lavapipe). GPUs reduce in the subgroup first.
+  // Cross-lane operations are emulated on CPU drivers, slower there than per-lane shared-memory
+  // adds (docs/rasterizer.md); GPUs reduce in the subgroup first.
   k.subgroup_reduce = o.subgroup_reduce < 0 ? !cpu : o.subgroup_reduce == 1;
   return k;
 }
