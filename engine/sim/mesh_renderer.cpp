@@ -126,21 +126,17 @@ Frame MeshRenderer::render(const Camera& c) {
   cmd_.submit();
   const uint32_t items = offsets_.read_one<uint32_t>(n_tris_);
   if (items > 0) {
-    cmd_.dispatch("sim/raster",
-                  {{kSimRasterBindCamVerts, cam_},
-                   {kSimRasterBindBoxes, boxes_},
-                   {kSimRasterBindOffsets, offsets_},
-                   {kSimRasterBindDepth, depth_},
-                   {kSimRasterBindIds, ids_}},
-                  pc, cmd_.linear_groups(items));
-    pc.dims.w = 1;
-    cmd_.dispatch("sim/raster",
-                  {{kSimRasterBindCamVerts, cam_},
-                   {kSimRasterBindBoxes, boxes_},
-                   {kSimRasterBindOffsets, offsets_},
-                   {kSimRasterBindDepth, depth_},
-                   {kSimRasterBindIds, ids_}},
-                  pc, cmd_.linear_groups(items));
+    // Pass 0 keeps each pixel's nearest depth, pass 1 the triangle at that depth.
+    for (uint32_t pass = 0; pass < 2; ++pass) {
+      pc.dims.w = pass;
+      cmd_.dispatch("sim/raster",
+                    {{kSimRasterBindCamVerts, cam_},
+                     {kSimRasterBindBoxes, boxes_},
+                     {kSimRasterBindOffsets, offsets_},
+                     {kSimRasterBindDepth, depth_},
+                     {kSimRasterBindIds, ids_}},
+                    pc, cmd_.linear_groups(items));
+    }
   }
   cmd_.dispatch("sim/shade",
                 {{kSimShadeBindTris, tris_},
