@@ -242,9 +242,8 @@ ViewSnapshot Trainer::snapshot(uint32_t v) {
 }
 
 std::vector<float> Trainer::render(const Camera& cam) {
-  RenderSettings s;
-  s.background = cfg_.background;
-  s.antialiased = cfg_.antialiased;
+  RenderSettings s = render_settings();
+  s.sh_degree = -1;  // every degree the Gaussians have
   raster_.forward(*params_, cam, s, preview_);
   return preview_.outputs().rgb.read<float>(size_t(cam.width) * cam.height * 3);
 }
