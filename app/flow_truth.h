@@ -1,0 +1,20 @@
+// Ground-truth flow of a simulated exposure's intervals (evflow flow): from the simulator's
+// gt/trajectories.json (the sub-frame poses) and gt/depth/<view>.npy (depth at mid-exposure).
+#pragma once
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace evflow::app {
+
+// For each interval [u_j, u_{j+1}] (normalised exposure times) of training view `name`: the
+// displacement over the interval of the surface point seen at each pixel at mid-exposure,
+// H * W * 2 (NaN where no surface or out of view). nullopt when `data` has no ground truth.
+// Sub-frame poses are interpolated by projecting at the two nearest sub-frames and blending the
+// pixel positions linearly in time (the sub-frames are at most half a pixel apart).
+std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const std::filesystem::path& data,
+                                                                         const std::string& name,
+                                                                         const std::vector<double>& frame_u);
+
+}  // namespace evflow::app

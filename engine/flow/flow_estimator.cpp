@@ -1,0 +1,267 @@
+#include "flow/flow_estimator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "flow/flow_layout.h"
+#include "optim/host_adam.h"
+
+namespace evflow::flow {
+
+using shaderio::kFlowGroupSize;
+using shaderio::kFlowRefs;
+
+namespace {
+constexpr double kRefWeight[kFlowRefs] = {0.25, 0.5, 0.25};  // flow_ref_weight in flow_math.glsl
+}
+
+void FlowOptions::validate() const {
+  if (tiles.empty() || tiles.size() != iterations.size())
+    throw std::invalid_argument("flow: the tile pyramid and the iterations per level must be non-empty and as long");
+  for (size_t l = 0; l < tiles.size(); ++l)
+    if (tiles[l] == 0 || tiles[l] > 256 || (l > 0 && tiles[l] % tiles[l - 1] != 0))
+      throw std::invalid_argument("flow: tiles per level must be 1..256, each a multiple of the one before");
+  if (image_scale.size() != tiles.size())
+    throw std::invalid_argument("flow: one image scale per level of the tile pyramid");
+  for (uint32_t sc : image_scale)
+    if (sc == 0 || sc > 64) throw std::invalid_argument("flow: image scales must be 1..64");
+  if (!(lr > 0) || !(lr_level > 0)) throw std::invalid_argument("flow: learning rates must be > 0");
+  if (!(tv_weight >= 0)) throw std::invalid_argument("flow: tv_weight must be >= 0");
+}
+
+double flow_ref_weight(uint32_t r) { return kRefWeight[r]; }
+
+namespace {
+// The intervals between consecutive frame times as the shaders read them.
+std::vector<float> interval_table(const std::vector<double>& frame_u) {
+  if (frame_u.size() < 2 || frame_u.size() > shaderio::kFlowMaxIntervals + 1)
+    throw std::invalid_argument("flow: needs 2 to " + std::to_string(shaderio::kFlowMaxIntervals + 1) +
+                                " frame times, got " + std::to_string(frame_u.size()));
+  std::vector<float> t;
+  for (size_t i = 0; i + 1 < frame_u.size(); ++i) {
+    const double d = frame_u[i + 1] - frame_u[i];
+    if (!(d > 0) || frame_u[i] < 0 || frame_u[i + 1] > 1)
+      throw std::invalid_argument("flow: frame times must increase within [0, 1]");
+    t.insert(t.end(), {float(frame_u[i]), float(frame_u[i + 1]), float(1.0 / d), 0.0f});
+  }
+  return t;
+}
+}  // namespace
+
+FlowEstimator::FlowEstimator(gpu::Context& ctx, FlowOptions options)
+    : ctx_(ctx),
+      options_(std::move(options)),
+      pixel_first_(ctx, 16, "flow_pixel_first"),
+      event_time_(ctx, 16, "flow_event_time"),
+      intervals_(ctx, 16, "flow_intervals"),
+      nodes_(ctx, 16, "flow_nodes"),
+      iwe_(ctx, 16, "flow_iwe"),
+      blur_tmp_(ctx, 16, "flow_blur_tmp"),
+      blurred_(ctx, 16, "flow_blurred"),
+      adjoint_(ctx, 16, "flow_adjoint"),
+      scale_(ctx, 16, "flow_scale"),
+      partials_(ctx, 16, "flow_partials"),
+      grad_field_(ctx, 16, "flow_grad_field"),
+      node_grad_(ctx, 16, "flow_node_grad") {
+  options_.validate();
+}
+
+void FlowEstimator::set_events(const PixelEvents& ev) {
+  const uint64_t hw = uint64_t(ev.width) * ev.height;
+  if (hw == 0 || ev.first.size() != hw + 1 || ev.first.back() != ev.size())
+    throw std::invalid_argument("flow: pixel events are inconsistent with their " + std::to_string(ev.width) + "x" +
+                                std::to_string(ev.height) + " sensor");
+  ctx_.check_binding_size(ev.size() * 4, "flow: the events of one exposure");
+  width_ = ev.width;
+  height_ = ev.height;
+  pixel_first_.ensure((hw + 1) * 4);
+  pixel_first_.write(ev.first);
+  event_time_.ensure(std::max<uint64_t>(ev.size() * 4, 16));
+  event_time_.write(ev.time);
+}
+
+void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint32_t tiles, uint32_t image_scale,
+                                   bool gradient) {
+  using namespace shaderio;
+  const uint32_t iw = (width_ + image_scale - 1) / image_scale, ih = (height_ + image_scale - 1) / image_scale;
+  const uint64_t hw = uint64_t(iw) * ih;
+  const FlowEventsPC epc{width_, height_, intervals, tiles, iw, ih, float(image_scale), 0};
+  const gpu::Groups pixel_groups = cmd.linear_groups(gpu::Commands::div_up(uint64_t(width_) * height_, kFlowGroupSize));
+  const gpu::Groups image_groups = cmd.linear_groups(gpu::Commands::div_up(hw * kFlowRefs, kFlowGroupSize));
+  const uint32_t per_image = gpu::Commands::div_up(hw, kFlowGroupSize);
+  cmd.fill(iwe_, 0u, 0, hw * kFlowRefs * 4);
+  cmd.dispatch("flow/vote",
+               {{kFlowVoteBindPixelFirst, pixel_first_},
+                {kFlowVoteBindEventTime, event_time_},
+                {kFlowVoteBindIntervals, intervals_},
+                {kFlowVoteBindNodes, nodes_},
+                {kFlowVoteBindIwe, iwe_}},
+               epc, pixel_groups);
+  auto blur = [&](const gpu::Buffer& src, const gpu::Buffer& dst, uint32_t axis, uint32_t fixed) {
+    const FlowBlurPC bpc{iw, ih, kFlowRefs, axis, fixed, 0, 0, 0};
+    cmd.dispatch("flow/blur", {{kFlowBlurBindSrc, src}, {kFlowBlurBindDst, dst}}, bpc, image_groups);
+  };
+  blur(iwe_, blur_tmp_, 0, 1);
+  blur(blur_tmp_, blurred_, 1, 0);
+  const FlowContrastPC cpc{iw, ih, kFlowRefs, per_image};
+  cmd.dispatch("flow/contrast",
+               {{kFlowContrastBindBlurred, blurred_},
+                {kFlowContrastBindScale, scale_},
+                {kFlowContrastBindAdjoint, adjoint_},
+                {kFlowContrastBindPartials, partials_}},
+               cpc, cmd.linear_groups(uint64_t(per_image) * kFlowRefs));
+  if (!gradient) return;
+  blur(adjoint_, blur_tmp_, 0, 0);  // the blur is its own adjoint
+  blur(blur_tmp_, adjoint_, 1, 0);
+  cmd.dispatch("flow/flow_grad",
+               {{kFlowGradBindPixelFirst, pixel_first_},
+                {kFlowGradBindEventTime, event_time_},
+                {kFlowGradBindIntervals, intervals_},
+                {kFlowGradBindNodes, nodes_},
+                {kFlowGradBindAdjoint, adjoint_},
+                {kFlowGradBindGradField, grad_field_}},
+               epc, pixel_groups);
+  const uint32_t nodes = (tiles + 1) * (tiles + 1);
+  const FlowNodeReducePC rpc{width_, height_, intervals, tiles};
+  cmd.dispatch("flow/node_reduce", {{kFlowReduceBindGradField, grad_field_}, {kFlowReduceBindNodeGrad, node_grad_}},
+               rpc, cmd.linear_groups(uint64_t(nodes) * intervals));
+}
+
+ContrastEval FlowEstimator::evaluate(const std::vector<double>& frame_u, const std::vector<FlowGrid>& grids,
+                                     const std::vector<float>& scale, bool gradient, uint32_t image_scale) {
+  const std::vector<float> table = interval_table(frame_u);
+  const uint32_t J = uint32_t(grids.size());
+  if (J != frame_u.size() - 1 || scale.size() != kFlowRefs)
+    throw std::invalid_argument("flow: evaluate needs one grid per interval and three scales");
+  if (width_ == 0) throw std::logic_error("flow: evaluate before set_events");
+  const uint32_t tiles = grids[0].tiles;
+  const uint64_t hw = uint64_t(width_) * height_;
+  ctx_.check_binding_size(hw * kFlowRefs * 4, "flow: the images of warped events");
+  ctx_.check_binding_size(hw * J * 8, "flow: the per-pixel flow gradients");
+  std::vector<float> nodes;
+  for (const FlowGrid& g : grids) {
+    if (g.tiles != tiles) throw std::invalid_argument("flow: every grid of one evaluate has the same tiles");
+    nodes.insert(nodes.end(), g.nodes.begin(), g.nodes.end());
+  }
+  if (image_scale == 0 || image_scale > 64) throw std::invalid_argument("flow: image scale must be 1..64");
+  const uint64_t ihw = uint64_t((width_ + image_scale - 1) / image_scale) * ((height_ + image_scale - 1) / image_scale);
+  const uint32_t per_image = uint32_t((ihw + kFlowGroupSize - 1) / kFlowGroupSize);
+  last_image_pixels_ = ihw;
+  intervals_.ensure(table.size() * 4);
+  intervals_.write(table);
+  nodes_.ensure(nodes.size() * 4);
+  nodes_.write(nodes);
+  scale_.ensure(kFlowRefs * 4);
+  scale_.write(scale);
+  for (gpu::Buffer* b : {&iwe_, &blur_tmp_, &blurred_, &adjoint_}) b->ensure(hw * kFlowRefs * 4);
+  partials_.ensure(uint64_t(per_image) * kFlowRefs * 4);
+  grad_field_.ensure(hw * J * 8);
+  node_grad_.ensure(nodes.size() * 4);
+
+  gpu::Commands cmd(ctx_);
+  record_contrast(cmd, J, tiles, image_scale, gradient);
+  cmd.submit();
+
+  ContrastEval out;
+  const std::vector<float> partials = partials_.read<float>(size_t(per_image) * kFlowRefs);
+  out.g.assign(kFlowRefs, 0.0);
+  for (uint32_t r = 0; r < kFlowRefs; ++r)
+    for (uint32_t k = 0; k < per_image; ++k) out.g[r] += partials[r * per_image + k];
+  if (gradient) {
+    const std::vector<float> g = node_grad_.read<float>(nodes.size());
+    const size_t per = grids[0].nodes.size();
+    for (uint32_t j = 0; j < J; ++j) out.node_grad.emplace_back(g.begin() + j * per, g.begin() + (j + 1) * per);
+  }
+  return out;
+}
+
+std::vector<float> FlowEstimator::iwe(uint32_t r) const {
+  if (width_ == 0 || r >= kFlowRefs) throw std::out_of_range("flow: no such image of warped events");
+  const uint64_t hw = uint64_t(width_) * height_;
+  if (last_image_pixels_ != hw) throw std::logic_error("flow: the last evaluate was not at full resolution");
+  std::vector<uint32_t> fixed = iwe_.read<uint32_t>(hw, uint64_t(r) * hw * 4);
+  std::vector<float> out(hw);
+  for (uint64_t i = 0; i < hw; ++i) out[i] = float(fixed[i] / double(shaderio::kFlowVoteScale));
+  return out;
+}
+
+namespace {
+// weight * mean over nodes and neighbouring intervals of |u_{j+1} - u_j|^2: its gradient, added.
+void add_temporal_smoothness(const std::vector<FlowGrid>& grids, double weight,
+                             std::vector<std::vector<double>>& grad) {
+  const size_t n = grids[0].nodes.size();
+  const double k = 2 * weight / (double(n / 2) * std::max<size_t>(1, grids.size() - 1));
+  for (size_t j = 0; j + 1 < grids.size(); ++j)
+    for (size_t i = 0; i < n; ++i) {
+      const double d = double(grids[j + 1].nodes[i]) - grids[j].nodes[i];
+      grad[j + 1][i] += k * d;
+      grad[j][i] -= k * d;
+    }
+}
+}  // namespace
+
+void FlowEstimator::optimise_level(const std::vector<double>& frame_u, std::vector<FlowGrid>& grids,
+                                   const std::vector<float>& scale, uint32_t iterations, double lr, bool tied,
+                                   uint32_t image_scale) {
+  const size_t J = grids.size(), n = grids[0].nodes.size(), groups = tied ? 1 : J;
+  std::vector<std::vector<double>> x(groups), m(groups, std::vector<double>(n, 0.0)),
+      v(groups, std::vector<double>(n, 0.0));
+  for (size_t k = 0; k < groups; ++k) x[k].assign(grids[k].nodes.begin(), grids[k].nodes.end());
+  for (uint32_t it = 0; it < iterations; ++it) {
+    ContrastEval e = evaluate(frame_u, grids, scale, true, image_scale);
+    const double step = lr * (1.0 - 0.9 * it / std::max(1u, iterations));  // decays to lr / 10
+    if (tied)  // one flow for every interval: the gradients add
+      for (size_t j = 1; j < J; ++j)
+        for (size_t k = 0; k < n; ++k) e.node_grad[0][k] += e.node_grad[j][k];
+    if (!tied) add_temporal_smoothness(grids, options_.temporal_weight, e.node_grad);
+    for (size_t k = 0; k < groups; ++k) {
+      grid_tv(grids[k], options_.tv_weight * (tied ? J : 1), e.node_grad[k]);
+      host_adam_step(x[k].data(), e.node_grad[k].data(), m[k].data(), v[k].data(), n, it + 1, step);
+    }
+    for (size_t j = 0; j < J; ++j)
+      for (size_t k = 0; k < n; ++k) grids[j].nodes[k] = float(x[tied ? 0 : j][k]);
+  }
+}
+
+std::vector<float> FlowEstimator::normalisation(const std::vector<double>& frame_u, uint32_t tiles,
+                                                 uint32_t image_scale) {
+  const std::vector<FlowGrid> zero(frame_u.size() - 1, FlowGrid(tiles));
+  const ContrastEval e = evaluate(frame_u, zero, std::vector<float>(kFlowRefs, 0.0f), false, image_scale);
+  std::vector<float> scale(kFlowRefs, 0.0f);
+  for (uint32_t r = 0; r < kFlowRefs; ++r)
+    if (e.g[r] > 0) scale[r] = float(-kRefWeight[r] / e.g[r]);
+  return scale;
+}
+
+ExposureFlow FlowEstimator::estimate(const PixelEvents& events, const std::vector<double>& frame_u) {
+  set_events(events);
+  const size_t J = interval_table(frame_u).size() / 4;
+  std::vector<FlowGrid> grids(J, FlowGrid(options_.tiles[0]));
+  double lr = options_.lr;
+  for (size_t l = 0; l < options_.tiles.size(); ++l, lr *= options_.lr_level) {
+    if (l > 0)
+      for (FlowGrid& g : grids) g = refine(g, options_.tiles[l], events.width, events.height);
+    const std::vector<float> scale = normalisation(frame_u, options_.tiles[l], options_.image_scale[l]);
+    optimise_level(frame_u, grids, scale, options_.iterations[l], lr, true, options_.image_scale[l]);
+  }
+  const std::vector<float> scale = normalisation(frame_u, options_.tiles.back(), 1);
+  optimise_level(frame_u, grids, scale, options_.interval_iterations, options_.lr_intervals, false, 1);
+  const ContrastEval final_eval = evaluate(frame_u, grids, scale, false);
+  ExposureFlow out;
+  out.width = events.width;
+  out.height = events.height;
+  out.frame_u = frame_u;
+  out.contrast = 0;
+  for (uint32_t r = 0; r < kFlowRefs; ++r) out.contrast += scale[r] == 0 ? kRefWeight[r] : -scale[r] * final_eval.g[r];
+  for (size_t j = 0; j < J; ++j) {
+    IntervalFlow f;
+    f.grid = grids[j];
+    for (uint32_t c : event_counts(events, frame_u[j], frame_u[j + 1])) f.events += c;
+    out.intervals.push_back(std::move(f));
+  }
+  return out;
+}
+
+}  // namespace evflow::flow

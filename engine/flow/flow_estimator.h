@@ -1,0 +1,104 @@
+// Optical flow from events by contrast maximisation (Gallego et al. 2018; Shiba et al. 2022), on
+// the GPU (shaders/flow/, docs/flow.md). For one exposure and the intervals [t_j, t_{j+1}] of its
+// virtual frames: the flows u_j (pixels over interval j) under which the exposure's events, each
+// warped from its time t_k to a reference time t_r along the piecewise-constant flow
+//
+//   x' = x_k + sum_j lever_j(t_k, t_r) u_j(x_k),  lever_j = the signed part of [t_k, t_r] in
+//        interval j, in interval lengths (within one interval: x_k + (t_r - t_k) u_j(x_k)),
+//
+// stack into the sharpest images of warped events (IWE). The references are the exposure's
+// start, middle and end (weights 1/4, 1/2, 1/4); each IWE is blurred (Gaussian, sigma 1 px) and
+// scored by its summed squared gradient G, normalised by its value with zero flow (Shiba's
+// normalised gradient magnitude: collapsing the events into a few pixels at one reference spreads
+// them at the others, so it does not pay):
+//
+//   loss(u) = - sum_r w_r G_r(u) / G_r(0) + tv_weight * sum_j TV(u_j)
+//             + temporal_weight * mean_j,nodes |u_{j+1} - u_j|^2.
+//
+// Coarse to fine in space, then in time: one flow for the whole exposure (every u_j the same), a
+// node grid (flow/flow_grid.h) refined 1 -> 2x2 -> ... tiles while the IWEs go from coarse images
+// (large motions of fine textures have many local optima at full resolution) to the sensor's;
+// then each interval's own flow from there. Every stage is Adam on the analytic gradients the shaders compute.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "flow/flow_grid.h"
+#include "flow/pixel_events.h"
+#include "gpu/buffer.h"
+#include "gpu/commands.h"
+
+namespace evflow::flow {
+
+struct FlowOptions {
+  std::vector<uint32_t> tiles = {1, 2, 4, 8};           // the pyramid of the exposure's flow
+  std::vector<uint32_t> image_scale = {4, 2, 1, 1};     // each level's IWE is this much coarser
+  std::vector<uint32_t> iterations = {60, 30, 25, 20};  // its Adam steps per level
+  uint32_t interval_iterations = 40;                    // then the intervals' own flows
+  double lr = 0.1;             // Adam step (pixels per interval) at the first level, decaying to a tenth
+  double lr_level = 0.6;       // each finer level's step, relative to the one before
+  double lr_intervals = 0.08;  // the intervals' own flows' step
+  double tv_weight = 0.01;  // weight of each grid's total variation
+  double temporal_weight = 0.05;  // weight of the mean squared change of the flow between intervals
+  void validate() const;    // throws std::invalid_argument naming the bad setting
+};
+
+struct IntervalFlow {
+  FlowGrid grid;
+  uint32_t events = 0;  // events inside the interval
+};
+
+struct ExposureFlow {
+  uint32_t width = 0, height = 0;
+  std::vector<double> frame_u;  // the 2N+1 frame times, normalised to the exposure
+  std::vector<IntervalFlow> intervals;
+  double contrast = 1;  // sum_r w_r G_r(u) / G_r(0): 1 with zero flow, larger when sharper
+};
+
+// The GPU's answer: G per reference and, when asked, the gradient of sum_r scale[r] G_r with
+// respect to each interval's nodes.
+struct ContrastEval {
+  std::vector<double> g;                       // 3
+  std::vector<std::vector<double>> node_grad;  // per interval, nodes * 2
+};
+
+class FlowEstimator {
+ public:
+  FlowEstimator(gpu::Context& ctx, FlowOptions options = {});
+
+  // Uploads one exposure's events; evaluate() and iwe() use them.
+  void set_events(const PixelEvents& events);
+  // Scores one grid per interval between consecutive `frame_u` (same tile count) on the events.
+  // The IWEs are `image_scale` times coarser than the sensor.
+  ContrastEval evaluate(const std::vector<double>& frame_u, const std::vector<FlowGrid>& grids,
+                        const std::vector<float>& scale, bool gradient, uint32_t image_scale = 1);
+  // The IWE (H * W, events per pixel, unblurred) at reference r of the last evaluate (at image
+  // scale 1).
+  std::vector<float> iwe(uint32_t r) const;
+
+  // The flow of every interval between consecutive `frame_u` (normalised times, increasing, in
+  // [0, 1], at most 17) of the exposure whose events are given.
+  ExposureFlow estimate(const PixelEvents& events, const std::vector<double>& frame_u);
+
+  const FlowOptions& options() const { return options_; }
+
+ private:
+  void record_contrast(gpu::Commands& cmd, uint32_t intervals, uint32_t tiles, uint32_t image_scale, bool gradient);
+  // The per-reference scales -w_r / G_r(0) at this level.
+  std::vector<float> normalisation(const std::vector<double>& frame_u, uint32_t tiles, uint32_t image_scale);
+  void optimise_level(const std::vector<double>& frame_u, std::vector<FlowGrid>& grids,
+                      const std::vector<float>& scale, uint32_t iterations, double lr, bool tied,
+                      uint32_t image_scale);
+
+  gpu::Context& ctx_;
+  FlowOptions options_;
+  uint32_t width_ = 0, height_ = 0;
+  uint64_t last_image_pixels_ = 0;
+  gpu::Buffer pixel_first_, event_time_, intervals_, nodes_, iwe_, blur_tmp_, blurred_, adjoint_, scale_, partials_,
+      grad_field_, node_grad_;
+};
+
+// The weight of reference r (start, middle, end) in the loss.
+double flow_ref_weight(uint32_t r);
+
+}  // namespace evflow::flow

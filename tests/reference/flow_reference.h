@@ -1,0 +1,19 @@
+// Double-precision CPU reference of the flow estimator's contrast (engine/flow/flow_estimator.h):
+// the same warp, bilinear vote, Gaussian blur and squared central-difference gradient, without
+// the GPU's fixed-point votes.
+#pragma once
+#include <vector>
+
+#include "flow/flow_estimator.h"
+
+namespace evflow::reference {
+
+// sum over references r of scale[r] * G_r(grids), one grid per interval between consecutive
+// frame_u.
+double flow_contrast(const flow::PixelEvents& ev, const std::vector<double>& frame_u,
+                     const std::vector<flow::FlowGrid>& grids, const std::vector<double>& scale);
+
+// G of one image: sum of squared central differences of its 7-tap Gaussian blur (zero outside).
+double flow_image_contrast(const std::vector<double>& iwe, int width, int height);
+
+}  // namespace evflow::reference
