@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "cli.h"
+#include "flow/flow_estimator.h"
 #include "gpu/commands.h"
 #include "splat/rasterizer.h"
 #include "splat/synthetic.h"
@@ -165,6 +166,50 @@ static int bench_train(ArgParser& p) {
   return 0;
 }
 
+// Flow estimation of the training views of a dataset: wall seconds and the GPU stages' totals.
+static int bench_flow(ArgParser& p) {
+  const std::string data_dir = p.value("--data");
+  const int views = int(p.integer("--views", 0));  // 0: all
+  const bool json = p.flag("--json");
+  gpu::ContextOptions o = context_options(p);
+  p.reject_unknown();
+  if (data_dir.empty()) throw std::invalid_argument("bench flow: --data DIR needed (a dataset with events)");
+  const io::Dataset data = io::load_dataset(data_dir);
+  if (data.events.size() == 0) throw std::invalid_argument("bench flow: " + data_dir + " has no event stream");
+  gpu::Context ctx(o);
+  flow::FlowEstimator est(ctx);
+  std::vector<double> u;
+  const uint32_t frames = 2 * TrainConfig{}.virtual_frames + 1;
+  for (uint32_t i = 0; i < frames; ++i) u.push_back(double(i) / (frames - 1));
+  const size_t n = views > 0 ? std::min<size_t>(size_t(views), data.train.size()) : data.train.size();
+  const auto start = std::chrono::steady_clock::now();
+  size_t events = 0;
+  for (size_t v = 0; v < n; ++v) {
+    const io::View& view = data.train[v];
+    const flow::PixelEvents ev = flow::pixel_events(data.events, view.exposure_start, view.exposure_end, data_dir);
+    events += ev.size();
+    est.estimate(ev, u);
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const uint32_t W = data.train[0].camera.width, H = data.train[0].camera.height;
+  if (json) {
+    std::printf(
+        "{\"bench\": \"flow\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"views\": %zu, "
+        "\"intervals\": %u, \"events\": %zu, \"evaluations\": %llu, \"seconds\": %.3f, \"stages_ms\": {",
+        ctx.caps().name.c_str(), W, H, n, frames - 1, events, (unsigned long long)est.evaluations(), seconds);
+    for (size_t i = 0; i < est.stage_ms().size(); ++i)
+      std::printf("%s\"%s\": %.1f", i ? ", " : "", est.stage_ms()[i].first.c_str(), est.stage_ms()[i].second);
+    std::printf("}}\n");
+  } else {
+    std::printf("flow bench on %s: %ux%u, %zu views x %u intervals, %zu events, %llu evaluations: %.2f s\n",
+                ctx.caps().name.c_str(), W, H, n, frames - 1, events, (unsigned long long)est.evaluations(), seconds);
+    std::printf("  GPU stages (total):");
+    for (auto& [name, ms] : est.stage_ms()) std::printf(" %s %.0f,", name.c_str(), ms);
+    std::printf(" ms\n");
+  }
+  return 0;
+}
+
 static int run_bench(const Args& a) {
   ArgParser p(a);
   auto pos = p.positional();
@@ -177,15 +222,19 @@ static int run_bench(const Args& a) {
         "[--json]\n"
         "                          [--data DIR --method plain|edi|blur-only|blur+events] [key=value ...]\n"
         "  Training steps (render, loss terms, backward, Adam): it/s and the split per part. With --data,\n"
-        "  the steps train that dataset with the method (blur modes: 2N+1 renders per step).\n");
+        "  the steps train that dataset with the method (blur modes: 2N+1 renders per step).\n"
+        "       evflow bench flow --data DIR [--views N] [--json]\n"
+        "  Optical flow from events of the first N (default all) training views: seconds in all and\n"
+        "  the GPU stages summed over every evaluation of the contrast.\n");
     return pos.empty() ? 2 : 0;
   }
   p.args.erase(std::find(p.args.begin(), p.args.end(), pos[0]));
   if (pos[0] == "raster") return bench_raster(p);
   if (pos[0] == "train") return bench_train(p);
-  throw std::invalid_argument("unknown benchmark '" + pos[0] + "' (available: raster, train)");
+  if (pos[0] == "flow") return bench_flow(p);
+  throw std::invalid_argument("unknown benchmark '" + pos[0] + "' (available: raster, train, flow)");
 }
 
-static Command reg("bench", "time the stages of a pipeline (raster, train), as a table or JSON", run_bench);
+static Command reg("bench", "time the stages of a pipeline (raster, train, flow), as a table or JSON", run_bench);
 
 }  // namespace evflow::app

@@ -40,7 +40,8 @@ struct Aee {
 };
 
 // Endpoint error of `est` against `truth` on the pixels with events in the interval.
-Aee endpoint_error(const std::vector<float>& est, const std::vector<float>& truth, const std::vector<uint32_t>& counts) {
+Aee endpoint_error(const std::vector<float>& est, const std::vector<float>& truth,
+                   const std::vector<uint32_t>& counts) {
   Aee a;
   for (size_t p = 0; p < counts.size(); ++p) {
     if (!counts[p] || !std::isfinite(truth[p * 2]) || !std::isfinite(truth[p * 2 + 1])) continue;
@@ -111,7 +112,8 @@ int run_flow(const Args& args) {
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   const auto pos = p.positional();
-  if (pos.size() != 1 || out.empty()) throw std::invalid_argument(std::string("flow: DATA and --out needed\n") + kUsage);
+  if (pos.size() != 1 || out.empty())
+    throw std::invalid_argument(std::string("flow: DATA and --out needed\n") + kUsage);
   if (frames < 2 || frames > 17) throw std::invalid_argument("--frames must be 2..17");
   const io::Dataset data = io::load_dataset(pos[0]);
   if (data.events.size() == 0) throw std::runtime_error(pos[0] + ": no event stream (flow needs events with times)");

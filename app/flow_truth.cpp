@@ -15,7 +15,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-Camera camera_of(const nlohmann::json& intr, const nlohmann::json& R, const nlohmann::json& T, const nlohmann::json& size) {
+Camera camera_of(const nlohmann::json& intr, const nlohmann::json& R, const nlohmann::json& T,
+                 const nlohmann::json& size) {
   Camera c;
   c.fx = intr.at(0), c.fy = intr.at(1), c.cx = intr.at(2), c.cy = intr.at(3);
   c.width = size.at(0), c.height = size.at(1);
@@ -46,16 +47,14 @@ std::vector<float> positions_at(const nlohmann::json& view, const Camera& mid, c
 }  // namespace
 
 std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const fs::path& data, const std::string& name,
-                                                                         const std::vector<double>& frame_u) {
+                                                                          const std::vector<double>& frame_u) {
   const fs::path traj = data / "gt" / "trajectories.json", depth_file = data / "gt" / "depth" / (name + ".npy");
   if (!fs::exists(traj) || !fs::exists(depth_file)) return std::nullopt;
   std::ifstream f(traj);
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(f);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(traj.string() + ": " + e.what());
-  }
+  } catch (const std::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
   for (const nlohmann::json& view : j.at("train")) {
     if (view.at("name") != name) continue;
     const nlohmann::json& gc = view.at("gt_camera");

@@ -14,7 +14,7 @@ namespace evflow::app {
 // Sub-frame poses are interpolated by projecting at the two nearest sub-frames and blending the
 // pixel positions linearly in time (the sub-frames are at most half a pixel apart).
 std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const std::filesystem::path& data,
-                                                                         const std::string& name,
-                                                                         const std::vector<double>& frame_u);
+                                                                          const std::string& name,
+                                                                          const std::vector<double>& frame_u);
 
 }  // namespace evflow::app

@@ -103,6 +103,7 @@ TEST_CASE("flow: events are laid out pixel by pixel in time order, times normali
   const flow::PixelEvents ev = flow::pixel_events(s, 10.0, 14.0, "s");
   REQUIRE(ev.first == std::vector<uint32_t>{0, 1, 2, 2, 2, 2, 4});
   REQUIRE(ev.time == std::vector<float>{0.125f, 0.5f, 0.0f, 0.25f});
+  REQUIRE(ev.order == std::vector<uint32_t>{5, 0, 1});
   REQUIRE(flow::event_counts(ev, 0.1, 0.3) == std::vector<uint32_t>{1, 0, 0, 0, 0, 1});
   REQUIRE_THROWS_WITH(flow::pixel_events(s, 3.0, 3.0, "cam.h5"), Catch::Contains("cam.h5") && Catch::Contains("empty"));
 }
@@ -122,9 +123,8 @@ TEST_CASE("flow: a refined grid is the same field", "[flow]") {
 TEST_CASE("flow: the GPU contrast and its node gradients match the double reference", "[flow][gpu]") {
   const uint32_t W = 40, H = 30;
   const Texture tex(5, W, H);
-  const EventStream s = simulate(W, H, tex, [](double x, double y, double t, double& sx, double& sy) {
-    sx = x - 4.0 * t, sy = y + 2.5 * t;
-  });
+  const EventStream s = simulate(
+      W, H, tex, [](double x, double y, double t, double& sx, double& sy) { sx = x - 4.0 * t, sy = y + 2.5 * t; });
   const flow::PixelEvents ev = flow::pixel_events(s, 0.0, 1.0, "sim");
   REQUIRE(ev.size() > 500);
   const std::vector<double> frame_u = {0.0, 0.3, 0.55, 1.0};
@@ -150,9 +150,9 @@ TEST_CASE("flow: the GPU contrast and its node gradients match the double refere
       auto plus = grids, minus = grids;
       plus[j].nodes[k] += float(h);
       minus[j].nodes[k] -= float(h);
-      const double fd = (reference::flow_contrast(ev, frame_u, plus, scale) -
-                         reference::flow_contrast(ev, frame_u, minus, scale)) /
-                        double(plus[j].nodes[k] - minus[j].nodes[k]);
+      const double fd =
+          (reference::flow_contrast(ev, frame_u, plus, scale) - reference::flow_contrast(ev, frame_u, minus, scale)) /
+          double(plus[j].nodes[k] - minus[j].nodes[k]);
       INFO("interval " << j << " node value " << k);
       CHECK(gpu.node_grad[j][k] == Approx(fd).margin(0.02 * max_grad));
     }

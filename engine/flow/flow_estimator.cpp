@@ -54,6 +54,7 @@ FlowEstimator::FlowEstimator(gpu::Context& ctx, FlowOptions options)
     : ctx_(ctx),
       options_(std::move(options)),
       pixel_first_(ctx, 16, "flow_pixel_first"),
+      pixel_order_(ctx, 16, "flow_pixel_order"),
       event_time_(ctx, 16, "flow_event_time"),
       intervals_(ctx, 16, "flow_intervals"),
       nodes_(ctx, 16, "flow_nodes"),
@@ -80,31 +81,38 @@ void FlowEstimator::set_events(const PixelEvents& ev) {
   pixel_first_.write(ev.first);
   event_time_.ensure(std::max<uint64_t>(ev.size() * 4, 16));
   event_time_.write(ev.time);
+  if (ev.order.size() > hw) throw std::invalid_argument("flow: pixel order longer than the sensor");
+  pixel_order_.ensure(std::max<uint64_t>(ev.order.size() * 4, 16));
+  pixel_order_.write(ev.order);
+  busy_pixels_ = uint32_t(ev.order.size());
 }
 
 void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint32_t tiles, uint32_t image_scale,
-                                   bool gradient) {
+                                    bool gradient) {
   using namespace shaderio;
   const uint32_t iw = (width_ + image_scale - 1) / image_scale, ih = (height_ + image_scale - 1) / image_scale;
   const uint64_t hw = uint64_t(iw) * ih;
-  const FlowEventsPC epc{width_, height_, intervals, tiles, iw, ih, float(image_scale), 0};
-  const gpu::Groups pixel_groups = cmd.linear_groups(gpu::Commands::div_up(uint64_t(width_) * height_, kFlowGroupSize));
+  const FlowEventsPC epc{width_, height_, intervals, tiles, iw, ih, float(image_scale), busy_pixels_};
+  const gpu::Groups pixel_groups = cmd.linear_groups(std::max(1u, gpu::Commands::div_up(busy_pixels_, kFlowGroupSize)));
   const gpu::Groups image_groups = cmd.linear_groups(gpu::Commands::div_up(hw * kFlowRefs, kFlowGroupSize));
   const uint32_t per_image = gpu::Commands::div_up(hw, kFlowGroupSize);
   cmd.fill(iwe_, 0u, 0, hw * kFlowRefs * 4);
   cmd.dispatch("flow/vote",
-               {{kFlowVoteBindPixelFirst, pixel_first_},
+               {{kFlowVoteBindPixelOrder, pixel_order_},
+                {kFlowVoteBindPixelFirst, pixel_first_},
                 {kFlowVoteBindEventTime, event_time_},
                 {kFlowVoteBindIntervals, intervals_},
                 {kFlowVoteBindNodes, nodes_},
                 {kFlowVoteBindIwe, iwe_}},
                epc, pixel_groups);
+  cmd.mark("vote");
   auto blur = [&](const gpu::Buffer& src, const gpu::Buffer& dst, uint32_t axis, uint32_t fixed) {
     const FlowBlurPC bpc{iw, ih, kFlowRefs, axis, fixed, 0, 0, 0};
     cmd.dispatch("flow/blur", {{kFlowBlurBindSrc, src}, {kFlowBlurBindDst, dst}}, bpc, image_groups);
   };
   blur(iwe_, blur_tmp_, 0, 1);
   blur(blur_tmp_, blurred_, 1, 0);
+  cmd.mark("blur");
   const FlowContrastPC cpc{iw, ih, kFlowRefs, per_image};
   cmd.dispatch("flow/contrast",
                {{kFlowContrastBindBlurred, blurred_},
@@ -112,21 +120,27 @@ void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint
                 {kFlowContrastBindAdjoint, adjoint_},
                 {kFlowContrastBindPartials, partials_}},
                cpc, cmd.linear_groups(uint64_t(per_image) * kFlowRefs));
+  cmd.mark("contrast");
   if (!gradient) return;
   blur(adjoint_, blur_tmp_, 0, 0);  // the blur is its own adjoint
   blur(blur_tmp_, adjoint_, 1, 0);
+  cmd.mark("blur");
+  cmd.fill(grad_field_, 0u, 0, uint64_t(width_) * height_ * intervals * 8);  // pixels without events
   cmd.dispatch("flow/flow_grad",
-               {{kFlowGradBindPixelFirst, pixel_first_},
+               {{kFlowGradBindPixelOrder, pixel_order_},
+                {kFlowGradBindPixelFirst, pixel_first_},
                 {kFlowGradBindEventTime, event_time_},
                 {kFlowGradBindIntervals, intervals_},
                 {kFlowGradBindNodes, nodes_},
                 {kFlowGradBindAdjoint, adjoint_},
                 {kFlowGradBindGradField, grad_field_}},
                epc, pixel_groups);
+  cmd.mark("flow gradient");
   const uint32_t nodes = (tiles + 1) * (tiles + 1);
   const FlowNodeReducePC rpc{width_, height_, intervals, tiles};
   cmd.dispatch("flow/node_reduce", {{kFlowReduceBindGradField, grad_field_}, {kFlowReduceBindNodeGrad, node_grad_}},
                rpc, cmd.linear_groups(uint64_t(nodes) * intervals));
+  cmd.mark("node reduce");
 }
 
 ContrastEval FlowEstimator::evaluate(const std::vector<double>& frame_u, const std::vector<FlowGrid>& grids,
@@ -163,6 +177,14 @@ ContrastEval FlowEstimator::evaluate(const std::vector<double>& frame_u, const s
   gpu::Commands cmd(ctx_);
   record_contrast(cmd, J, tiles, image_scale, gradient);
   cmd.submit();
+  for (const auto& [name, ms] : cmd.stage_ms()) {
+    auto it = std::find_if(stage_ms_.begin(), stage_ms_.end(), [&](const auto& s) { return s.first == name; });
+    if (it == stage_ms_.end())
+      stage_ms_.emplace_back(name, ms);
+    else
+      it->second += ms;
+  }
+  ++evaluations_;
 
   ContrastEval out;
   const std::vector<float> partials = partials_.read<float>(size_t(per_image) * kFlowRefs);
@@ -226,7 +248,7 @@ void FlowEstimator::optimise_level(const std::vector<double>& frame_u, std::vect
 }
 
 std::vector<float> FlowEstimator::normalisation(const std::vector<double>& frame_u, uint32_t tiles,
-                                                 uint32_t image_scale) {
+                                                uint32_t image_scale) {
   const std::vector<FlowGrid> zero(frame_u.size() - 1, FlowGrid(tiles));
   const ContrastEval e = evaluate(frame_u, zero, std::vector<float>(kFlowRefs, 0.0f), false, image_scale);
   std::vector<float> scale(kFlowRefs, 0.0f);

@@ -21,6 +21,8 @@
 // then each interval's own flow from there. Every stage is Adam on the analytic gradients the shaders compute.
 #pragma once
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "flow/flow_grid.h"
@@ -35,12 +37,12 @@ struct FlowOptions {
   std::vector<uint32_t> image_scale = {4, 2, 1, 1};     // each level's IWE is this much coarser
   std::vector<uint32_t> iterations = {60, 30, 25, 20};  // its Adam steps per level
   uint32_t interval_iterations = 40;                    // then the intervals' own flows
-  double lr = 0.1;             // Adam step (pixels per interval) at the first level, decaying to a tenth
-  double lr_level = 0.6;       // each finer level's step, relative to the one before
-  double lr_intervals = 0.08;  // the intervals' own flows' step
-  double tv_weight = 0.01;  // weight of each grid's total variation
+  double lr = 0.1;                // Adam step (pixels per interval) at the first level, decaying to a tenth
+  double lr_level = 0.6;          // each finer level's step, relative to the one before
+  double lr_intervals = 0.08;     // the intervals' own flows' step
+  double tv_weight = 0.01;        // weight of each grid's total variation
   double temporal_weight = 0.05;  // weight of the mean squared change of the flow between intervals
-  void validate() const;    // throws std::invalid_argument naming the bad setting
+  void validate() const;          // throws std::invalid_argument naming the bad setting
 };
 
 struct IntervalFlow {
@@ -81,21 +83,26 @@ class FlowEstimator {
   ExposureFlow estimate(const PixelEvents& events, const std::vector<double>& frame_u);
 
   const FlowOptions& options() const { return options_; }
+  // GPU time per stage summed over every evaluate so far (ms, in recording order), and their count.
+  const std::vector<std::pair<std::string, double>>& stage_ms() const { return stage_ms_; }
+  uint64_t evaluations() const { return evaluations_; }
 
  private:
   void record_contrast(gpu::Commands& cmd, uint32_t intervals, uint32_t tiles, uint32_t image_scale, bool gradient);
   // The per-reference scales -w_r / G_r(0) at this level.
   std::vector<float> normalisation(const std::vector<double>& frame_u, uint32_t tiles, uint32_t image_scale);
-  void optimise_level(const std::vector<double>& frame_u, std::vector<FlowGrid>& grids,
-                      const std::vector<float>& scale, uint32_t iterations, double lr, bool tied,
-                      uint32_t image_scale);
+  void optimise_level(const std::vector<double>& frame_u, std::vector<FlowGrid>& grids, const std::vector<float>& scale,
+                      uint32_t iterations, double lr, bool tied, uint32_t image_scale);
 
   gpu::Context& ctx_;
   FlowOptions options_;
   uint32_t width_ = 0, height_ = 0;
   uint64_t last_image_pixels_ = 0;
-  gpu::Buffer pixel_first_, event_time_, intervals_, nodes_, iwe_, blur_tmp_, blurred_, adjoint_, scale_, partials_,
-      grad_field_, node_grad_;
+  std::vector<std::pair<std::string, double>> stage_ms_;
+  uint64_t evaluations_ = 0;
+  uint32_t busy_pixels_ = 0;
+  gpu::Buffer pixel_first_, pixel_order_, event_time_, intervals_, nodes_, iwe_, blur_tmp_, blurred_, adjoint_, scale_,
+      partials_, grad_field_, node_grad_;
 };
 
 // The weight of reference r (start, middle, end) in the loss.

@@ -28,6 +28,11 @@ PixelEvents pixel_events(const EventStream& stream, double t0, double t1, const 
     const size_t p = size_t(stream.y[i]) * stream.width + stream.x[i];
     ev.time[next[p]++] = std::min(float((stream.t[i] - t0) * scale), std::nextafter(1.0f, 0.0f));
   }
+  for (uint32_t p = 0; p < hw; ++p)
+    if (ev.first[p + 1] > ev.first[p]) ev.order.push_back(p);
+  std::stable_sort(ev.order.begin(), ev.order.end(), [&](uint32_t a, uint32_t b) {
+    return ev.first[a + 1] - ev.first[a] > ev.first[b + 1] - ev.first[b];
+  });
   return ev;
 }
 

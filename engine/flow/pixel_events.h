@@ -12,9 +12,10 @@ namespace evflow::flow {
 
 struct PixelEvents {
   uint32_t width = 0, height = 0;
-  double t0 = 0, t1 = 0;             // the exposure
-  std::vector<uint32_t> first;       // H * W + 1 offsets into time
-  std::vector<float> time;           // (t - t0) / (t1 - t0), in [0, 1)
+  double t0 = 0, t1 = 0;        // the exposure
+  std::vector<uint32_t> first;  // H * W + 1 offsets into time
+  std::vector<float> time;      // (t - t0) / (t1 - t0), in [0, 1)
+  std::vector<uint32_t> order;  // the pixels with events, most events first (ties: by index)
   size_t size() const { return time.size(); }
 };
 

@@ -27,7 +27,8 @@ EVF_CONST(float, kFlowBlurSigma, 0.7f)      // its standard deviation, pixels
 // Per interval j (a vec4 in the Intervals buffer): (start, end, 1 / (end - start), unused), in
 // normalised exposure time. Reference r's time is r / 2.
 
-// flow/vote: one invocation per pixel; adds each event's bilinear vote (scaled by
+// Pixels with events, the busiest first: pixel_order[busy].
+// flow/vote: one invocation per pixel with events; adds each event's bilinear vote (scaled by
 // kFlowVoteScale) to iwe[r * image_height * image_width + pixel'] for r = 0..2.
 // flow/flow_grad: the same grid; grad_field[(j * H * W + pixel) * 2 + c] = dLoss / du_j(pixel).
 // The IWEs may be coarser than the sensor (coarse to fine in image scale): pixel centre c of the
@@ -40,7 +41,7 @@ struct FlowEventsPC {
   uint image_width;
   uint image_height;
   float scale;
-  uint pad0;
+  uint busy;  // pixels with events: pixel_order[0 .. busy)
 };
 
 // flow/blur: one invocation per pixel of `images` images; the 7-tap Gaussian along x (axis 0) or
@@ -80,6 +81,7 @@ EVF_BIND(kFlowVoteBindEventTime, 1u, EventTime)
 EVF_BIND(kFlowVoteBindIntervals, 2u, Intervals)
 EVF_BIND(kFlowVoteBindNodes, 3u, Nodes)
 EVF_BIND(kFlowVoteBindIwe, 4u, Iwe)
+EVF_BIND(kFlowVoteBindPixelOrder, 5u, PixelOrder)
 // flow/blur
 EVF_BIND(kFlowBlurBindSrc, 0u, Src)
 EVF_BIND(kFlowBlurBindDst, 1u, Dst)
@@ -95,6 +97,7 @@ EVF_BIND(kFlowGradBindIntervals, 2u, Intervals)
 EVF_BIND(kFlowGradBindNodes, 3u, Nodes)
 EVF_BIND(kFlowGradBindAdjoint, 4u, Adjoint)
 EVF_BIND(kFlowGradBindGradField, 5u, GradField)
+EVF_BIND(kFlowGradBindPixelOrder, 6u, PixelOrder)
 // flow/node_reduce
 EVF_BIND(kFlowReduceBindGradField, 0u, GradField)
 EVF_BIND(kFlowReduceBindNodeGrad, 1u, NodeGrad)

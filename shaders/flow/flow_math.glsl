@@ -28,12 +28,20 @@ vec2 flow_at(uint j, uint n, uint W, uint H, uint x, uint y) {
 // Reference time r (normalised exposure time): start, middle, end.
 float flow_ref_time(uint r) { return 0.5 * float(r); }
 
-// The lever of interval (start, end, 1 / length) for an event at time t moved to time tr: the
-// signed part of [t, tr] inside the interval, in interval lengths. The event's displacement is
-// sum_j lever_j u_j; d displacement / d u_j = lever_j.
-float flow_lever(vec4 interval, float t, float tr) {
-  return (clamp(tr, interval.x, interval.y) - clamp(t, interval.x, interval.y)) * interval.z;
+// The flow is piecewise constant in time, so the position of a pixel's content at time t,
+// relative to where it is at the first frame time, is P(t) = C_i + f (C_{i+1} - C_i), with
+// C_j = u_0 + ... + u_{j-1} the cumulative flow at frame j, i the interval holding t and f the
+// fraction of it that has passed (t before the first frame: P = C_0 = 0; after the last: C_J).
+// An event moves from t_k to t_r by P(t_r) - P(t_k) = sum_j lever_j u_j, lever_j the signed part
+// of [t_k, t_r] inside interval j in interval lengths. The intervals are (start, end, 1 / length)
+// in the including shader's `intervals` buffer (it defines FLOW_INTERVALS); `i` is advanced from
+// where it is (a pixel's events come in time order).
+#ifdef FLOW_INTERVALS
+float flow_interval_fraction(float t, uint count, inout uint i) {
+  while (i + 1u < count && t >= intervals[i].y) ++i;
+  return clamp((t - intervals[i].x) * intervals[i].z, 0.0, 1.0);
 }
+#endif
 
 // Bilinear footprint of a point q (pixel coordinates, centres at +0.5): the top-left pixel and
 // the fractions. Votes: (1-fx)(1-fy), fx(1-fy), (1-fx)fy, fx fy.

@@ -1,11 +1,13 @@
 #version 450
-// Images of warped events: one invocation per pixel votes each of the pixel's events, warped
-// along the piecewise-constant flow to the three reference times, bilinearly into the three IWEs
-// (fixed point, integer atomics: exact and order-independent).
+// Images of warped events: one invocation per pixel with events (busiest first, so that the
+// invocations of a SIMD group loop about as long) votes each of the pixel's events, warped along
+// the piecewise-constant flow to the three reference times, bilinearly into the three IWEs (fixed
+// point, integer atomics: exact and order-independent).
 #extension GL_GOOGLE_include_directive : require
 #include "flow/flow_layout.h"
 #include "common/dispatch.glsl"
 layout(local_size_x = kFlowGroupSize) in;
+layout(std430, binding = kFlowVoteBindPixelOrder) readonly buffer PixelOrder { uint pixel_order[]; };
 layout(std430, binding = kFlowVoteBindPixelFirst) readonly buffer PixelFirst { uint pixel_first[]; };
 layout(std430, binding = kFlowVoteBindEventTime) readonly buffer EventTime { float event_time[]; };
 layout(std430, binding = kFlowVoteBindIntervals) readonly buffer Intervals { vec4 intervals[]; };
@@ -13,6 +15,7 @@ layout(std430, binding = kFlowVoteBindNodes) readonly buffer Nodes { vec2 nodes[
 layout(std430, binding = kFlowVoteBindIwe) buffer Iwe { uint iwe[]; };
 layout(push_constant) uniform PC { FlowEventsPC pc; };
 vec2 flow_node(uint i) { return nodes[i]; }
+#define FLOW_INTERVALS 1
 #include "flow/flow_math.glsl"
 
 void vote(uint image, ivec2 i0, vec2 f) {
@@ -27,24 +30,30 @@ void vote(uint image, ivec2 i0, vec2 f) {
 }
 
 void main() {
-  const uint hw = pc.width * pc.height;
-  uint pixel = evf_linear_invocation(kFlowGroupSize);
-  if (pixel >= hw) return;
+  uint k = evf_linear_invocation(kFlowGroupSize);
+  if (k >= pc.busy) return;
+  uint pixel = pixel_order[k];
   uint first = pixel_first[pixel], last = pixel_first[pixel + 1u];
-  if (first == last) return;
   uint x = pixel % pc.width, y = pixel / pc.width;
-  vec2 u[kFlowMaxIntervals];
-  for (uint j = 0u; j < pc.intervals; ++j) u[j] = flow_at(j, pc.tiles, pc.width, pc.height, x, y);
+  vec2 C[kFlowMaxIntervals + 1u];
+  C[0] = vec2(0.0);
+  for (uint j = 0u; j < pc.intervals; ++j) C[j + 1u] = C[j] + flow_at(j, pc.tiles, pc.width, pc.height, x, y);
+  vec2 ref[kFlowRefs];
+  for (uint r = 0u; r < kFlowRefs; ++r) {
+    uint i = 0u;
+    float f = flow_interval_fraction(flow_ref_time(r), pc.intervals, i);
+    ref[r] = mix(C[i], C[i + 1u], f);
+  }
   vec2 c = vec2(x, y) + 0.5;
+  uint i = 0u;
   for (uint e = first; e < last; ++e) {
-    float t = event_time[e];
+    float f = flow_interval_fraction(event_time[e], pc.intervals, i);
+    vec2 at = c - mix(C[i], C[i + 1u], f);
     for (uint r = 0u; r < kFlowRefs; ++r) {
-      vec2 d = vec2(0.0);
-      for (uint j = 0u; j < pc.intervals; ++j) d += flow_lever(intervals[j], t, flow_ref_time(r)) * u[j];
       ivec2 i0;
-      vec2 f;
-      flow_footprint((c + d) / pc.scale, i0, f);
-      vote(r, i0, f);
+      vec2 fr;
+      flow_footprint((at + ref[r]) / pc.scale, i0, fr);
+      vote(r, i0, fr);
     }
   }
 }
