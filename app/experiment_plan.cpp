@@ -76,7 +76,7 @@ std::string ExperimentPlan::help() {
       "         [--width 173] [--height 130] [--methods plain,edi,blur-only,blur+events] [--preset fast]\n"
       "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device "
       "N|name]\n"
-      "         [--no-baseline-pose-refine] [--emit-jobs FILE] [key=value ...]\n"
+      "         [--no-baseline-pose-refine] [--emit-jobs FILE | --job] [key=value ...]\n"
       "       evflow experiment --collect DIR\n"
       "  Simulates each built-in scene (blur size per scene; recorded poses perturbed like poses estimated\n"
       "  from blurry images), trains every method on it with the preset\n"
@@ -89,7 +89,8 @@ std::string ExperimentPlan::help() {
       "  methods do through their trajectories; --no-baseline-pose-refine turns that off.\n"
       "  --emit-jobs FILE: run nothing; write DIR/experiment_plan.json and FILE, one self-contained command\n"
       "  line per (scene, method) for a batch scheduler (docs/cluster.md). --collect DIR: the table of\n"
-      "  those runs once they have finished (an error lists the runs that have not).\n",
+      "  those runs once they have finished (an error lists the runs that have not). --job: what an\n"
+      "  emitted line runs: the listed scenes and methods, without writing the plan or the table.\n",
       join(names, ",").c_str(), seeds.c_str());
   return buf;
 }
