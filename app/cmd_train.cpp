@@ -13,6 +13,7 @@
 #include "io/atomic_file.h"
 #include "train/checkpoint.h"
 #include "train/trainer.h"
+#include "train_curve.h"
 #include "viewer/train_view.h"
 
 namespace evflow::app {
@@ -174,7 +175,7 @@ static int run_train(const Args& a) {
         "usage: evflow train DATA --out RUN [--config FILE.json] [--preset fast|paper] [--resume] [--device N|name] "
         "[key=value ...]\n"
         "  DATA: a dataset folder (our layout, E3NeRF Real-World-Challenge or EBAD-NeRF; docs/datasets.md).\n"
-        "  RUN: output folder: config.json, train.log, curve.csv, checkpoint.ckpt.\n"
+        "  RUN: output folder: config.json, train.log, curve.csv, curve.png, checkpoint.ckpt.\n"
         "  keys with their defaults (--keys: the tables of docs/training.md, each key's meaning):\n");
     print_keys_brief();
     std::printf(
@@ -245,19 +246,17 @@ static int run_train(const Args& a) {
     trainer = std::make_unique<Trainer>(ctx, data, cfg);
   }
   std::ofstream log(fs::path(out) / "train.log", resume ? std::ios::app : std::ios::trunc);
-  std::ofstream curve(fs::path(out) / "curve.csv", resume ? std::ios::app : std::ios::trunc);
-  if (!resume) {  // the weighted total, then every registered term's unweighted value
-    curve << "step,view,loss,ms,flipped";
-    for (auto& t : trainer->losses()) curve << "," << t->name();
-    curve << "\n";
-  }
+  TrainCurve curve(out, *trainer, resume);
   const bool tty = isatty(fileno(stdout));
   std::printf("training %zu views (%s) on %s, %u Gaussians, %u iterations, preset %s\n", data.train.size(),
               data.layout.c_str(), ctx.caps().name.c_str(), cfg.init_gaussians, cfg.iterations, cfg.preset.c_str());
   std::signal(SIGINT, on_sigint);
   std::unique_ptr<viewer::TrainView> tv;
   if (display) tv = std::make_unique<viewer::TrainView>(*display, *trainer, data, vo, &g_interrupted);
-  auto save = [&] { write_checkpoint(ckpt_path, trainer->checkpoint()); };
+  auto save = [&] {
+    write_checkpoint(ckpt_path, trainer->checkpoint());
+    curve.plot();
+  };
   double ema_ms = 0, ema_loss = 0;
   const auto t_start = std::chrono::steady_clock::now();
   const uint32_t first_step = trainer->current_step();
@@ -270,9 +269,8 @@ static int run_train(const Args& a) {
     if (tv) tv->after_step(st);
     ema_ms = ema_ms ? 0.95 * ema_ms + 0.05 * st.ms : st.ms;
     if (!st.skipped) ema_loss = ema_loss ? 0.95 * ema_loss + 0.05 * st.loss : st.loss;
-    curve << st.step << "," << st.view << "," << st.loss << "," << st.ms << "," << (st.flipped ? 1 : 0);
-    for (double v : st.term_values) curve << "," << v;
-    curve << "\n";
+    const bool log_step = st.step % cfg.log_every == 0 || st.step == cfg.iterations;
+    const double psnr = curve.add(*trainer, st, log_step);
     if (st.skipped) log << "step " << st.step << ": non-finite loss on view " << st.view << ", skipped\n";
     if (st.flipped)
       log << "step " << st.step << ": view " << st.view << " (" << data.train[st.view].name
@@ -284,10 +282,11 @@ static int run_train(const Args& a) {
                   trainer->params().count);
       std::fflush(stdout);
     }
-    if (st.step % cfg.log_every == 0 || st.step == cfg.iterations) {
+    if (log_step) {
       char line[256];
-      std::snprintf(line, sizeof line, "step %u/%u  %.2f it/s  ETA %.0fs  loss %.5f  Gaussians %zu  flips %u", st.step,
-                    cfg.iterations, 1000.0 / ema_ms, eta, ema_loss, trainer->params().count,
+      std::snprintf(line, sizeof line,
+                    "step %u/%u  %.2f it/s  ETA %.0fs  loss %.5f  PSNR %.2f dB  Gaussians %zu  flips %u", st.step,
+                    cfg.iterations, 1000.0 / ema_ms, eta, ema_loss, psnr, trainer->params().count,
                     trainer->trajectory_flips());
       log << line << "\n";
       log.flush();

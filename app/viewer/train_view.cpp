@@ -32,10 +32,7 @@ std::string fmt(const char* f, double v) {
 }
 
 // PSNR on 8-bit sRGB images, as `evflow eval` scores (metrics/srgb_metrics.h).
-double psnr(const std::vector<float>& a, const std::vector<float>& b) {
-  const uint32_t n = uint32_t(a.size());
-  return metrics::psnr(metrics::quantise_srgb(a, n, 1, 1), metrics::quantise_srgb(b, n, 1, 1));
-}
+double psnr(const std::vector<float>& a, const std::vector<float>& b) { return metrics::psnr_srgb(a, b); }
 
 std::vector<float> encoded(std::vector<float> linear) {
   for (float& x : linear) x = io::linear_to_srgb(x);

@@ -8,7 +8,7 @@
 
 namespace evflow {
 
-EventLoss::EventLoss(gpu::Context& ctx, const GpuEvents& events, float weight, EventLossOptions options)
+EventLoss::EventLoss(gpu::Context& ctx, const IntervalEvents& events, float weight, EventLossOptions options)
     : ExposureLossTerm(ctx, "events", weight, 1),
       events_(events),
       options_(options),
@@ -90,6 +90,7 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     pc.value_accumulate = q > 0 ? 1u : 0u;
     pc.value_index = value_offset();
     pc.pair = q;
+    pc.counts_float = events_.float_planes() ? 1u : 0u;
     cmd.dispatch("loss/event_pair",
                  {{shaderio::kEventPairBindCounts, counts_},
                   {shaderio::kEventPairBindFrameS, *f.rgb[s]},

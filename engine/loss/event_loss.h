@@ -20,7 +20,7 @@
 #include <utility>
 #include <vector>
 
-#include "events/gpu_events.h"
+#include "events/interval_events.h"
 #include "loss/loss_term.h"
 
 namespace evflow {
@@ -35,7 +35,7 @@ class EventLoss : public ExposureLossTerm {
  public:
   // `events` holds one window per training view (ExposureFrames::view indexes it); it must
   // outlive the term.
-  EventLoss(gpu::Context& ctx, const GpuEvents& events, float weight, EventLossOptions options = {});
+  EventLoss(gpu::Context& ctx, const IntervalEvents& events, float weight, EventLossOptions options = {});
   using ExposureLossTerm::record;
   void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) override;
   // The value alone, for the same frames and seed (frames.grad is not read and may be empty):
@@ -47,7 +47,8 @@ class EventLoss : public ExposureLossTerm {
   static std::vector<std::pair<uint32_t, uint32_t>> sample_pairs(uint32_t frames, uint64_t seed);
   const std::vector<std::pair<uint32_t, uint32_t>>& last_pairs() const { return pairs_; }
   const EventLossOptions& options() const { return options_; }
-  // Per-pixel counts of the last record, 2 * H * W uints per interval plane (for viewers and tests).
+  // Per-pixel counts of the last record, 2 * H * W values per interval plane: uints, or floats
+  // when the events' float_planes() (for viewers and tests).
   const gpu::Buffer& counts() const { return counts_; }
   // How many records counted their events (a record for the same view and frame times as the
   // one before reuses its counts: events never change).
@@ -56,7 +57,7 @@ class EventLoss : public ExposureLossTerm {
  private:
   void record_pairs(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
 
-  const GpuEvents& events_;
+  const IntervalEvents& events_;
   EventLossOptions options_;
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
   gpu::Buffer counts_, scratch_, partials_, sums_;

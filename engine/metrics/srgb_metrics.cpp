@@ -111,6 +111,10 @@ double psnr(const Image8& a, const Image8& b) {
   return 10.0 * std::log10(255.0 * 255.0 * double(a.data.size()) / se);
 }
 
+double psnr_srgb(const std::vector<float>& a, const std::vector<float>& b) {
+  return psnr(quantise_srgb(a, uint32_t(a.size()), 1, 1), quantise_srgb(b, uint32_t(b.size()), 1, 1));
+}
+
 double ssim(const Image8& a, const Image8& b) {
   check_pair(a, b);
   if (a.width <= 2 * kRadius || a.height <= 2 * kRadius)

@@ -26,6 +26,8 @@ Image8 quantise_srgb(const std::vector<float>& planar_srgb, uint32_t width, uint
 Image8 encode_linear(const std::vector<float>& planar_linear, uint32_t width, uint32_t height, uint32_t channels);
 
 double psnr(const Image8& a, const Image8& b);
+// PSNR of two sRGB-valued float images of the same size (any layout), each quantised as above.
+double psnr_srgb(const std::vector<float>& a, const std::vector<float>& b);
 double ssim(const Image8& a, const Image8& b);  // images at least 11 x 11
 
 struct Scores {

@@ -104,22 +104,9 @@ void Trainer::upload_targets() {
 
 // The event loss L_ev^gs on the training views' events, and the time-direction check it drives.
 void Trainer::add_event_term() {
-  const Camera& c0 = data_.train[0].camera;
   if (cfg_.mode != TrainMode::Blur)
     throw std::invalid_argument("event_weight > 0 needs mode=blur (the event loss compares virtual frames)");
-  if (data_.events.size() == 0)
-    throw std::invalid_argument("event_weight > 0, but the dataset in '" + data_.root + "' has no events");
-  if (data_.events.width != c0.width || data_.events.height != c0.height)
-    throw std::invalid_argument("the events' sensor (" + std::to_string(data_.events.width) + "x" +
-                                std::to_string(data_.events.height) + ") differs from the images (" +
-                                std::to_string(c0.width) + "x" + std::to_string(c0.height) + ")");
-  std::vector<EventWindow> windows;
-  for (auto& v : data_.train) {
-    if (!(v.exposure_end > v.exposure_start))
-      throw std::invalid_argument("view '" + v.name + "' has no exposure interval for its events");
-    windows.push_back({v.exposure_start, v.exposure_end});
-  }
-  events_ = std::make_unique<GpuEvents>(ctx_, data_.events, windows, "events of " + data_.root);
+  events_ = training_events(ctx_, data_);
   auto [pos, neg] = event_thresholds(data_, cfg_);
   EventLossOptions o;
   o.theta_pos = float(pos), o.theta_neg = float(neg), o.norm_floor_rms = float(cfg_.event_norm_floor);

@@ -110,7 +110,7 @@ class Trainer {
   std::unique_ptr<ExposureRender> exposure_;
   std::unique_ptr<ImageModel> image_model_;
   LossTerms terms_;
-  std::unique_ptr<GpuEvents> events_;  // training views' events (when a term needs them)
+  std::unique_ptr<IntervalEvents> events_;  // training views' events (when a term needs them)
   std::unique_ptr<DirectionCheck> direction_;
   std::vector<gpu::Buffer> frame_grad_;  // per virtual frame, linear light (exposure terms only)
   std::unique_ptr<GaussianOptimizer> optimizer_;

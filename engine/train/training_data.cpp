@@ -5,7 +5,9 @@
 #include <random>
 #include <stdexcept>
 
+#include "events/binned_events.h"
 #include "events/edi.h"
+#include "events/gpu_events.h"
 
 namespace evflow {
 
@@ -16,6 +18,35 @@ static const io::Image& target_image(const io::View& v, const TrainConfig& cfg) 
     return *v.sharp_mid;
   }
   return v.blurry;
+}
+
+std::unique_ptr<IntervalEvents> training_events(gpu::Context& ctx, const io::Dataset& data) {
+  const Camera& c0 = data.train.at(0).camera;
+  const bool binned = data.events.size() == 0 && !data.event_counts.empty();
+  if (data.events.size() == 0 && !binned)
+    throw std::invalid_argument("event_weight > 0, but the dataset in '" + data.root + "' has no events");
+  if (!binned && (data.events.width != c0.width || data.events.height != c0.height))
+    throw std::invalid_argument("the events' sensor (" + std::to_string(data.events.width) + "x" +
+                                std::to_string(data.events.height) + ") differs from the images (" +
+                                std::to_string(c0.width) + "x" + std::to_string(c0.height) + ")");
+  std::vector<EventWindow> windows;
+  for (auto& v : data.train) {
+    if (!(v.exposure_end > v.exposure_start))
+      throw std::invalid_argument("view '" + v.name + "' has no exposure interval for its events");
+    windows.push_back({v.exposure_start, v.exposure_end});
+  }
+  const std::string source = "events of " + data.root;
+  if (!binned) return std::make_unique<GpuEvents>(ctx, data.events, windows, source);
+  const auto& shape = data.event_counts_shape;
+  if (shape.size() != 3 || shape[0] != data.train.size() || shape[2] != size_t(c0.width) * c0.height) {
+    std::string dims;
+    for (size_t d : shape) dims += (dims.empty() ? "" : ", ") + std::to_string(d);
+    throw std::invalid_argument(source + ": binned event counts of shape [" + dims + "] do not fit " +
+                                std::to_string(data.train.size()) + " training views of " + std::to_string(c0.width) +
+                                "x" + std::to_string(c0.height) + " pixels");
+  }
+  return std::make_unique<BinnedEvents>(ctx, data.event_counts, uint32_t(shape[1]), c0.width, c0.height, windows,
+                                        source);
 }
 
 std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainConfig& cfg) {

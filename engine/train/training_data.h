@@ -1,8 +1,11 @@
-// What training starts from, taken from the dataset: each view's target image, the event
-// thresholds and the initial Gaussians.
+// What training starts from, taken from the dataset: each view's target image, the events and
+// their thresholds, and the initial Gaussians.
 #pragma once
+#include <memory>
 #include <utility>
 
+#include "events/interval_events.h"
+#include "gpu/context.h"
 #include "io/dataset.h"
 #include "splat/gaussians.h"
 #include "train/train_config.h"
@@ -15,6 +18,12 @@ io::Image training_target(const io::Dataset& data, size_t view, const TrainConfi
 // Event thresholds for the event loss / EDI: the config's, else the dataset's (simulator
 // manifest), else 0.2.
 std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainConfig& cfg);
+
+// The training views' events on the GPU for the event loss, one window per view (its exposure):
+// the dataset's event stream (exact counts) or, for a dataset with binned counts only
+// (EBAD-NeRF), its bins. Throws naming the dataset when it has neither, when the events' sensor
+// differs from the images or when a view has no exposure interval.
+std::unique_ptr<IntervalEvents> training_events(gpu::Context& ctx, const io::Dataset& data);
 
 // Random Gaussians inside the training views' frustums between the near and far bounds, coloured
 // from the pixel they were seeded on.

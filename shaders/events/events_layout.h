@@ -27,10 +27,26 @@ struct EventAccumulatePC {
   uint pad0, pad1, pad2;
 };
 
+// events/binned_accumulate: one bin of pre-binned signed counts (binned[offset + p], pixel p =
+// y * W + x) weighted by the covered fraction `weight`, added to a float plane:
+//   counts[plane * 2 * H * W + p] += weight * max(c, 0),  counts[... + H * W + p] += weight * max(-c, 0)
+// (one invocation per pixel; the planes hold the 32 bits of floats).
+struct BinnedAccumulatePC {
+  uint offset;
+  uint width;
+  uint height;
+  uint plane;
+  float weight;
+  uint pad0, pad1, pad2;
+};
+
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
 // events/accumulate
 EVF_BIND(kEventAccumulateBindPacked, 0u, Packed)
 EVF_BIND(kEventAccumulateBindCounts, 1u, Counts)
+// events/binned_accumulate
+EVF_BIND(kBinnedAccumulateBindBinned, 0u, Binned)
+EVF_BIND(kBinnedAccumulateBindCounts, 1u, Counts)
 
 EVF_NAMESPACE_END
 #endif

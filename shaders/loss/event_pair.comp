@@ -14,12 +14,17 @@ layout(push_constant) uniform PC { EventPairPC pc; };
 #include "loss/ssim_math.glsl"
 #include "loss/event_math.glsl"
 
+// A plane value: a uint count, or (binned events) the bits of a float amount.
+float plane_amount(uint i) {
+  return pc.counts_float != 0u ? uintBitsToFloat(event_counts[i]) : float(event_counts[i]);
+}
+
 // The event side: the interval planes' signed, threshold-weighted counts at pixel p.
 float event_level(uint p, uint hw) {
   float e = 0.0;
   for (uint k = pc.plane_first; k <= pc.plane_last; ++k) {
     uint base = k * 2u * hw;
-    e += pc.theta_pos * float(event_counts[base + p]) - pc.theta_neg * float(event_counts[base + hw + p]);
+    e += pc.theta_pos * plane_amount(base + p) - pc.theta_neg * plane_amount(base + hw + p);
   }
   return e;
 }

@@ -75,6 +75,7 @@ struct ReducePC {
 // Event loss (paper Eq. 5, engine/loss/event_loss.h). One record per pair (t_s, t_j), s < j:
 // loss/event_pair: per pixel
 //   E = sum over interval planes [plane_first, plane_last] of theta_pos * n_pos - theta_neg * n_neg
+//       (n: uint counts, or with counts_float the planes' float amounts)
 //   D = L_j - L_s,  L = log(eps + max(0, luminance(rgb)))   (the later minus the earlier frame:
 //       the sign of the events, checked against the simulator in tests/test_event_loss.cpp)
 // writes E and D into scratch planes 0 and 1 and partials[g] = (sum E*D, sum D*D, sum E*E, 0);
@@ -97,7 +98,8 @@ struct EventPairPC {
   uint value_accumulate;
   uint value_index;
   uint pair;
-  uint pad0, pad1, pad2;
+  uint counts_float;  // the count planes hold floats (binned events), else uints
+  uint pad1, pad2;
 };
 
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).

@@ -1,0 +1,79 @@
+// `evflow experiment --emit-jobs` / `--collect`: the emitted lines, run one by one from anywhere,
+// give the table the direct run gives.
+#include <unistd.h>
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include "cli_helpers.h"
+
+using namespace evflow;
+using namespace evflow::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The table without its last column (training seconds: wall time, never the same twice).
+std::string without_times(const std::string& md) { return std::regex_replace(md, std::regex(" [^|]* \\|\n"), "\n"); }
+
+nlohmann::json runs_without_times(const fs::path& json) {
+  nlohmann::json j = nlohmann::json::parse(slurp(json));
+  for (auto& r : j["runs"]) r.erase("train_seconds");
+  return j;
+}
+
+}  // namespace
+
+TEST_CASE("experiment: the emitted job lines, run one by one, collect into the direct run's table",
+          "[experiment][gpu]") {
+  REQUIRE(fs::exists(evflow_binary()));
+  const fs::path dir = fs::temp_directory_path() / ("evflow_experiment_jobs_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "elsewhere");
+  const std::string tiny =
+      " --scenes gallery --blur-px 4 --methods plain,blur-only --refine-iters 1 --width 32 --height 24 "
+      "iterations=4 init_gaussians=200 max_gaussians=400 sh_degree=0";
+  std::string out;
+  int rc = run_evflow(dir, "experiment --out direct" + tiny, out);
+  INFO(out);
+  REQUIRE(rc == 0);
+  const std::string direct_md = slurp(dir / "direct" / "experiment.md");
+  REQUIRE(direct_md.find("| gallery | 4 | blur-only |") != std::string::npos);
+
+  rc = run_evflow(dir, "experiment --out batch --emit-jobs jobs.txt" + tiny, out);
+  REQUIRE(rc == 0);
+  CHECK(!fs::exists(dir / "batch" / "gallery"));  // nothing ran
+  std::vector<std::string> lines;
+  {
+    std::istringstream in(slurp(dir / "jobs.txt"));
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+  }
+  REQUIRE(lines.size() == 2);  // one per (scene, method)
+  CHECK(lines[1].find("--methods 'blur-only'") != std::string::npos);
+  // Before the jobs ran, --collect names the runs that are missing.
+  CHECK(run_evflow(dir, "experiment --collect batch", out) != 0);
+  CHECK(out.find("2 of 2 runs have not finished") != std::string::npos);
+  for (const auto& l : lines) {  // from another folder: the lines hold absolute paths
+    const std::string cmd = "cd " + quote((dir / "elsewhere").string()) + " && " + l + " > job.log 2>&1";
+    INFO(cmd << "\n" << slurp(dir / "elsewhere" / "job.log"));
+    REQUIRE(std::system(cmd.c_str()) == 0);
+  }
+  rc = run_evflow(dir, "experiment --collect batch", out);
+  INFO(out);
+  REQUIRE(rc == 0);
+  CHECK(without_times(slurp(dir / "batch" / "experiment.md")) == without_times(direct_md));
+  CHECK(without_times(direct_md).find("blur-only | ") != std::string::npos);
+  CHECK(runs_without_times(dir / "batch" / "experiment.json") ==
+        runs_without_times(dir / "direct" / "experiment.json"));
+  // Collecting the direct run's folder writes its table again, byte for byte.
+  REQUIRE(run_evflow(dir, "experiment --collect direct", out) == 0);
+  CHECK(slurp(dir / "direct" / "experiment.md") == direct_md);
+  // A folder without a plan is refused, naming the file.
+  CHECK(run_evflow(dir, "experiment --collect elsewhere", out) != 0);
+  CHECK(out.find("experiment_plan.json") != std::string::npos);
+  fs::remove_all(dir);
+}
