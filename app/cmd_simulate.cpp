@@ -31,6 +31,8 @@ static const char* kSimulateHelp =
     "  --exposure S              exposure time per training view, seconds (default: 0.04)\n"
     "  --view-spacing S          time between training exposures' starts (default: 0.1)\n"
     "  --translation-share X     translation shake per unit rotation x viewing distance (default: 0.3)\n"
+    "  --shake smooth|jerk       the shake's sinusoids alone, or plus a sudden change of velocity per\n"
+    "                            degree of freedom inside each exposure (default: smooth)\n"
     "  --max-step-px PX          bound on any pixel's motion between sub-frames (default: 0.5)\n"
     "  --max-subframes N         per-view sub-frame limit (default: 2000)\n"
     "  --pose-noise-rot DEG      std dev of rotation noise on the recorded poses (default: 0)\n"
@@ -75,6 +77,7 @@ static int run_simulate(const Args& a) {
   sp.exposure_s = p.number("--exposure", sp.exposure_s);
   sp.view_spacing_s = p.number("--view-spacing", sp.view_spacing_s);
   sp.translation_share = p.number("--translation-share", sp.translation_share);
+  sp.shake = p.value("--shake", sp.shake);
   sp.max_step_px = p.number("--max-step-px", sp.max_step_px);
   sp.plan_step_px = std::min(sp.plan_step_px, 0.8 * sp.max_step_px);
   sp.max_subframes = int(p.integer("--max-subframes", sp.max_subframes));

@@ -539,3 +539,33 @@ TEST_CASE("built-in scenes: the default room with other textures, unknown names 
   REQUIRE(sim::builtin_scene_names().size() == 3);
   REQUIRE_THROWS_WITH(sim::make_builtin_scene("atrium"), Catch::Contains("unknown built-in scene 'atrium'"));
 }
+
+TEST_CASE("sim shake: jerk adds a sudden change of velocity to the smooth shake, which it leaves as it was",
+          "[sim][gpu]") {
+  auto& ctx = test::gpu_context();
+  const sim::Scene scene = sim::make_default_scene();
+  sim::SimParams smooth_p = small_params(6), jerk_p = small_params(6);
+  jerk_p.shake = "jerk";
+  sim::Simulator smooth(ctx, scene, smooth_p), jerky(ctx, scene, jerk_p);
+  // The largest second difference of the camera's rotation over the exposure, per sample step^2.
+  auto max_acceleration = [](const sim::Simulator& s) {
+    const int n = 400;
+    double best = 0;
+    for (int i = 1; i < n; ++i) {
+      const Camera a = s.shake_pose(0, double(i - 1) / n, 1.0), b = s.shake_pose(0, double(i) / n, 1.0),
+                   c = s.shake_pose(0, double(i + 1) / n, 1.0);
+      for (int k = 0; k < 9; ++k) best = std::max(best, std::abs(a.R[k] - 2 * b.R[k] + c.R[k]) * n * n);
+    }
+    return best;
+  };
+  const double acc_smooth = max_acceleration(smooth), acc_jerk = max_acceleration(jerky);
+  INFO("largest rotation acceleration: smooth " << acc_smooth << ", jerk " << acc_jerk);
+  CHECK(acc_jerk > 3 * acc_smooth);
+  // Both keep the ground-truth pose at mid-exposure.
+  const Camera m0 = smooth.shake_pose(0, 0.5, 1.0), m1 = jerky.shake_pose(0, 0.5, 1.0);
+  for (int k = 0; k < 9; ++k) CHECK(m0.R[k] == m1.R[k]);
+  sim::SimParams bad = small_params(6);
+  bad.shake = "wobble";
+  REQUIRE_THROWS_WITH(sim::Simulator(ctx, scene, bad), Catch::Contains("smooth or jerk"));
+  test::require_no_validation_messages();
+}

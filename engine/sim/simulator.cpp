@@ -29,6 +29,7 @@ nlohmann::json SimParams::to_json() const {
           {"view_spacing_s", view_spacing_s},
           {"blur_px", blur_px},
           {"translation_share", translation_share},
+          {"shake", shake},
           {"max_step_px", max_step_px},
           {"plan_step_px", plan_step_px},
           {"max_subframes", max_subframes},
@@ -168,6 +169,8 @@ Simulator::Simulator(gpu::Context& ctx, const Scene& scene, const SimParams& p)
     throw std::invalid_argument("simulate: need 0 < exposure_s < view_spacing_s");
   if (!(p.blur_px >= 0) || !(p.max_step_px > 0) || !(p.plan_step_px > 0))
     throw std::invalid_argument("simulate: bad blur/step parameters");
+  if (p.shake != "smooth" && p.shake != "jerk")
+    throw std::invalid_argument("simulate: shake must be smooth or jerk, not '" + p.shake + "'");
   if (!(p.fov_y_deg > 1 && p.fov_y_deg < 170)) throw std::invalid_argument("simulate: fov_y_deg must be in (1, 170)");
   p_.events.validate();
 
@@ -225,7 +228,25 @@ Simulator::Simulator(gpu::Context& ctx, const Scene& scene, const SimParams& p)
       }
     shake_terms_.push_back(s);
   }
+  // Jerks from a stream of their own: the smooth shake stays what it was.
+  std::mt19937_64 gj(p.seed * 0xD1B54A32D192ED03ull + 777);
+  for (int v = 0; v < p.train_views && p.shake == "jerk"; ++v) {
+    std::array<double, 12> j{};
+    for (int d = 0; d < 6; ++d) {
+      j[d * 2] = 6.0 * events::normal01(gj);
+      j[d * 2 + 1] = 0.2 + 0.6 * events::uniform01(gj);
+    }
+    jerk_terms_.push_back(j);
+  }
 }
+
+namespace {
+// A velocity step of size a at s0, 0.01 wide: a * w * softplus((s - s0) / w).
+double jerk(double a, double s0, double s) {
+  const double w = 0.01, z = (s - s0) / w;
+  return a * w * (z > 30 ? z : std::log1p(std::exp(z)));
+}
+}  // namespace
 
 Camera Simulator::shake_pose(int v, double s, double scale) const {
   const auto& st = shake_terms_.at(v);
@@ -237,6 +258,10 @@ Camera Simulator::shake_pose(int v, double s, double scale) const {
     for (int k = 0; k < 3; ++k) {
       const double* t = &st[(d * 3 + k) * 3];
       sum += t[0] * (std::sin(2 * M_PI * t[1] * s + t[2]) - std::sin(2 * M_PI * t[1] * 0.5 + t[2]));
+    }
+    if (!jerk_terms_.empty()) {
+      const double* j = &jerk_terms_.at(v)[d * 2];
+      sum += jerk(j[0], j[1], s) - jerk(j[0], j[1], 0.5);
     }
     delta[d] = scale * w * sum;
   }

@@ -4,7 +4,8 @@
 // them (different heights/radii), all looking at the target. Each training view v has an
 // exposure window [t0, t1] = [v * view_spacing_s, v * view_spacing_s + exposure_s] with a smooth,
 // non-uniform 6-DoF shake: c2w(s) = c2w_mid * Exp(k * g(s)), s in [0, 1], g a sum of random
-// sinusoids per degree of freedom with g(0.5) = 0, so the mid-exposure pose is the view's
+// sinusoids per degree of freedom (with `shake = jerk`, plus a sudden change of velocity each)
+// with g(0.5) = 0, so the mid-exposure pose is the view's
 // ground-truth pose. k is chosen so that the mean (over pixels) length of a pixel's image path
 // during the exposure is `blur_px`.
 // Sub-frames: times planned on a fine grid so that no pixel (of a grid of the mid-frame's
@@ -44,11 +45,14 @@ struct SimParams {
   double view_spacing_s = 0.1;     // start-to-start time between training views
   double blur_px = 12;             // target mean pixel path length during an exposure
   double translation_share = 0.3;  // translation shake amplitude per unit of rotation, times the target distance
-  double max_step_px = 0.5;        // hard bound on any pixel's motion between sub-frames
-  double plan_step_px = 0.4;       // planning bound (on sampled points) before the hard check
-  int max_subframes = 2000;        // per view; exceeding it is an error (blur too large)
-  double pose_noise_rot_deg = 0;   // std dev of the recorded poses' rotation noise
-  double pose_noise_trans = 0;     // std dev of the recorded poses' translation noise (scene units)
+  // "smooth": the sinusoids alone; "jerk": plus, per degree of freedom, a sudden change of
+  // velocity (a softplus ramp 0.01 of the exposure wide at a random time in [0.2, 0.8]).
+  std::string shake = "smooth";
+  double max_step_px = 0.5;       // hard bound on any pixel's motion between sub-frames
+  double plan_step_px = 0.4;      // planning bound (on sampled points) before the hard check
+  int max_subframes = 2000;       // per view; exceeding it is an error (blur too large)
+  double pose_noise_rot_deg = 0;  // std dev of the recorded poses' rotation noise
+  double pose_noise_trans = 0;    // std dev of the recorded poses' translation noise (scene units)
   uint64_t seed = 1;
   events::EventModelParams events = events::EventModelParams::defaults();
   ShadingParams shading;
@@ -145,6 +149,7 @@ class Simulator {
   MeshRenderer renderer_;
   std::vector<Camera> train_, novel_;
   std::vector<std::array<double, 54>> shake_terms_;  // per view: 6 DoF x 3 terms x (amplitude, frequency, phase)
+  std::vector<std::array<double, 12>> jerk_terms_;   // per view: 6 DoF x (velocity change, time); "jerk" only
   double target_dist_ = 1;
 };
 
