@@ -87,6 +87,7 @@ flow::FlowOptions small_options() {
   flow::FlowOptions o;
   o.tiles = {1};
   o.image_scale = {1};
+  o.event_stride = {1};
   o.iterations = {100};
   o.temporal_weight = 1.0;  // the motions below are uniform in time
   o.lr_intervals = 0.02;

@@ -23,8 +23,10 @@ void FlowOptions::validate() const {
   for (size_t l = 0; l < tiles.size(); ++l)
     if (tiles[l] == 0 || tiles[l] > 256 || (l > 0 && tiles[l] % tiles[l - 1] != 0))
       throw std::invalid_argument("flow: tiles per level must be 1..256, each a multiple of the one before");
-  if (image_scale.size() != tiles.size())
-    throw std::invalid_argument("flow: one image scale per level of the tile pyramid");
+  if (image_scale.size() != tiles.size() || event_stride.size() != tiles.size())
+    throw std::invalid_argument("flow: one image scale and one event stride per level of the tile pyramid");
+  for (uint32_t st : event_stride)
+    if (st == 0) throw std::invalid_argument("flow: event strides must be >= 1");
   for (uint32_t sc : image_scale)
     if (sc == 0 || sc > 64) throw std::invalid_argument("flow: image scales must be 1..64");
   if (!(lr > 0) || !(lr_level > 0)) throw std::invalid_argument("flow: learning rates must be > 0");
@@ -88,11 +90,11 @@ void FlowEstimator::set_events(const PixelEvents& ev) {
 }
 
 void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint32_t tiles, uint32_t image_scale,
-                                    bool gradient) {
+                                    uint32_t stride, bool gradient) {
   using namespace shaderio;
   const uint32_t iw = (width_ + image_scale - 1) / image_scale, ih = (height_ + image_scale - 1) / image_scale;
   const uint64_t hw = uint64_t(iw) * ih;
-  const FlowEventsPC epc{width_, height_, intervals, tiles, iw, ih, float(image_scale), busy_pixels_};
+  const FlowEventsPC epc{width_, height_, intervals, tiles, iw, ih, float(image_scale), busy_pixels_, stride, 0, 0, 0};
   const gpu::Groups pixel_groups = cmd.linear_groups(std::max(1u, gpu::Commands::div_up(busy_pixels_, kFlowGroupSize)));
   const gpu::Groups image_groups = cmd.linear_groups(gpu::Commands::div_up(hw * kFlowRefs, kFlowGroupSize));
   const uint32_t per_image = gpu::Commands::div_up(hw, kFlowGroupSize);
@@ -144,7 +146,8 @@ void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint
 }
 
 ContrastEval FlowEstimator::evaluate(const std::vector<double>& frame_u, const std::vector<FlowGrid>& grids,
-                                     const std::vector<float>& scale, bool gradient, uint32_t image_scale) {
+                                     const std::vector<float>& scale, bool gradient, uint32_t image_scale,
+                                     uint32_t stride) {
   const std::vector<float> table = interval_table(frame_u);
   const uint32_t J = uint32_t(grids.size());
   if (J != frame_u.size() - 1 || scale.size() != kFlowRefs)
@@ -175,7 +178,8 @@ ContrastEval FlowEstimator::evaluate(const std::vector<double>& frame_u, const s
   node_grad_.ensure(nodes.size() * 4);
 
   gpu::Commands cmd(ctx_);
-  record_contrast(cmd, J, tiles, image_scale, gradient);
+  if (stride == 0) throw std::invalid_argument("flow: event stride must be >= 1");
+  record_contrast(cmd, J, tiles, image_scale, stride, gradient);
   cmd.submit();
   for (const auto& [name, ms] : cmd.stage_ms()) {
     auto it = std::find_if(stage_ms_.begin(), stage_ms_.end(), [&](const auto& s) { return s.first == name; });
@@ -226,13 +230,13 @@ void add_temporal_smoothness(const std::vector<FlowGrid>& grids, double weight,
 
 void FlowEstimator::optimise_level(const std::vector<double>& frame_u, std::vector<FlowGrid>& grids,
                                    const std::vector<float>& scale, uint32_t iterations, double lr, bool tied,
-                                   uint32_t image_scale) {
+                                   uint32_t image_scale, uint32_t stride) {
   const size_t J = grids.size(), n = grids[0].nodes.size(), groups = tied ? 1 : J;
   std::vector<std::vector<double>> x(groups), m(groups, std::vector<double>(n, 0.0)),
       v(groups, std::vector<double>(n, 0.0));
   for (size_t k = 0; k < groups; ++k) x[k].assign(grids[k].nodes.begin(), grids[k].nodes.end());
   for (uint32_t it = 0; it < iterations; ++it) {
-    ContrastEval e = evaluate(frame_u, grids, scale, true, image_scale);
+    ContrastEval e = evaluate(frame_u, grids, scale, true, image_scale, stride);
     const double step = lr * (1.0 - 0.9 * it / std::max(1u, iterations));  // decays to lr / 10
     if (tied)  // one flow for every interval: the gradients add
       for (size_t j = 1; j < J; ++j)
@@ -248,9 +252,9 @@ void FlowEstimator::optimise_level(const std::vector<double>& frame_u, std::vect
 }
 
 std::vector<float> FlowEstimator::normalisation(const std::vector<double>& frame_u, uint32_t tiles,
-                                                uint32_t image_scale) {
+                                                uint32_t image_scale, uint32_t stride) {
   const std::vector<FlowGrid> zero(frame_u.size() - 1, FlowGrid(tiles));
-  const ContrastEval e = evaluate(frame_u, zero, std::vector<float>(kFlowRefs, 0.0f), false, image_scale);
+  const ContrastEval e = evaluate(frame_u, zero, std::vector<float>(kFlowRefs, 0.0f), false, image_scale, stride);
   std::vector<float> scale(kFlowRefs, 0.0f);
   for (uint32_t r = 0; r < kFlowRefs; ++r)
     if (e.g[r] > 0) scale[r] = float(-kRefWeight[r] / e.g[r]);
@@ -265,11 +269,12 @@ ExposureFlow FlowEstimator::estimate(const PixelEvents& events, const std::vecto
   for (size_t l = 0; l < options_.tiles.size(); ++l, lr *= options_.lr_level) {
     if (l > 0)
       for (FlowGrid& g : grids) g = refine(g, options_.tiles[l], events.width, events.height);
-    const std::vector<float> scale = normalisation(frame_u, options_.tiles[l], options_.image_scale[l]);
-    optimise_level(frame_u, grids, scale, options_.iterations[l], lr, true, options_.image_scale[l]);
+    const uint32_t sc = options_.image_scale[l], stride = options_.event_stride[l];
+    const std::vector<float> scale = normalisation(frame_u, options_.tiles[l], sc, stride);
+    optimise_level(frame_u, grids, scale, options_.iterations[l], lr, true, sc, stride);
   }
-  const std::vector<float> scale = normalisation(frame_u, options_.tiles.back(), 1);
-  optimise_level(frame_u, grids, scale, options_.interval_iterations, options_.lr_intervals, false, 1);
+  const std::vector<float> scale = normalisation(frame_u, options_.tiles.back(), 1, 1);
+  optimise_level(frame_u, grids, scale, options_.interval_iterations, options_.lr_intervals, false, 1, 1);
   const ContrastEval final_eval = evaluate(frame_u, grids, scale, false);
   ExposureFlow out;
   out.width = events.width;

@@ -35,6 +35,7 @@ namespace evflow::flow {
 struct FlowOptions {
   std::vector<uint32_t> tiles = {1, 2, 4, 8};           // the pyramid of the exposure's flow
   std::vector<uint32_t> image_scale = {4, 2, 1, 1};     // each level's IWE is this much coarser
+  std::vector<uint32_t> event_stride = {4, 2, 1, 1};    // each level uses every stride-th event of a pixel
   std::vector<uint32_t> iterations = {60, 30, 25, 20};  // its Adam steps per level
   uint32_t interval_iterations = 40;                    // then the intervals' own flows
   double lr = 0.1;                // Adam step (pixels per interval) at the first level, decaying to a tenth
@@ -71,9 +72,10 @@ class FlowEstimator {
   // Uploads one exposure's events; evaluate() and iwe() use them.
   void set_events(const PixelEvents& events);
   // Scores one grid per interval between consecutive `frame_u` (same tile count) on the events.
-  // The IWEs are `image_scale` times coarser than the sensor.
+  // The IWEs are `image_scale` times coarser than the sensor; every `stride`-th event of a pixel
+  // takes part.
   ContrastEval evaluate(const std::vector<double>& frame_u, const std::vector<FlowGrid>& grids,
-                        const std::vector<float>& scale, bool gradient, uint32_t image_scale = 1);
+                        const std::vector<float>& scale, bool gradient, uint32_t image_scale = 1, uint32_t stride = 1);
   // The IWE (H * W, events per pixel, unblurred) at reference r of the last evaluate (at image
   // scale 1).
   std::vector<float> iwe(uint32_t r) const;
@@ -88,11 +90,13 @@ class FlowEstimator {
   uint64_t evaluations() const { return evaluations_; }
 
  private:
-  void record_contrast(gpu::Commands& cmd, uint32_t intervals, uint32_t tiles, uint32_t image_scale, bool gradient);
+  void record_contrast(gpu::Commands& cmd, uint32_t intervals, uint32_t tiles, uint32_t image_scale, uint32_t stride,
+                       bool gradient);
   // The per-reference scales -w_r / G_r(0) at this level.
-  std::vector<float> normalisation(const std::vector<double>& frame_u, uint32_t tiles, uint32_t image_scale);
+  std::vector<float> normalisation(const std::vector<double>& frame_u, uint32_t tiles, uint32_t image_scale,
+                                   uint32_t stride);
   void optimise_level(const std::vector<double>& frame_u, std::vector<FlowGrid>& grids, const std::vector<float>& scale,
-                      uint32_t iterations, double lr, bool tied, uint32_t image_scale);
+                      uint32_t iterations, double lr, bool tied, uint32_t image_scale, uint32_t stride);
 
   gpu::Context& ctx_;
   FlowOptions options_;

@@ -55,7 +55,7 @@ void main() {
   }
   vec2 c = vec2(x, y) + 0.5;
   uint i = 0u;
-  for (uint e = first; e < last; ++e) {
+  for (uint e = first; e < last; e += pc.stride) {
     float f = flow_interval_fraction(event_time[e], pc.intervals, i);
     vec2 at = c - mix(C[i], C[i + 1u], f);
     vec2 sum = vec2(0.0);

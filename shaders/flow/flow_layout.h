@@ -41,7 +41,9 @@ struct FlowEventsPC {
   uint image_width;
   uint image_height;
   float scale;
-  uint busy;  // pixels with events: pixel_order[0 .. busy)
+  uint busy;    // pixels with events: pixel_order[0 .. busy)
+  uint stride;  // every stride-th event of a pixel (coarse levels need fewer)
+  uint pad0, pad1, pad2;
 };
 
 // flow/blur: one invocation per pixel of `images` images; the 7-tap Gaussian along x (axis 0) or
