@@ -305,8 +305,7 @@ void write_npy(const fs::path& path, DType dtype, const std::vector<size_t>& sha
     }
     f.write(header.data(), static_cast<std::streamsize>(header.size()));
     if (n) f.write(static_cast<const char*>(data), static_cast<std::streamsize>(n * dtype_size(dtype)));
-    f.close();
-    if (!f) fail(path, "write error");
+    close_or_throw(f, path);
   });
 }
 
