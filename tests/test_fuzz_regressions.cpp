@@ -10,6 +10,7 @@
 
 #include "cli_helpers.h"
 #include "io/events_h5.h"
+#include "io/npy.h"
 
 using namespace evflow;
 namespace fs = std::filesystem;
@@ -28,4 +29,12 @@ TEST_CASE("fuzz regressions: an HDF5 event file whose type claims 771,751,938-by
   REQUIRE_THROWS_WITH(io::read_events_h5_image(bytes.data() + 1, bytes.size() - 1, "image.h5"),
                       Contains("image.h5") && Contains("771751938-byte numbers"));
   fs::remove(file);
+}
+
+TEST_CASE("fuzz regressions: an npy shape needing more than 2^64 bytes is refused with that said", "[io][fuzz]") {
+  const fs::path input =
+      fs::path(EVF_SOURCE_DIR) / "tests/fuzz/regressions/npy/crash-27323ba35d69f3309ba2d98de5bcdadaf4897407";
+  REQUIRE(fs::exists(input));
+  REQUIRE_THROWS_WITH(io::read_npy(input), Contains(input.filename().string()) &&
+                                               Contains("needs more than 18446744073709551615 bytes of data"));
 }
