@@ -14,4 +14,4 @@ if [ -f tests/tools/package.json ]; then
 fi
 (cd build && ctest --output-on-failure -j"$(nproc)" --timeout 600)
 # A short libFuzzer run of every file reader (ASan + UBSan, build-fuzz/); docs/robustness.md.
-bash scripts/fuzz.sh all "${EVF_FUZZ_SECONDS:-4}"
+bash scripts/fuzz.sh --check "${EVF_FUZZ_RUNS:-2000}"

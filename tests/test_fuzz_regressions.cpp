@@ -9,7 +9,9 @@
 #include <string>
 
 #include "cli_helpers.h"
+#include "io/dataset.h"
 #include "io/events_h5.h"
+#include "io/image.h"
 #include "io/npy.h"
 
 using namespace evflow;
@@ -37,4 +39,17 @@ TEST_CASE("fuzz regressions: an npy shape needing more than 2^64 bytes is refuse
   REQUIRE(fs::exists(input));
   REQUIRE_THROWS_WITH(io::read_npy(input), Contains(input.filename().string()) &&
                                                Contains("needs more than 18446744073709551615 bytes of data"));
+}
+
+TEST_CASE("fuzz regressions: a NeRF-synthetic camera_angle_x that is a string is an error naming the file",
+          "[io][fuzz]") {
+  const fs::path dir = fs::temp_directory_path() / ("evf_fuzz_nerf_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  io::write_png(dir / "train" / "000.png", io::Image(4, 3, 3, 0.5f));
+  std::ofstream(dir / "transforms_train.json")
+      << R"({"camera_angle_x": "./train/000.png", "frames": [{"file_path": "./train/000", )"
+      << R"("transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]}]})";
+  REQUIRE_THROWS_WITH(io::load_dataset(dir),
+                      Contains((dir / "transforms_train.json").string()) && Contains("type must be number"));
+  fs::remove_all(dir);
 }
