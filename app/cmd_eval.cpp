@@ -117,7 +117,11 @@ static int run_eval(const Args& a) {
   out["step"] = run.checkpoint.step;
   out["gaussians"] = run.checkpoint.cloud.size();
   auto write = [](const fs::path& path, const std::string& text) {
-    io::write_file_atomic(path, [&](const fs::path& tmp) { std::ofstream(tmp) << text; });
+    io::write_file_atomic(path, [&](const fs::path& tmp) {
+      std::ofstream f(tmp);
+      f << text;
+      io::close_or_throw(f, path);
+    });
   };
   write(run.dir / "eval.json", out.dump(2) + "\n");
   write(run.dir / "eval.md", md.str());

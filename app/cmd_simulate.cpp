@@ -6,6 +6,7 @@
 
 #include "cli.h"
 #include "gpu/context.h"
+#include "io/atomic_file.h"
 #include "io/npy.h"
 #include "sim/builtin_scenes.h"
 #include "sim/gltf_scene.h"
@@ -122,19 +123,23 @@ static int run_simulate(const Args& a) {
               sp.novel_views, ctx.caps().name.c_str());
   sim::Simulator simulator(ctx, scene, sp);
   const std::filesystem::path dir(out);
-  sim::IntervalCallback cb;
-  if (flow == "all") {
-    std::filesystem::create_directories(dir / "gt" / "flow");
-    cb = [&](const sim::Interval& iv) {
-      char name[64];
-      std::snprintf(name, sizeof name, "%03d_%04d.npy", iv.view, iv.index);
-      io::write_npy<float>(dir / "gt" / "flow" / name, {sp.height, sp.width, 2}, iv.flow);
-    };
-  }
-  sim::SimResult res = simulator.run(cb, verbose);
-  res.scene_source = scene.source;
-  res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  sim::write_simulation(res, dir);
+  sim::SimResult res;
+  // Written into a fresh folder that replaces DIR at the end: a failure leaves the old DIR whole.
+  io::write_folder_atomic(dir, "dataset.json", [&](const std::filesystem::path& stage) {
+    sim::IntervalCallback cb;
+    if (flow == "all") {
+      std::filesystem::create_directories(stage / "gt" / "flow");
+      cb = [&](const sim::Interval& iv) {
+        char name[64];
+        std::snprintf(name, sizeof name, "%03d_%04d.npy", iv.view, iv.index);
+        io::write_npy<float>(stage / "gt" / "flow" / name, {sp.height, sp.width, 2}, iv.flow);
+      };
+    }
+    res = simulator.run(cb, verbose);
+    res.scene_source = scene.source;
+    res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    sim::write_simulation(res, stage);
+  });
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf(
       "simulate: wrote %s\n  time %.1f s (simulation %.1f s), %zu events, %zu sub-frames, mean blur %.2f px, "

@@ -11,6 +11,7 @@
 
 #include "cli.h"
 #include "io/atomic_file.h"
+#include "resume_files.h"
 #include "train/checkpoint.h"
 #include "train/trainer.h"
 #include "train_curve.h"
@@ -26,7 +27,7 @@ static void write_text(const fs::path& p, const std::string& s) {
   io::write_file_atomic(p, [&](const fs::path& tmp) {
     std::ofstream f(tmp);
     f << s;
-    if (!f) throw std::runtime_error(tmp.string() + ": write failed");
+    io::close_or_throw(f, p);
   });
 }
 
@@ -240,8 +241,10 @@ static int run_train(const Args& a) {
 
   const fs::path ckpt_path = fs::path(out) / "checkpoint.ckpt";
   std::unique_ptr<Trainer> trainer;
+  io::remove_stale_temporaries(ckpt_path);  // left by a run that was killed while saving
   if (resume) {
     trainer = std::make_unique<Trainer>(ctx, data, cfg, read_checkpoint(ckpt_path));
+    trim_curve(fs::path(out) / "curve.csv", trainer->current_step());
   } else {
     trainer = std::make_unique<Trainer>(ctx, data, cfg);
   }
@@ -253,7 +256,11 @@ static int run_train(const Args& a) {
   std::signal(SIGINT, on_sigint);
   std::unique_ptr<viewer::TrainView> tv;
   if (display) tv = std::make_unique<viewer::TrainView>(*display, *trainer, data, vo, &g_interrupted);
+  // The curve and the log reach the disk before the checkpoint does: a run killed after a save
+  // has every row up to the checkpoint's step (--resume drops the rows past it).
   auto save = [&] {
+    curve.flush();
+    log.flush();
     write_checkpoint(ckpt_path, trainer->checkpoint());
     curve.plot();
   };

@@ -1,4 +1,5 @@
 // evflow: the command-line program. `evflow --help` lists the subcommands.
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <stdexcept>
@@ -90,6 +91,8 @@ static void usage() {
 
 int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress lines appear as they happen in logs and pipes
+  // Past a file-size limit (ulimit -f) a write fails with a clear error instead of killing us.
+  std::signal(SIGXFSZ, SIG_IGN);
   if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
     usage();
     return argc < 2 ? 2 : 0;

@@ -44,8 +44,13 @@ double TrainCurve::add(Trainer& trainer, const StepStats& st, bool with_psnr) {
   return psnr;
 }
 
-void TrainCurve::plot() {
+void TrainCurve::flush() {
   out_.flush();
+  if (!out_) throw std::runtime_error(csv_.string() + ": write failed");
+}
+
+void TrainCurve::plot() {
+  flush();
   plot::write_curve_png(csv_, png_);
 }
 

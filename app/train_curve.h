@@ -17,6 +17,8 @@ class TrainCurve {
   // Appends the step's row; measures the PSNR (one extra render) when `with_psnr`. Returns it
   // (NaN when not measured).
   double add(Trainer& trainer, const StepStats& st, bool with_psnr);
+  // Puts the rows written so far on the disk; throws naming the file when it cannot.
+  void flush();
   // Writes RUN/curve.png from what the file holds so far.
   void plot();
 

@@ -2,7 +2,10 @@
 #include <catch2/catch.hpp>
 
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <memory>
+#include <vector>
 
 #include "gpu_fixture.h"
 
@@ -14,6 +17,7 @@ gpu::Context& gpu_context() {
   if (!g_ctx) {
     gpu::ContextOptions o = gpu::ContextOptions::from_env();
     o.validation = true;
+    o.sync_validation = true;
     o.poison = true;
     g_ctx = std::make_unique<gpu::Context>(o);
   }
@@ -24,8 +28,24 @@ bool gpu_context_exists() { return g_ctx != nullptr; }
 
 }  // namespace evflow::test
 
+// Takes every "--env NAME=VALUE" out of the arguments and sets it in the environment before
+// anything reads it (the Vulkan driver, the programs the tests run). CTest passes the
+// environment this way: catch_discover_tests keeps only the first entry of an ENVIRONMENT list.
+static std::vector<char*> apply_env_args(int argc, char* argv[]) {
+  std::vector<char*> rest;
+  for (int i = 0; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--env") == 0 && i + 1 < argc && std::strchr(argv[i + 1], '=')) {
+      ::putenv(argv[++i]);
+      continue;
+    }
+    rest.push_back(argv[i]);
+  }
+  return rest;
+}
+
 int main(int argc, char* argv[]) {
-  int rc = Catch::Session().run(argc, argv);
+  std::vector<char*> args = apply_env_args(argc, argv);
+  int rc = Catch::Session().run(int(args.size()), args.data());
   if (evflow::test::gpu_context_exists()) {
     auto msgs = evflow::test::gpu_context().take_validation_messages();
     for (auto& m : msgs) std::fprintf(stderr, "%s\n", m.c_str());

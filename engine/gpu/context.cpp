@@ -26,6 +26,7 @@ ContextOptions ContextOptions::from_env() {
   o.poison = env_flag("EVF_POISON");
   o.force_cas = env_flag("EVF_FORCE_CAS");
   o.print_validation = env_flag("EVF_VALIDATION_PRINT");
+  o.sync_validation = env_flag("EVF_VALIDATION_SYNC");
   if (const char* e = std::getenv("EVF_SORT_ITEMS"))
     o.sort_items = std::clamp<uint32_t>(uint32_t(std::atoi(e)), 1u, 256u);
   if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) o.subgroup_reduce = e[0] == '1' ? 1 : 0;
@@ -54,7 +55,8 @@ static std::string lower(std::string s) {
 }
 
 static VkInstance make_instance(bool validation, VkDebugUtilsMessengerCreateInfoEXT* dbg,
-                                const std::vector<std::string>& extra_exts = {}) {
+                                const std::vector<std::string>& extra_exts = {},
+                                const std::vector<VkValidationFeatureEnableEXT>& features = {}) {
   VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
   app.pApplicationName = "evflow";
   app.apiVersion = VK_API_VERSION_1_2;
@@ -72,6 +74,7 @@ static VkInstance make_instance(bool validation, VkDebugUtilsMessengerCreateInfo
           "(Debian package vulkan-validationlayers)");
     layers.push_back("VK_LAYER_KHRONOS_validation");
     exts.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    if (!features.empty()) exts.push_back(VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME);
   }
   for (const std::string& e : extra_exts)
     if (std::none_of(exts.begin(), exts.end(), [&](const char* x) { return e == x; })) exts.push_back(e.c_str());
@@ -81,7 +84,11 @@ static VkInstance make_instance(bool validation, VkDebugUtilsMessengerCreateInfo
   ci.ppEnabledLayerNames = layers.data();
   ci.enabledExtensionCount = static_cast<uint32_t>(exts.size());
   ci.ppEnabledExtensionNames = exts.data();
-  if (validation) ci.pNext = dbg;
+  VkValidationFeaturesEXT vf{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
+  vf.enabledValidationFeatureCount = uint32_t(features.size());
+  vf.pEnabledValidationFeatures = features.data();
+  vf.pNext = dbg;
+  if (validation) ci.pNext = features.empty() ? static_cast<const void*>(dbg) : &vf;
   VkInstance inst = VK_NULL_HANDLE;
   VkResult r = vkCreateInstance(&ci, nullptr, &inst);
   if (r == VK_ERROR_INCOMPATIBLE_DRIVER)
@@ -154,7 +161,9 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
     for (const std::string& e : opts_.instance_extensions)
       if (std::find(extra_exts.begin(), extra_exts.end(), e) == extra_exts.end()) extra_exts.push_back(e);
   }
-  instance_ = make_instance(opts_.validation, &dbg, extra_exts);
+  std::vector<VkValidationFeatureEnableEXT> features;
+  if (opts_.sync_validation) features.push_back(VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT);
+  instance_ = make_instance(opts_.validation, &dbg, extra_exts, features);
   if (opts_.validation) {
     auto fn = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
         vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));

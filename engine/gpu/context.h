@@ -30,6 +30,8 @@ struct ContextOptions {
   bool verbose = false;
   bool force_cas = false;         // use the compare-and-swap path even where float atomics exist
   bool print_validation = false;  // also print each validation message to stderr
+  // With `validation`: the layer's synchronisation checks (hazards between commands, barriers).
+  bool sync_validation = false;
   // Kernel choices for the device, overridden where set (Rasterizer, RadixSort read them):
   uint32_t sort_items = 0;    // keys per radix-sort invocation, 1..256; 0 = by device and size
   int subgroup_reduce = -1;   // rasterize backward: 1 = subgroupAdd first, 0 = per-lane adds; -1 = by device
@@ -40,8 +42,8 @@ struct ContextOptions {
   bool presentation = false;
   std::vector<std::string> instance_extensions;
   // Defaults that read the environment, once: EVF_DEVICE, EVF_VALIDATION=1, EVF_POISON=1,
-  // EVF_FORCE_CAS=1, EVF_VALIDATION_PRINT=1, EVF_SORT_ITEMS=n, EVF_SUBGROUP_REDUCE=0|1,
-  // EVF_RASTER_KERNEL=pixel|block.
+  // EVF_FORCE_CAS=1, EVF_VALIDATION_PRINT=1, EVF_VALIDATION_SYNC=1, EVF_SORT_ITEMS=n,
+  // EVF_SUBGROUP_REDUCE=0|1, EVF_RASTER_KERNEL=pixel|block.
   static ContextOptions from_env();
 };
 

@@ -61,9 +61,15 @@ Dataset load_nerf_synthetic(const fs::path& dir) {
       out.push_back(std::move(v));
     }
   };
-  load_split(dir / "transforms_train.json", ds.train, true);
+  // A value of the wrong JSON type (a string for camera_angle_x) is an error naming the file.
+  auto load_checked = [&](const fs::path& file, std::vector<View>& out, bool train) {
+    try {
+      load_split(file, out, train);
+    } catch (const json::exception& e) { fail(file, std::string("malformed file: ") + e.what()); }
+  };
+  load_checked(dir / "transforms_train.json", ds.train, true);
   std::error_code ec;
-  if (fs::exists(dir / "transforms_test.json", ec)) load_split(dir / "transforms_test.json", ds.novel, false);
+  if (fs::exists(dir / "transforms_test.json", ec)) load_checked(dir / "transforms_test.json", ds.novel, false);
   ds.near = 2.0;  // the Blender scenes' conventional bounds
   ds.far = 6.0;
   ds.manifest = {{"layout", "nerf-synthetic"}};

@@ -116,8 +116,7 @@ void write_evflow_dataset(const Dataset& ds, const fs::path& dir, const WriteOpt
   write_file_atomic(dir / "dataset.json", [&](const fs::path& tmp) {
     std::ofstream f(tmp, std::ios::binary);
     f << text;
-    f.close();
-    if (!f) throw std::runtime_error((dir / "dataset.json").string() + ": write error");
+    close_or_throw(f, dir / "dataset.json");
   });
 }
 

@@ -111,6 +111,19 @@ struct Dataset1D {
   std::string name;
 };
 
+// HDF5 1.10 reads past a compact dataset's storage when the dataspace claims more values than
+// the storage holds (a corrupt file): refuse such a dataset before reading it.
+void check_compact_storage(const fs::path& path, hid_t dset, const std::string& name, size_t n, hid_t type) {
+  Hid dcpl(H5Dget_create_plist(dset), H5Pclose);
+  if (!dcpl.ok()) fail(path, "corrupt dataset " + name);
+  if (H5Pget_layout(dcpl.get()) != H5D_COMPACT) return;
+  const size_t element = H5Tget_size(type);
+  const hsize_t stored = H5Dget_storage_size(dset);
+  if (element == 0 || n > stored / element)
+    fail(path, "corrupt dataset " + name + ": its compact storage holds " + std::to_string(stored) +
+                   " bytes, too few for " + std::to_string(n) + " values");
+}
+
 Dataset1D open_1d(const fs::path& path, hid_t loc, const std::string& prefix, const char* name) {
   Dataset1D d;
   d.name = prefix + name;
@@ -129,8 +142,13 @@ Dataset1D open_1d(const fs::path& path, hid_t loc, const std::string& prefix, co
   d.cls = type.ok() ? H5Tget_class(type.get()) : H5T_NO_CLASS;
   if (d.cls != H5T_INTEGER && d.cls != H5T_FLOAT && d.cls != H5T_ENUM)  // h5py stores bool as enum
     fail(path, "dataset " + d.name + " is not numeric");
+  // A corrupt type message can claim any element size; HDF5 1.10 then reads past its buffers.
+  const size_t element = H5Tget_size(type.get());
+  if (element == 0 || element > 16)
+    fail(path, "corrupt dataset " + d.name + ": " + std::to_string(element) + "-byte numbers");
   std::string miss = missing_filters(d.id.get());
   if (!miss.empty()) fail(path, "dataset " + d.name + ": " + miss);
+  check_compact_storage(path, d.id.get(), d.name, d.n, type.get());
   return d;
 }
 
@@ -208,6 +226,8 @@ uint32_t read_uint_attr(hid_t obj, const char* name) {
   if (H5Aexists(obj, name) <= 0) return 0;
   Hid a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
   if (!a.ok()) return 0;
+  Hid space(H5Aget_space(a.get()), H5Sclose);  // one value only: H5Aread writes every element
+  if (!space.ok() || H5Sget_simple_extent_npoints(space.get()) != 1) return 0;
   int64_t v = 0;
   if (H5Aread(a.get(), H5T_NATIVE_INT64, &v) < 0 || v <= 0 || v > 65536) return 0;
   return uint32_t(v);
@@ -226,66 +246,19 @@ bool h5_blosc_available() {
   return H5Zfilter_avail(kBloscFilter) > 0;
 }
 
-H5Events read_events_h5(const fs::path& path, const H5ReadOptions& opt) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) fail(path, "event file is missing");
-  QuietHdf5 quiet;
-  if (H5Fis_hdf5(path.string().c_str()) <= 0) fail(path, "not an HDF5 file (or a truncated one)");
-  Hid file(H5Fopen(path.string().c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (!file.ok()) fail(path, "cannot open HDF5 file (truncated or corrupt?): " + h5_last_error());
+namespace {
 
-  Hid group;
-  std::string prefix;
-  hid_t loc = file.get();
-  if (link_exists(file.get(), "events")) {
-    group = Hid(H5Gopen2(file.get(), "events", H5P_DEFAULT), H5Gclose);
-    if (!group.ok()) fail(path, "/events is not a group: " + h5_last_error());
-    loc = group.get();
-    prefix = "/events/";
-  } else {
-    prefix = "/";
-  }
-  for (const char* n : {"x", "y", "t", "p"})
-    if (!link_exists(loc, n))
-      fail(path, "no dataset " + prefix + n + " (expected /events/{x,y,t,p} or root-level x, y, t, p)");
+// The event group: /events, or the root when the file has no /events.
+hid_t event_location(const fs::path& path, hid_t file, Hid& group, std::string& prefix) {
+  prefix = "/";
+  if (!link_exists(file, "events")) return file;
+  group = Hid(H5Gopen2(file, "events", H5P_DEFAULT), H5Gclose);
+  if (!group.ok()) fail(path, "/events is not a group: " + h5_last_error());
+  prefix = "/events/";
+  return group.get();
+}
 
-  Dataset1D dx = open_1d(path, loc, prefix, "x"), dy = open_1d(path, loc, prefix, "y"),
-            dt = open_1d(path, loc, prefix, "t"), dp = open_1d(path, loc, prefix, "p");
-  if (dx.n != dt.n || dy.n != dt.n || dp.n != dt.n)
-    fail(path, "event datasets differ in length (x " + std::to_string(dx.n) + ", y " + std::to_string(dy.n) + ", t " +
-                   std::to_string(dt.n) + ", p " + std::to_string(dp.n) + ")");
-  const size_t n = dt.n;
-
-  H5Events out;
-  if (link_exists(file.get(), "t_offset")) {
-    Hid d(H5Dopen2(file.get(), "t_offset", H5P_DEFAULT), H5Dclose);
-    int64_t v = 0;
-    if (!d.ok() || H5Dread(d.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &v) < 0)
-      fail(path, "cannot read /t_offset: " + h5_last_error());
-    out.t_offset_us = v;
-  }
-  const int64_t off = opt.apply_t_offset ? out.t_offset_us : 0;
-
-  EventStream& ev = out.events;
-  ev.x.resize(n);
-  ev.y.resize(n);
-  ev.t.resize(n);
-  ev.p.resize(n);
-  uint32_t max_x = 0, max_y = 0;
-  auto coords = [&](Dataset1D& d, std::vector<uint16_t>& dst, uint32_t& mx) {
-    read_blocks<double>(path, d, H5T_NATIVE_DOUBLE, [&](const double* b, size_t first, size_t cnt) {
-      for (size_t i = 0; i < cnt; ++i) {
-        const double v = b[i];
-        if (!(v >= 0 && v <= 65535) || v != std::floor(v))
-          fail(path, "event " + std::to_string(first + i) + ": " + d.name + " = " + std::to_string(v) +
-                         " is not a pixel coordinate");
-        dst[first + i] = uint16_t(v);
-        mx = std::max(mx, uint32_t(v));
-      }
-    });
-  };
-  coords(dx, ev.x, max_x);
-  coords(dy, ev.y, max_y);
+void read_polarity(const fs::path& path, Dataset1D& dp, EventStream& ev) {
   read_blocks<double>(path, dp, H5T_NATIVE_DOUBLE, [&](const double* b, size_t first, size_t cnt) {
     for (size_t i = 0; i < cnt; ++i) {
       if (b[i] > 0)
@@ -297,53 +270,132 @@ H5Events read_events_h5(const fs::path& path, const H5ReadOptions& opt) {
                        " (expected 0/1 or -1/1)");
     }
   });
-  const double units_per_s = opt.unit == TimeUnit::s    ? 1.0
-                             : opt.unit == TimeUnit::ms ? 1e3
-                             : opt.unit == TimeUnit::us ? 1e6
-                                                        : 1e9;
+}
+
+// Times in seconds; `off` is /t_offset in us (0 when not applied).
+void read_times(const fs::path& path, Dataset1D& dt, TimeUnit unit, int64_t off, EventStream& ev) {
+  const double units_per_s = unit == TimeUnit::s ? 1.0 : unit == TimeUnit::ms ? 1e3 : unit == TimeUnit::us ? 1e6 : 1e9;
   if (dt.cls == H5T_FLOAT) {
     read_blocks<double>(path, dt, H5T_NATIVE_DOUBLE, [&](const double* b, size_t first, size_t cnt) {
       for (size_t i = 0; i < cnt; ++i) ev.t[first + i] = b[i] / units_per_s + double(off) / 1e6;
     });
-  } else {
-    // Integer times: add the offset in integers where the unit allows it, then divide once.
-    read_blocks<int64_t>(path, dt, H5T_NATIVE_INT64, [&](const int64_t* b, size_t first, size_t cnt) {
-      for (size_t i = 0; i < cnt; ++i) {
-        switch (opt.unit) {
-          case TimeUnit::us:
-            ev.t[first + i] = double(b[i] + off) / 1e6;
-            break;
-          case TimeUnit::ns:
-            ev.t[first + i] = double(b[i] + off * 1000) / 1e9;
-            break;
-          default:
-            ev.t[first + i] = double(b[i]) / units_per_s + double(off) / 1e6;
-        }
-      }
-    });
+    return;
   }
+  // Integer times: add the offset in integers where the unit allows it (and the sum fits), then
+  // divide once.
+  const int64_t scale = unit == TimeUnit::us ? 1 : unit == TimeUnit::ns ? 1000 : 0;
+  read_blocks<int64_t>(path, dt, H5T_NATIVE_INT64, [&](const int64_t* b, size_t first, size_t cnt) {
+    for (size_t i = 0; i < cnt; ++i) {
+      int64_t scaled_off = 0, sum = 0;
+      if (scale && !__builtin_mul_overflow(off, scale, &scaled_off) && !__builtin_add_overflow(b[i], scaled_off, &sum))
+        ev.t[first + i] = double(sum) / (scale == 1 ? 1e6 : 1e9);
+      else
+        ev.t[first + i] = double(b[i]) / units_per_s + double(off) / 1e6;
+    }
+  });
+}
+
+void read_exposure(const fs::path& path, hid_t file, int64_t off, H5Events& out) {
+  if (!link_exists(file, "exposure")) return;
+  Hid g(H5Gopen2(file, "exposure", H5P_DEFAULT), H5Gclose);
+  if (!g.ok()) fail(path, "/exposure is not a group");
+  if (!link_exists(g.get(), "start_us") || !link_exists(g.get(), "end_us"))
+    fail(path, "/exposure needs both start_us and end_us");
+  auto s = read_int64(path, g.get(), "/exposure/", "start_us");
+  auto e = read_int64(path, g.get(), "/exposure/", "end_us");
+  if (s.size() != e.size())
+    fail(path, "/exposure/start_us has " + std::to_string(s.size()) + " entries, /exposure/end_us " +
+                   std::to_string(e.size()));
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (e[i] < s[i]) fail(path, "exposure window " + std::to_string(i) + " ends before it starts");
+    out.exposure_start.push_back((double(s[i]) + double(off)) / 1e6);
+    out.exposure_end.push_back((double(e[i]) + double(off)) / 1e6);
+  }
+}
+
+int64_t read_t_offset(const fs::path& path, hid_t file) {
+  if (!link_exists(file, "t_offset")) return 0;
+  Hid d(H5Dopen2(file, "t_offset", H5P_DEFAULT), H5Dclose);
+  if (!d.ok()) fail(path, "cannot read /t_offset: " + h5_last_error());
+  Hid space(H5Dget_space(d.get()), H5Sclose), type(H5Dget_type(d.get()), H5Tclose);
+  if (!space.ok() || !type.ok() || H5Sget_simple_extent_npoints(space.get()) != 1 || H5Tget_size(type.get()) > 16)
+    fail(path, "/t_offset must be a single number");
+  check_compact_storage(path, d.get(), "/t_offset", 1, type.get());
+  int64_t v = 0;
+  if (H5Dread(d.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &v) < 0)
+    fail(path, "cannot read /t_offset: " + h5_last_error());
+  return v;
+}
+
+void read_coords(const fs::path& path, Dataset1D& d, std::vector<uint16_t>& dst, uint32_t& mx) {
+  read_blocks<double>(path, d, H5T_NATIVE_DOUBLE, [&](const double* b, size_t first, size_t cnt) {
+    for (size_t i = 0; i < cnt; ++i) {
+      const double v = b[i];
+      if (!(v >= 0 && v <= 65535) || v != std::floor(v))
+        fail(path, "event " + std::to_string(first + i) + ": " + d.name + " = " + std::to_string(v) +
+                       " is not a pixel coordinate");
+      dst[first + i] = uint16_t(v);
+      mx = std::max(mx, uint32_t(v));
+    }
+  });
+}
+
+// Everything read_events_h5 reads, from an open file; `path` names it in errors.
+H5Events read_open_file(const fs::path& path, hid_t file, const H5ReadOptions& opt) {
+  Hid group;
+  std::string prefix;
+  const hid_t loc = event_location(path, file, group, prefix);
+  for (const char* n : {"x", "y", "t", "p"})
+    if (!link_exists(loc, n))
+      fail(path, "no dataset " + prefix + n + " (expected /events/{x,y,t,p} or root-level x, y, t, p)");
+  Dataset1D dx = open_1d(path, loc, prefix, "x"), dy = open_1d(path, loc, prefix, "y"),
+            dt = open_1d(path, loc, prefix, "t"), dp = open_1d(path, loc, prefix, "p");
+  if (dx.n != dt.n || dy.n != dt.n || dp.n != dt.n)
+    fail(path, "event datasets differ in length (x " + std::to_string(dx.n) + ", y " + std::to_string(dy.n) + ", t " +
+                   std::to_string(dt.n) + ", p " + std::to_string(dp.n) + ")");
+  const size_t n = dt.n;
+  H5Events out;
+  out.t_offset_us = read_t_offset(path, file);
+  const int64_t off = opt.apply_t_offset ? out.t_offset_us : 0;
+  EventStream& ev = out.events;
+  ev.x.resize(n);
+  ev.y.resize(n);
+  ev.t.resize(n);
+  ev.p.resize(n);
+  uint32_t max_x = 0, max_y = 0;
+  read_coords(path, dx, ev.x, max_x);
+  read_coords(path, dy, ev.y, max_y);
+  read_polarity(path, dp, ev);
+  read_times(path, dt, opt.unit, off, ev);
   uint32_t aw = read_uint_attr(loc, "width"), ah = read_uint_attr(loc, "height");
   ev.width = opt.width ? opt.width : aw ? aw : (n ? max_x + 1 : 0);
   ev.height = opt.height ? opt.height : ah ? ah : (n ? max_y + 1 : 0);
   ev.validate(path.string());
-
-  if (link_exists(file.get(), "exposure")) {
-    Hid g(H5Gopen2(file.get(), "exposure", H5P_DEFAULT), H5Gclose);
-    if (!g.ok()) fail(path, "/exposure is not a group");
-    if (!link_exists(g.get(), "start_us") || !link_exists(g.get(), "end_us"))
-      fail(path, "/exposure needs both start_us and end_us");
-    auto s = read_int64(path, g.get(), "/exposure/", "start_us");
-    auto e = read_int64(path, g.get(), "/exposure/", "end_us");
-    if (s.size() != e.size())
-      fail(path, "/exposure/start_us has " + std::to_string(s.size()) + " entries, /exposure/end_us " +
-                     std::to_string(e.size()));
-    for (size_t i = 0; i < s.size(); ++i) {
-      if (e[i] < s[i]) fail(path, "exposure window " + std::to_string(i) + " ends before it starts");
-      out.exposure_start.push_back(double(s[i] + off) / 1e6);
-      out.exposure_end.push_back(double(e[i] + off) / 1e6);
-    }
-  }
+  read_exposure(path, file, off, out);
   return out;
+}
+
+}  // namespace
+
+H5Events read_events_h5(const fs::path& path, const H5ReadOptions& opt) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) fail(path, "event file is missing");
+  QuietHdf5 quiet;
+  if (H5Fis_hdf5(path.string().c_str()) <= 0) fail(path, "not an HDF5 file (or a truncated one)");
+  Hid file(H5Fopen(path.string().c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!file.ok()) fail(path, "cannot open HDF5 file (truncated or corrupt?): " + h5_last_error());
+  return read_open_file(path, file.get(), opt);
+}
+
+H5Events read_events_h5_image(const void* data, size_t size, const std::string& name, const H5ReadOptions& opt) {
+  QuietHdf5 quiet;
+  Hid fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  if (!fapl.ok() || H5Pset_fapl_core(fapl.get(), 1 << 16, 0) < 0 ||
+      (size && H5Pset_file_image(fapl.get(), const_cast<void*>(data), size) < 0))
+    fail(name, "cannot set up an in-memory HDF5 file: " + h5_last_error());
+  Hid file(H5Fopen(name.c_str(), H5F_ACC_RDONLY, fapl.get()), H5Fclose);
+  if (!file.ok()) fail(name, "cannot open HDF5 file (truncated or corrupt?): " + h5_last_error());
+  return read_open_file(name, file.get(), opt);
 }
 
 void write_events_h5(const fs::path& path, const EventStream& ev, const std::vector<double>& exposure_start,

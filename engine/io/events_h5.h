@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "events/event_stream.h"
@@ -30,6 +31,10 @@ struct H5Events {
 // sensor, or a compression filter that is not installed (Blosc: names the Debian package).
 // HDF5's own error printing is silenced.
 H5Events read_events_h5(const std::filesystem::path& path, const H5ReadOptions& options = {});
+// The same from a file image in memory (HDF5's core driver, nothing written); `name` names it
+// in errors.
+H5Events read_events_h5_image(const void* data, size_t size, const std::string& name,
+                              const H5ReadOptions& options = {});
 
 struct H5WriteOptions {
   int64_t t_offset_us = 0;  // stored as /t_offset; /events/t and /exposure/* are relative to it

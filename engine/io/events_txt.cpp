@@ -271,8 +271,7 @@ void write_events_txt(const fs::path& path, const EventStream& ev, const TxtWrit
       }
     }
     f.write(buf.data(), std::streamsize(buf.size()));
-    f.close();
-    if (!f) throw std::runtime_error(path.string() + ": write error");
+    close_or_throw(f, path);
   });
 }
 

@@ -236,13 +236,13 @@ void put_u32(std::string& s, uint32_t v) {
   s.append(b, 4);
 }
 
-void write_bytes(const fs::path& tmp, const std::string& head, const std::vector<uint8_t>& tail) {
+void write_bytes(const fs::path& tmp, const fs::path& target, const std::string& head,
+                 const std::vector<uint8_t>& tail) {
   std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
   if (!out) throw std::runtime_error(tmp.string() + ": cannot open for writing");
   out.write(head.data(), static_cast<std::streamsize>(head.size()));
   out.write(reinterpret_cast<const char*>(tail.data()), static_cast<std::streamsize>(tail.size()));
-  out.close();
-  if (!out) throw std::runtime_error(tmp.string() + ": write failed");
+  close_or_throw(out, target);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -710,7 +710,7 @@ void write_gltf_splats(const fs::path& path, const GaussianCloud& cloud, const G
   if (ext == ".gltf") {
     content.doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64_encode(content.bin);
     const std::string text = content.doc.dump(1) + "\n";
-    write_file_atomic(path, [&](const fs::path& tmp) { write_bytes(tmp, text, {}); });
+    write_file_atomic(path, [&](const fs::path& tmp) { write_bytes(tmp, path, text, {}); });
     return;
   }
   std::string json_text = content.doc.dump();
@@ -729,7 +729,7 @@ void write_gltf_splats(const fs::path& path, const GaussianCloud& cloud, const G
   head += json_text;
   put_u32(head, static_cast<uint32_t>(content.bin.size()));  // already a multiple of 4
   put_u32(head, kChunkBin);
-  write_file_atomic(path, [&](const fs::path& tmp) { write_bytes(tmp, head, content.bin); });
+  write_file_atomic(path, [&](const fs::path& tmp) { write_bytes(tmp, path, head, content.bin); });
 }
 
 GaussianCloud read_gltf_splats(const fs::path& path, GltfColorSpace* color_space) {

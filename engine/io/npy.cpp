@@ -253,9 +253,11 @@ NpyArray read_npy(const fs::path& path) {
     std::string shape_s = "(";
     for (size_t i = 0; i < a.shape.size(); ++i) shape_s += (i ? ", " : "") + std::to_string(a.shape[i]);
     shape_s += ")";
+    // A shape past 2^64 bytes cannot be converted to an integer (undefined behaviour): say so.
+    const std::string need_s = need_ld < 0x1p64L ? std::to_string(uint64_t(need_ld)) : "more than 18446744073709551615";
     fail(path, std::string(need_ld > data_bytes ? "truncated npy file" : "npy header/shape mismatch") + ": shape " +
-                   shape_s + " of " + dtype_descr(a.dtype) + " needs " + std::to_string(uint64_t(need_ld)) +
-                   " bytes of data, the file has " + std::to_string(data_bytes));
+                   shape_s + " of " + dtype_descr(a.dtype) + " needs " + need_s + " bytes of data, the file has " +
+                   std::to_string(data_bytes));
   }
   a.bytes.resize(data_bytes);
   if (data_bytes && !f.read(reinterpret_cast<char*>(a.bytes.data()), static_cast<std::streamsize>(data_bytes)))
@@ -305,8 +307,7 @@ void write_npy(const fs::path& path, DType dtype, const std::vector<size_t>& sha
     }
     f.write(header.data(), static_cast<std::streamsize>(header.size()));
     if (n) f.write(static_cast<const char*>(data), static_cast<std::streamsize>(n * dtype_size(dtype)));
-    f.close();
-    if (!f) fail(path, "write error");
+    close_or_throw(f, path);
   });
 }
 

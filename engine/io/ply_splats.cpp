@@ -27,7 +27,7 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Writing
 
-void write_ply_file(const fs::path& tmp, const GaussianCloud& cloud) {
+void write_ply_file(const fs::path& tmp, const fs::path& target, const GaussianCloud& cloud) {
   const size_t n = cloud.size();
   const int K = cloud.coeffs();
   const int rest = 3 * (K - 1);  // f_rest count: 0, 9, 24, 45
@@ -70,8 +70,7 @@ void write_ply_file(const fs::path& tmp, const GaussianCloud& cloud) {
       batch.clear();
     }
   }
-  out.close();
-  if (!out) throw std::runtime_error(tmp.string() + ": write failed");
+  close_or_throw(out, target);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -476,7 +475,7 @@ GaussianCloud parse_ply(const std::vector<uint8_t>& bytes) {
 
 void write_ply(const fs::path& path, const GaussianCloud& cloud) {
   cloud.validate(path.string());
-  write_file_atomic(path, [&](const fs::path& tmp) { write_ply_file(tmp, cloud); });
+  write_file_atomic(path, [&](const fs::path& tmp) { write_ply_file(tmp, path, cloud); });
 }
 
 GaussianCloud read_ply(const fs::path& path) {

@@ -90,7 +90,7 @@ void write_simulation(const SimResult& res, const fs::path& dir) {
   io::write_file_atomic(dir / "gt" / "trajectories.json", [&](const fs::path& tmp) {
     std::ofstream f(tmp);
     f << j.dump(1) << "\n";
-    if (!f) throw std::runtime_error(tmp.string() + ": write failed");
+    io::close_or_throw(f, dir / "gt" / "trajectories.json");
   });
   io::write_evflow_dataset(to_dataset(res), dir);
 }

@@ -16,21 +16,25 @@ static gpu::Buffer make(gpu::Context& ctx, uint64_t bytes, const std::string& na
   return gpu::Buffer(ctx, bytes, name);
 }
 
+// `n`, or an error naming the largest count the device holds, before any buffer is allocated.
+static size_t checked_count(const gpu::Context& ctx, size_t n, int degree) {
+  if (n > GaussianBuffers::max_count(ctx, degree))
+    throw gpu::Error(std::to_string(n) + " Gaussians at SH degree " + std::to_string(degree) + " do not fit " +
+                     ctx.caps().name + "'s storage binding limit of " +
+                     std::to_string(ctx.caps().max_storage_buffer_range) + " bytes; the largest supported count is " +
+                     std::to_string(GaussianBuffers::max_count(ctx, degree)));
+  return n;
+}
+
 GaussianBuffers::GaussianBuffers(gpu::Context& ctx, size_t n, int degree, const std::string& prefix)
-    : count(n),
+    : count(checked_count(ctx, n, degree)),
       sh_degree(degree),
       means(make(ctx, n * 12, prefix + "means")),
       log_scales(make(ctx, n * 12, prefix + "log_scales")),
       quats(make(ctx, n * 16, prefix + "quats")),
       opacity_logits(make(ctx, n * 4, prefix + "opacity_logits")),
       sh{make(ctx, n * 12, prefix + "sh0"), make(ctx, degree >= 1 ? n * 36 : 16, prefix + "sh1"),
-         make(ctx, degree >= 2 ? n * 60 : 16, prefix + "sh2"), make(ctx, degree >= 3 ? n * 84 : 16, prefix + "sh3")} {
-  if (n > max_count(ctx, degree))
-    throw gpu::Error(std::to_string(n) + " Gaussians at SH degree " + std::to_string(degree) + " do not fit " +
-                     ctx.caps().name + "'s storage binding limit of " +
-                     std::to_string(ctx.caps().max_storage_buffer_range) + " bytes; the largest supported count is " +
-                     std::to_string(max_count(ctx, degree)));
-}
+         make(ctx, degree >= 2 ? n * 60 : 16, prefix + "sh2"), make(ctx, degree >= 3 ? n * 84 : 16, prefix + "sh3")} {}
 
 size_t GaussianBuffers::max_count(const gpu::Context& ctx, int degree) {
   // The widest per-Gaussian buffer: the degree-3 band (84 B), else quats (16 B) or the

@@ -6,146 +6,195 @@
 #include <stdexcept>
 
 #include "io/atomic_file.h"
+#include "io/crc32.h"
 
 namespace evflow {
 
-static constexpr char kMagic[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '4'};
+// Version 5 is version 4's layout followed by the CRC-32 of everything before it.
+static constexpr char kMagic5[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '5'};
+static constexpr char kMagic4[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '4'};
 
 namespace {
 
-template <class T>
-void put(std::ofstream& f, const T& v) {
-  f.write(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-void put_floats(std::ofstream& f, const std::vector<float>& v) {
-  f.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * 4));
-}
+struct Writer {
+  std::string bytes;
+  template <class T>
+  void put(const T& v) {
+    bytes.append(reinterpret_cast<const char*>(&v), sizeof(T));
+  }
+  template <class T>
+  void put_all(const std::vector<T>& v) {
+    bytes.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
+};
 
 struct Reader {
-  std::ifstream f;
-  std::string name;
+  const uint8_t* p;
   uint64_t left;
-  void need(uint64_t bytes, const char* what) {
+  const std::string& name;
+  [[noreturn]] void corrupt(const std::string& what) const {
+    throw std::runtime_error(name + ": corrupt checkpoint (" + what + ")");
+  }
+  void need(uint64_t bytes, const char* what) const {
     if (bytes > left) throw std::runtime_error(name + ": truncated checkpoint (" + what + ")");
+  }
+  void take(void* out, uint64_t bytes, const char* what) {
+    need(bytes, what);
+    if (bytes) std::memcpy(out, p, bytes);
+    p += bytes;
     left -= bytes;
   }
   template <class T>
   T get(const char* what) {
-    need(sizeof(T), what);
     T v;
-    f.read(reinterpret_cast<char*>(&v), sizeof(T));
+    take(&v, sizeof(T), what);
     return v;
   }
-  std::vector<float> floats(uint64_t n, const char* what) {
-    if (n > left / 4) throw std::runtime_error(name + ": truncated checkpoint (" + what + ")");
-    need(n * 4, what);
-    std::vector<float> v(n);
-    f.read(reinterpret_cast<char*>(v.data()), std::streamsize(n * 4));
+  template <class T>
+  std::vector<T> array(uint64_t n, const char* what) {
+    if (n > left / sizeof(T)) throw std::runtime_error(name + ": truncated checkpoint (" + what + ")");
+    std::vector<T> v(n);
+    take(v.data(), n * sizeof(T), what);
     return v;
   }
 };
 
-}  // namespace
-
-void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c) {
+void check_writable(const std::filesystem::path& path, const Checkpoint& c) {
   c.cloud.validate("checkpoint " + path.string());
   for (auto& g : c.optimizer)
     if (g.exp_avg.size() != g.exp_avg_sq.size())
       throw std::invalid_argument("checkpoint " + path.string() + ": optimizer group " + g.name +
                                   " has mismatched moments");
-  io::write_file_atomic(path, [&](const std::filesystem::path& tmp) {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) throw std::runtime_error(tmp.string() + ": cannot open for writing");
-    f.write(kMagic, 8);
-    put(f, c.step);
-    put(f, int32_t(c.cloud.sh_degree));
-    put(f, uint64_t(c.cloud.size()));
-    for (auto* v : {&c.cloud.means, &c.cloud.log_scales, &c.cloud.quats, &c.cloud.opacity_logits, &c.cloud.sh})
-      put_floats(f, *v);
-    put(f, uint32_t(c.optimizer.size()));
-    for (auto& g : c.optimizer) {
-      put(f, uint32_t(g.name.size()));
-      f.write(g.name.data(), std::streamsize(g.name.size()));
-      put(f, g.step);
-      put(f, uint64_t(g.exp_avg.size()));
-      put_floats(f, g.exp_avg);
-      put_floats(f, g.exp_avg_sq);
-    }
-    put(f, uint32_t(c.trajectories.size()));
-    for (auto& t : c.trajectories) {
-      const size_t k = t.knots.size();
-      if ((k != 54 && k != 6) || t.exp_avg.size() != k || t.exp_avg_sq.size() != k)
-        throw std::invalid_argument("checkpoint " + path.string() +
-                                    ": a camera state needs 54 (trajectory) or 6 (pose) values and moments");
-      put(f, t.step);
-      put(f, uint32_t(k));
-      for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq})
-        f.write(reinterpret_cast<const char*>(v->data()), std::streamsize(k * 8));
-    }
-    if (!f) throw std::runtime_error(tmp.string() + ": write failed");
-  });
+  for (auto& t : c.trajectories) {
+    const size_t k = t.knots.size();
+    if ((k != 54 && k != 6) || t.exp_avg.size() != k || t.exp_avg_sq.size() != k)
+      throw std::invalid_argument("checkpoint " + path.string() +
+                                  ": a camera state needs 54 (trajectory) or 6 (pose) values and moments");
+  }
 }
 
-Checkpoint read_checkpoint(const std::filesystem::path& path) {
-  Reader r{std::ifstream(path, std::ios::binary), path.string(), 0};
-  if (!r.f) throw std::runtime_error(path.string() + ": cannot open checkpoint");
-  r.left = std::filesystem::file_size(path);
-  char magic[8];
-  r.need(8, "magic");
-  r.f.read(magic, 8);
-  if (std::memcmp(magic, kMagic, 8) != 0)
-    throw std::runtime_error(path.string() + ": not an EvFlow checkpoint (version 4)");
-  Checkpoint c;
+std::string serialize(const Checkpoint& c) {
+  Writer w;
+  w.bytes.append(kMagic5, 8);
+  w.put(c.step);
+  w.put(int32_t(c.cloud.sh_degree));
+  w.put(uint64_t(c.cloud.size()));
+  for (auto* v : {&c.cloud.means, &c.cloud.log_scales, &c.cloud.quats, &c.cloud.opacity_logits, &c.cloud.sh})
+    w.put_all(*v);
+  w.put(uint32_t(c.optimizer.size()));
+  for (auto& g : c.optimizer) {
+    w.put(uint32_t(g.name.size()));
+    w.bytes += g.name;
+    w.put(g.step);
+    w.put(uint64_t(g.exp_avg.size()));
+    w.put_all(g.exp_avg);
+    w.put_all(g.exp_avg_sq);
+  }
+  w.put(uint32_t(c.trajectories.size()));
+  for (auto& t : c.trajectories) {
+    w.put(t.step);
+    w.put(uint32_t(t.knots.size()));
+    for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) w.put_all(*v);
+  }
+  w.put(io::crc32(w.bytes.data(), w.bytes.size()));
+  return std::move(w.bytes);
+}
+
+void read_cloud(Reader& r, Checkpoint& c) {
   c.step = r.get<uint32_t>("step");
   const int32_t degree = r.get<int32_t>("SH degree");
   const uint64_t n = r.get<uint64_t>("count");
-  if (degree < 0 || degree > 3)
-    throw std::runtime_error(path.string() + ": corrupt checkpoint (SH degree " + std::to_string(degree) + ")");
+  if (degree < 0 || degree > 3) r.corrupt("SH degree " + std::to_string(degree));
   if (n > r.left / 4)
-    throw std::runtime_error(path.string() + ": truncated checkpoint (" + std::to_string(n) + " Gaussians announced)");
+    throw std::runtime_error(r.name + ": truncated checkpoint (" + std::to_string(n) + " Gaussians announced)");
+  const uint64_t per = 3 + 3 + 4 + 1 + 3 * uint64_t(degree + 1) * uint64_t(degree + 1);
+  r.need(n * per * 4, "Gaussians");
   c.cloud.resize(n, degree);
   for (auto* v : {&c.cloud.means, &c.cloud.log_scales, &c.cloud.quats, &c.cloud.opacity_logits, &c.cloud.sh})
-    *v = r.floats(v->size(), "Gaussians");
+    *v = r.array<float>(v->size(), "Gaussians");
+}
+
+void read_optimizer(Reader& r, Checkpoint& c) {
   const uint32_t groups = r.get<uint32_t>("optimizer groups");
-  if (groups > 64)
-    throw std::runtime_error(path.string() + ": corrupt checkpoint (" + std::to_string(groups) + " optimizer groups)");
+  if (groups > 64) r.corrupt(std::to_string(groups) + " optimizer groups");
   for (uint32_t i = 0; i < groups; ++i) {
     OptimizerGroupState g;
     const uint32_t len = r.get<uint32_t>("group name");
-    if (len > 256) throw std::runtime_error(path.string() + ": corrupt checkpoint (optimizer group name)");
-    r.need(len, "group name");
+    if (len > 256) r.corrupt("optimizer group name");
     g.name.resize(len);
-    r.f.read(g.name.data(), len);
+    r.take(g.name.data(), len, "group name");
     g.step = r.get<uint64_t>("group step");
     const uint64_t count = r.get<uint64_t>("group size");
-    g.exp_avg = r.floats(count, "optimizer moments");
-    g.exp_avg_sq = r.floats(count, "optimizer moments");
+    g.exp_avg = r.array<float>(count, "optimizer moments");
+    g.exp_avg_sq = r.array<float>(count, "optimizer moments");
     c.optimizer.push_back(std::move(g));
   }
+}
+
+void read_trajectories(Reader& r, Checkpoint& c) {
   const uint32_t trajectories = r.get<uint32_t>("trajectory count");
-  if (trajectories > (1u << 20)) throw std::runtime_error(path.string() + ": corrupt checkpoint (trajectory count)");
+  if (trajectories > (1u << 20)) r.corrupt("trajectory count");
   for (uint32_t i = 0; i < trajectories; ++i) {
     TrajectoryState t;
     t.step = r.get<uint64_t>("trajectory step");
     const uint32_t k = r.get<uint32_t>("camera state size");
-    if (k != 54 && k != 6)
-      throw std::runtime_error(path.string() + ": corrupt checkpoint (camera state of " + std::to_string(k) +
-                               " values)");
+    if (k != 54 && k != 6) r.corrupt("camera state of " + std::to_string(k) + " values");
     for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) {
-      r.need(size_t(k) * 8, "trajectory");
-      v->resize(k);
-      r.f.read(reinterpret_cast<char*>(v->data()), std::streamsize(k * 8));
+      *v = r.array<double>(k, "trajectory");
       for (double x : *v)
         if (!std::isfinite(x))
-          throw std::runtime_error(path.string() + ": trajectory " + std::to_string(i) + " is not finite");
+          throw std::runtime_error(r.name + ": trajectory " + std::to_string(i) + " is not finite");
     }
     c.trajectories.push_back(std::move(t));
   }
-  if (!r.f) throw std::runtime_error(path.string() + ": read error");
-  if (r.left)
-    throw std::runtime_error(path.string() + ": " + std::to_string(r.left) + " unexpected bytes after the checkpoint");
-  c.cloud.validate("checkpoint " + path.string());
+}
+
+}  // namespace
+
+void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c) {
+  check_writable(path, c);
+  const std::string bytes = serialize(c);
+  io::write_file_atomic(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    f.write(bytes.data(), std::streamsize(bytes.size()));
+    io::close_or_throw(f, path);
+  });
+}
+
+Checkpoint parse_checkpoint(const std::string& name, const uint8_t* data, size_t size) {
+  Reader r{data, size, name};
+  char magic[8];
+  r.take(magic, 8, "magic");
+  const bool v5 = std::memcmp(magic, kMagic5, 8) == 0;
+  if (!v5 && std::memcmp(magic, kMagic4, 8) != 0)
+    throw std::runtime_error(name + ": not an EvFlow checkpoint (version 4 or 5)");
+  if (v5) {
+    r.need(4, "checksum");
+    uint32_t stored;
+    std::memcpy(&stored, data + size - 4, 4);
+    if (io::crc32(data, size - 4) != stored)
+      throw std::runtime_error(name + ": checkpoint checksum mismatch (the file is damaged or truncated)");
+    r.left -= 4;
+  }
+  Checkpoint c;
+  read_cloud(r, c);
+  read_optimizer(r, c);
+  read_trajectories(r, c);
+  if (r.left) throw std::runtime_error(name + ": " + std::to_string(r.left) + " unexpected bytes after the checkpoint");
+  c.cloud.validate("checkpoint " + name);
   return c;
+}
+
+Checkpoint read_checkpoint(const std::filesystem::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw std::runtime_error(path.string() + ": cannot open checkpoint");
+  std::error_code ec;
+  const uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) throw std::runtime_error(path.string() + ": cannot read checkpoint: " + ec.message());
+  std::vector<uint8_t> bytes(size);
+  f.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size));
+  if (!f || f.gcount() != std::streamsize(size)) throw std::runtime_error(path.string() + ": read error");
+  return parse_checkpoint(path.string(), bytes.data(), bytes.size());
 }
 
 }  // namespace evflow

@@ -1,7 +1,9 @@
 // Training checkpoints: the step, the Gaussians and the optimizer state (Adam moments and step
 // counts per parameter group), so that a resumed run continues bit-identically on the same
-// device. Written atomically (temporary file, then rename).
+// device. Written atomically (temporary file, then rename). Format version 5: version 4's layout
+// followed by a CRC-32 of all the bytes before it; version 4 files (no checksum) are still read.
 #pragma once
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -32,7 +34,10 @@ struct Checkpoint {
 };
 
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& ckpt);
-// Throws std::runtime_error naming the file on a missing, truncated or malformed checkpoint.
+// Throws std::runtime_error naming the file on a missing, truncated or malformed checkpoint, and
+// on a checksum mismatch (a damaged file: flipped bits, cut short or grown).
 Checkpoint read_checkpoint(const std::filesystem::path& path);
+// The same from the file's bytes in memory; `name` names the file in errors.
+Checkpoint parse_checkpoint(const std::string& name, const uint8_t* data, size_t size);
 
 }  // namespace evflow
