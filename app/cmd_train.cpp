@@ -241,7 +241,8 @@ static int run_train(const Args& a) {
 
   const fs::path ckpt_path = fs::path(out) / "checkpoint.ckpt";
   std::unique_ptr<Trainer> trainer;
-  io::remove_stale_temporaries(ckpt_path);  // left by a run that was killed while saving
+  // Left by a run that was killed while saving (the checkpoint, then the curve's figure).
+  for (const char* name : {"checkpoint.ckpt", "curve.png"}) io::remove_stale_temporaries(fs::path(out) / name);
   if (resume) {
     trainer = std::make_unique<Trainer>(ctx, data, cfg, read_checkpoint(ckpt_path));
     trim_curve(fs::path(out) / "curve.csv", trainer->current_step());
