@@ -9,11 +9,11 @@
 #include "cli.h"
 #include "flow/flow_estimator.h"
 #include "flow_images.h"
-#include "flow_truth.h"
 #include "io/atomic_file.h"
 #include "io/dataset.h"
 #include "io/image.h"
 #include "io/npy.h"
+#include "sim/flow_truth.h"
 #include "train/train_config.h"
 
 namespace evflow::app {
@@ -77,7 +77,7 @@ nlohmann::json flow_view(flow::FlowEstimator& est, const io::Dataset& data, size
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const fs::path dir = out / view.name;
   fs::create_directories(dir);
-  const auto truth = ground_truth_interval_flow(data.root, view.name, u);
+  const auto truth = sim::ground_truth_interval_flow(data.root, view.name, u);
   nlohmann::json j = {{"view", view.name}, {"events", ev.size()}, {"contrast_after", f.contrast}, {"seconds", seconds}};
   Aee all;
   for (size_t k = 0; k < f.intervals.size(); ++k) {

@@ -87,6 +87,8 @@ struct Codec<LossSpace> : EnumCodec<LossSpace, loss_space_name, LossSpace::Linea
 template <>
 struct Codec<TrainMode> : EnumCodec<TrainMode, mode_name, TrainMode::Plain, TrainMode::Blur> {};
 template <>
+struct Codec<FlowSource> : EnumCodec<FlowSource, flow_source_name, FlowSource::Events, FlowSource::Gt> {};
+template <>
 struct Codec<TrainTarget>
     : EnumCodec<TrainTarget, target_name, TrainTarget::Blurry, TrainTarget::Sharp, TrainTarget::Edi> {};
 
@@ -129,9 +131,10 @@ std::vector<Setting> run_settings() {
        "`fast` (sized for CPUs) or `paper` (the paper's sizes: 40k iterations, 100k initial Gaussians); "
        "resets every other key to the preset's value, so it is applied first"},
       {"method", [](TrainConfig& c, const std::string& v) { c.apply_method(v); }, nullptr,
-       "sets `mode`, `target` and `event_weight` for one of the paper's configurations: `plain` (3DGS on the "
-       "blurry images), `edi` (3DGS on EDI-deblurred images), `blur-only` (mode=blur), `blur+events` "
-       "(mode=blur, event_weight 0.1). Applied after `preset` and before the other keys of a config file; on "
+       "sets `mode`, `target`, `event_weight` and `warp_weight` for one of the paper's configurations: `plain` "
+       "(3DGS on the blurry images), `edi` (3DGS on EDI-deblurred images), `blur-only` (mode=blur), "
+       "`blur+events` (mode=blur, event_weight 0.1), `blur+events+warp` (also warp_weight 0.1). Applied after `preset` "
+       "and before the other keys of a config file; on "
        "the command line, in order"},
       field("iterations", &TrainConfig::iterations, "optimisation steps, one training view per step"),
       field("init_gaussians", &TrainConfig::init_gaussians,
@@ -219,6 +222,15 @@ std::vector<Setting> event_settings() {
       field("event_flip_margin", &TrainConfig::event_flip_margin, "the margin of the direction check"),
       field("event_norm_floor", &TrainConfig::event_norm_floor,
             "per-pixel RMS below which the event loss holds a norm at its floor (static frame pairs)"),
+      field("warp_weight", &TrainConfig::warp_weight,
+            "λ of the warped-event loss L_ev^w (paper Eq. 6-7: each interval's events moved along its optical "
+            "flow to the interval's end, against the frame's edges moved by the flow; [losses.md](losses.md)); "
+            "0: off; > 0 needs `mode=blur` and events with times. Shares `event_from`, `event_norm_floor` and "
+            "the thresholds with the event loss"),
+      field("flow", &TrainConfig::flow,
+            "the optical flow of `warp_weight`: `events` (contrast maximisation on each view's events, "
+            "[flow.md](flow.md); cached under DATA/.evflow-cache/flow/) or `gt` (the simulator's ground truth, "
+            "for ablations; refused on data without it)"),
   };
 }
 
@@ -314,6 +326,7 @@ std::string display_text(const nlohmann::json& v) {
 
 const char* loss_space_name(LossSpace s) { return s == LossSpace::Linear ? "linear" : "srgb"; }
 const char* mode_name(TrainMode m) { return m == TrainMode::Plain ? "plain" : "blur"; }
+const char* flow_source_name(FlowSource f) { return f == FlowSource::Events ? "events" : "gt"; }
 const char* target_name(TrainTarget t) {
   switch (t) {
     case TrainTarget::Blurry:
@@ -349,21 +362,22 @@ void TrainConfig::apply_method(const std::string& name) {
   if (name == "plain") {
     mode = TrainMode::Plain;
     target = TrainTarget::Blurry;
-    event_weight = 0;
+    event_weight = warp_weight = 0;
   } else if (name == "edi") {
     mode = TrainMode::Plain;
     target = TrainTarget::Edi;
-    event_weight = 0;
+    event_weight = warp_weight = 0;
   } else if (name == "blur-only") {
     mode = TrainMode::Blur;
     target = TrainTarget::Blurry;
-    event_weight = 0;
-  } else if (name == "blur+events") {
+    event_weight = warp_weight = 0;
+  } else if (name == "blur+events" || name == "blur+events+warp") {
     mode = TrainMode::Blur;
     target = TrainTarget::Blurry;
     event_weight = 0.1;
+    warp_weight = name == "blur+events" ? 0 : 0.1;
   } else
-    throw std::invalid_argument("unknown method '" + name + "' (plain, edi, blur-only, blur+events)");
+    throw std::invalid_argument("unknown method '" + name + "' (plain, edi, blur-only, blur+events, blur+events+warp)");
 }
 
 void TrainConfig::set(const std::string& key, const std::string& value) {

@@ -18,6 +18,8 @@ enum class TrainMode { Plain, Blur };
 const char* mode_name(TrainMode m);
 enum class TrainTarget { Blurry, Sharp, Edi };
 const char* target_name(TrainTarget t);
+enum class FlowSource { Events, Gt };
+const char* flow_source_name(FlowSource f);
 
 // One setting as `evflow train --keys` and docs/training.md show it.
 struct SettingDoc {
@@ -47,6 +49,8 @@ struct TrainConfig {
   double event_norm_floor = 1e-3;
   double event_flip_until = 0.8, event_flip_margin = 0.05;
   double event_from = 0.3;
+  double warp_weight = 0.0;
+  FlowSource flow = FlowSource::Events;
   bool pose_refine = false;
   double lr_pose_init = 1e-3, lr_pose_final = 1e-5;
   TrainTarget target = TrainTarget::Blurry;
@@ -65,9 +69,9 @@ struct TrainConfig {
   static TrainConfig preset_named(const std::string& name);  // "fast" (CPU) or "paper" (GPU)
   // The paper's configurations and baselines (key "method"): plain (3DGS on the blurry images),
   // edi (3DGS on EDI-deblurred images), blur-only (BAD-Gaussians-like: mode=blur), blur+events
-  // (mode=blur + the event loss, lambda 0.1).
+  // (mode=blur + the event loss, lambda 0.1), blur+events+warp (+ the warped-event loss, lambda 0.1).
   void apply_method(const std::string& name);
-  static std::vector<std::string> methods() { return {"plain", "edi", "blur-only", "blur+events"}; }
+  static std::vector<std::string> methods() { return {"plain", "edi", "blur-only", "blur+events", "blur+events+warp"}; }
   void set(const std::string& key, const std::string& value);  // throws naming the key and what it expects
   // "preset" first, then "method", then every other key (so explicit keys win).
   void apply_json(const nlohmann::json& j);

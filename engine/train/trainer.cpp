@@ -8,6 +8,8 @@
 
 #include "loss/event_loss.h"
 #include "loss/image_losses.h"
+#include "loss/warped_event_loss.h"
+#include "train/training_flows.h"
 
 namespace evflow {
 
@@ -88,6 +90,7 @@ void Trainer::setup(const GaussianCloud& start) {
   image_model_ = std::make_unique<ImageModel>(ctx_, frames, hw * 3, cfg_.loss_space);
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
   if (cfg_.event_weight > 0) add_event_term();
+  if (cfg_.warp_weight > 0) add_warp_term();
   optimizer_ = std::make_unique<GaussianOptimizer>(ctx_, cmd_, *params_, *grads_, cfg_, scene_extent(data_));
 }
 
@@ -114,6 +117,21 @@ void Trainer::add_event_term() {
   direction_ = std::make_unique<DirectionCheck>(*term, uint32_t(cfg_.event_flip_until * cfg_.iterations),
                                                 cfg_.event_flip_margin);
   add_loss(std::move(term));
+}
+
+// The warped-event loss L_ev^w: each view's events warped along its intervals' flows.
+void Trainer::add_warp_term() {
+  if (cfg_.mode != TrainMode::Blur)
+    throw std::invalid_argument("warp_weight > 0 needs mode=blur (the warped-event loss compares virtual frames)");
+  if (data_.events.size() == 0)
+    throw std::invalid_argument("warp_weight > 0 needs an event stream with times, and the dataset in '" + data_.root +
+                                "' has none");
+  const std::vector<double>& u = cameras_->frame_times();
+  const auto planes = warped_event_planes(data_, cfg_, u, training_flows(ctx_, data_, cfg_.flow, u));
+  WarpedEventOptions o;
+  o.norm_floor_rms = float(cfg_.event_norm_floor);
+  add_loss(std::make_unique<WarpedEventLoss>(ctx_, data_.events.width, data_.events.height, planes,
+                                             float(cfg_.warp_weight), o));
 }
 
 RenderSettings Trainer::render_settings() const {

@@ -90,6 +90,7 @@ class Trainer {
   void setup(const GaussianCloud& start);
   void upload_targets();
   void add_event_term();
+  void add_warp_term();
   RenderSettings render_settings() const;
   // The stages of a step.
   void render_exposure(uint32_t view);

@@ -8,6 +8,7 @@
 #include "events/binned_events.h"
 #include "events/edi.h"
 #include "events/gpu_events.h"
+#include "events/warped_events.h"
 
 namespace evflow {
 
@@ -75,6 +76,29 @@ io::Image training_target(const io::Dataset& data, size_t view, const TrainConfi
                                 events::EdiThresholds{pos, neg, {}, {}});
   for (float& x : out.data)
     x = std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 0.0f;  // a training target lives in [0, 1]
+  return out;
+}
+
+std::vector<std::vector<float>> warped_event_planes(const io::Dataset& data, const TrainConfig& cfg,
+                                                    const std::vector<double>& frame_u,
+                                                    const std::vector<std::vector<std::vector<float>>>& flows) {
+  const auto [pos, neg] = event_thresholds(data, cfg);
+  const size_t hw = size_t(data.events.width) * data.events.height;
+  std::vector<std::vector<float>> out;
+  for (size_t v = 0; v < data.train.size(); ++v) {
+    const io::View& view = data.train[v];
+    const double t0 = view.exposure_start, span = view.exposure_end - view.exposure_start;
+    std::vector<float> planes;
+    for (size_t i = 0; i + 1 < frame_u.size(); ++i) {
+      const std::vector<float>& d = flows.at(v).at(i);
+      const std::vector<float> m =
+          warp_events_to_end(data.events, t0 + frame_u[i] * span, t0 + frame_u[i + 1] * span, d, pos, neg);
+      planes.insert(planes.end(), m.begin(), m.end());
+      for (size_t c = 0; c < 2; ++c)
+        for (size_t p = 0; p < hw; ++p) planes.push_back(std::isfinite(d[2 * p + c]) ? d[2 * p + c] : 0.0f);
+    }
+    out.push_back(std::move(planes));
+  }
   return out;
 }
 

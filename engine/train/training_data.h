@@ -3,6 +3,7 @@
 #pragma once
 #include <memory>
 #include <utility>
+#include <vector>
 
 #include "events/interval_events.h"
 #include "gpu/context.h"
@@ -24,6 +25,14 @@ std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainC
 // (EBAD-NeRF), its bins. Throws naming the dataset when it has neither, when the events' sensor
 // differs from the images or when a view has no exposure interval.
 std::unique_ptr<IntervalEvents> training_events(gpu::Context& ctx, const io::Dataset& data);
+
+// Per training view, the planes of the warped-event loss (loss/warped_event_loss.h): for each
+// interval between consecutive `frame_u` (the exposure's normalised frame times), the events of
+// the dataset's stream warped to the interval's end along flows[view][interval] (H * W * 2, as
+// train/training_flows.h gives), then the flow's u and v planes (0 where it is not finite).
+std::vector<std::vector<float>> warped_event_planes(const io::Dataset& data, const TrainConfig& cfg,
+                                                    const std::vector<double>& frame_u,
+                                                    const std::vector<std::vector<std::vector<float>>>& flows);
 
 // Random Gaussians inside the training views' frustums between the near and far bounds, coloured
 // from the pixel they were seeded on.

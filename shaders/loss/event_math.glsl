@@ -1,5 +1,5 @@
-// Event-loss maths shared by loss/event_pair (forward), loss/event_pair_bwd (backward) and
-// loss/event_pair_value (the value alone).
+// Event-loss maths shared by loss/event_pair (forward), loss/event_pair_bwd (backward),
+// loss/event_pair_value (the value alone) and the warped-event loss (loss/warped_event*).
 // Luminance weights match the simulator's event model (engine/events/event_model.h).
 const vec3 kEventLuma = vec3(0.2126, 0.7152, 0.0722);
 
@@ -17,4 +17,12 @@ float event_norm(float sq, float floor2) { return sqrt(max(sq, floor2)); }
 float event_pair_loss(float ed, float dd, float ee, float floor2) {
   float nE = event_norm(ee, floor2), nD = event_norm(dd, floor2);
   return ee / (nE * nE) + dd / (nD * nD) - 2.0 * ed / (nE * nD);
+}
+// dl/dD at a pixel with values e, d: 2 (d/nD - e/nE) / nD, plus, when nD follows D (not held at
+// the floor), the norm's share 2 d (ED/(nE nD) - DD/nD^2) / nD^2.
+float event_pair_dl_dd(float e, float d, float ed, float dd, float ee, float floor2) {
+  float nE = event_norm(ee, floor2), nD = event_norm(dd, floor2);
+  float g = 2.0 * (d / nD - e / nE) / nD;
+  if (!(dd < floor2)) g += 2.0 * d * (ed / (nE * nD) - dd / (nD * nD)) / (nD * nD);
+  return g;
 }

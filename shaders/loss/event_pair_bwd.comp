@@ -20,18 +20,12 @@ void main() {
   uint hw = pc.width * pc.height;
   uint p = evf_linear_invocation(kLossGroupSize);
   float ed = sums[4u * pc.pair], dd = sums[4u * pc.pair + 1u], ee = sums[4u * pc.pair + 2u];
-  bool d_floored = dd < pc.norm_floor2;
-  float nE = event_norm(ee, pc.norm_floor2), nD = event_norm(dd, pc.norm_floor2);
   if (p == 0u) {
     float v = pc.value_scale * event_pair_loss(ed, dd, ee, pc.norm_floor2);
     values[pc.value_index] = pc.value_accumulate != 0u ? values[pc.value_index] + v : v;
   }
   if (p >= hw) return;
-  float e = scratch[p], d = scratch[hw + p];
-  // dl/dD_p: 2 (D_p/nD - E_p/nE) / nD, plus, when nD follows D, the norm's share
-  // 2 D_p (ED/(nE nD) - DD/nD^2) / nD^2.
-  float g = 2.0 * (d / nD - e / nE) / nD;
-  if (!d_floored) g += 2.0 * d * (ed / (nE * nD) - dd / (nD * nD)) / (nD * nD);
+  float g = event_pair_dl_dd(scratch[p], scratch[hw + p], ed, dd, ee, pc.norm_floor2);
   g *= pc.grad_scale;
   vec3 cs = vec3(frame_s[p], frame_s[hw + p], frame_s[2u * hw + p]);
   vec3 cj = vec3(frame_j[p], frame_j[hw + p], frame_j[2u * hw + p]);

@@ -102,6 +102,29 @@ struct EventPairPC {
   uint pad1, pad2;
 };
 
+// Warped-event loss (paper Eq. 6-7, engine/loss/warped_event_loss.h). One record per interval i
+// of the virtual frames, frame j = i + 1; the view's planes hold, per interval, the measured
+// events warped to t_j (M) and the interval's displacement (dx, dy), H*W floats each.
+// loss/warped_event: per interior pixel (border pixels: both sides 0)
+//   P = -(Lx dx + Ly dy),  Lx, Ly: central differences of L = log(eps + luminance(rgb_j)),
+// writes M and P into scratch planes 0 and 1 and partials[g] = (sum M*P, sum P*P, sum M*M, 0);
+// loss/reduce stores the sums at sums[4 * interval ..].
+// loss/warped_event_bwd: l = || M / nM - P / nP ||^2 (floored norms as the event loss),
+//   grad_j (+)= grad_scale * dl/drgb_j, and invocation 0 writes (value_accumulate: adds)
+//   value_scale * l into values[value_index].
+struct WarpedEventPC {
+  uint width;
+  uint height;
+  uint interval;      // i: planes [3 i, 3 i + 2] of the view's buffer; sums at 4 i
+  uint value_index;
+  float eps;
+  float norm_floor2;
+  float grad_scale;
+  float value_scale;
+  uint value_accumulate;
+  uint pad0, pad1, pad2;
+};
+
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
 // loss/event_pair
 EVF_BIND(kEventPairBindCounts, 0u, Counts)
@@ -120,6 +143,18 @@ EVF_BIND(kEventPairBwdBindValues, 6u, Values)
 // loss/event_pair_value
 EVF_BIND(kEventPairValueBindSums, 0u, Sums)
 EVF_BIND(kEventPairValueBindValues, 1u, Values)
+// loss/warped_event
+EVF_BIND(kWarpedEventBindPlanes, 0u, Planes)
+EVF_BIND(kWarpedEventBindFrame, 1u, Frame)
+EVF_BIND(kWarpedEventBindScratch, 2u, Scratch)
+EVF_BIND(kWarpedEventBindPartials, 3u, Partials)
+// loss/warped_event_bwd
+EVF_BIND(kWarpedEventBwdBindPlanes, 0u, Planes)
+EVF_BIND(kWarpedEventBwdBindFrame, 1u, Frame)
+EVF_BIND(kWarpedEventBwdBindScratch, 2u, Scratch)
+EVF_BIND(kWarpedEventBwdBindSums, 3u, Sums)
+EVF_BIND(kWarpedEventBwdBindGrad, 4u, Grad)
+EVF_BIND(kWarpedEventBwdBindValues, 5u, Values)
 // loss/pixel
 EVF_BIND(kPixelLossBindA, 0u, A)
 EVF_BIND(kPixelLossBindB, 1u, B)

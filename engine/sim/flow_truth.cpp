@@ -1,4 +1,4 @@
-#include "flow_truth.h"
+#include "sim/flow_truth.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include "io/npy.h"
 #include "sim/simulator.h"
 
-namespace evflow::app {
+namespace evflow::sim {
 
 namespace fs = std::filesystem;
 
@@ -77,4 +77,4 @@ std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const 
   throw std::runtime_error(traj.string() + ": no training view '" + name + "'");
 }
 
-}  // namespace evflow::app
+}  // namespace evflow::sim

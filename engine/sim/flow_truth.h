@@ -1,4 +1,4 @@
-// Ground-truth flow of a simulated exposure's intervals (evflow flow): from the simulator's
+// Ground-truth flow of a simulated exposure's intervals (evflow flow, flow=gt in training): from the simulator's
 // gt/trajectories.json (the sub-frame poses) and gt/depth/<view>.npy (depth at mid-exposure).
 #pragma once
 #include <filesystem>
@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace evflow::app {
+namespace evflow::sim {
 
 // For each interval [u_j, u_{j+1}] (normalised exposure times) of training view `name`: the
 // displacement over the interval of the surface point seen at each pixel at mid-exposure,
@@ -17,4 +17,4 @@ std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const 
                                                                           const std::string& name,
                                                                           const std::vector<double>& frame_u);
 
-}  // namespace evflow::app
+}  // namespace evflow::sim

@@ -1,0 +1,49 @@
+// The warped-event loss L_ev^w (paper Eq. 6-7; docs/losses.md). For each interval i of an
+// exposure's 2N+1 virtual frames, j = i + 1:
+//
+//   M_i = the interval's events moved to t_j along its flow (threshold-weighted, signed,
+//         bilinear votes: events/warped_events.h), fixed by the data and the flow;
+//   P_i = -(grad L_j . d_i),  L_j = log(eps + luminance of frame j), d_i the interval's
+//         displacement (pixels), grad by central differences: the brightness change that moving
+//         frame j's edges by d_i makes, at the edges' positions at t_j;
+//   l_i = || M_i / ||M_i|| - P_i / ||P_i|| ||^2 (norms floored as the event loss's),
+//   L   = (1 / 2N) sum_i l_i,
+//
+// over interior pixels. The paper warps the gradient of frame i to t_j; EvFlow renders frame j
+// itself, so it takes that frame's gradient: the image the warp approximates, without a
+// resampling. Gradients reach frame j's render (and through it the splats, poses and knots),
+// never the flow.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "loss/loss_term.h"
+
+namespace evflow {
+
+struct WarpedEventOptions {
+  float eps = 1e-3f;             // L = log(eps + Y), the event model's eps
+  float norm_floor_rms = 1e-3f;  // per-pixel RMS below which a norm is floored
+};
+
+class WarpedEventLoss : public ExposureLossTerm {
+ public:
+  // planes[v]: training view v's intervals one after another, each M, dx, dy (H * W floats
+  // each); every view has the same number of intervals.
+  WarpedEventLoss(gpu::Context& ctx, uint32_t width, uint32_t height, const std::vector<std::vector<float>>& planes,
+                  float weight, WarpedEventOptions options = {});
+  using ExposureLossTerm::record;
+  void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) override;
+  uint32_t intervals() const { return intervals_; }
+  const WarpedEventOptions& options() const { return options_; }
+
+ private:
+  void check(const ExposureFrames& f) const;
+
+  uint32_t width_, height_, intervals_ = 0;
+  WarpedEventOptions options_;
+  std::vector<gpu::Buffer> planes_;
+  gpu::Buffer scratch_, partials_, sums_;
+};
+
+}  // namespace evflow
