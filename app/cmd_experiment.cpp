@@ -1,10 +1,10 @@
 // evflow experiment: the deblurring comparison of the paper's configurations on simulated scenes.
 // For every scene: simulate (unless its dataset exists), then train and evaluate every method
-// (plain, edi, blur-only, blur+events) with the same preset and overrides, and write one table
-// (DIR/experiment.md, DIR/experiment.json). Each run is a separate `evflow train` / `evflow eval`
-// process; a run whose eval.json exists is reused, so an interrupted experiment continues.
-// The same runs can go to a batch scheduler instead: --emit-jobs writes one command line per
-// (scene, method) (`evflow experiment --job ...`), --collect builds the table once they are done.
+// (plain, edi, blur-only, blur+events; blur+events+warp on request) with the same preset and overrides, and write one
+// table (DIR/experiment.md, DIR/experiment.json). Each run is a separate `evflow train` / `evflow eval` process; a run
+// whose eval.json exists is reused, so an interrupted experiment continues. The same runs can go to a batch scheduler
+// instead: --emit-jobs writes one command line per (scene, method) (`evflow experiment --job ...`), --collect builds
+// the table once they are done.
 #include <unistd.h>
 
 #include <chrono>

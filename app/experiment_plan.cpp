@@ -73,7 +73,8 @@ std::string ExperimentPlan::help() {
   std::snprintf(
       buf, sizeof buf,
       "usage: evflow experiment --out DIR [--scenes %s] [--blur-px 6,4,9]\n"
-      "         [--width 173] [--height 130] [--methods plain,edi,blur-only,blur+events] [--preset fast]\n"
+      "         [--width 173] [--height 130] [--methods plain,edi,blur-only,blur+events(,blur+events+warp)] [--preset "
+      "fast]\n"
       "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device "
       "N|name]\n"
       "         [--no-baseline-pose-refine] [--emit-jobs FILE | --job] [key=value ...]\n"

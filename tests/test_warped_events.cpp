@@ -248,7 +248,7 @@ TEST_CASE("warped-event loss: renders whose edges sit where the warped events st
   test::require_no_validation_messages();
 }
 
-TEST_CASE("blur+events+warp trains on a simulated folder with ground-truth and with estimated flow (cached)",
+TEST_CASE("blur+events+warp and +flow train on a simulated folder with ground-truth and estimated flow (cached)",
           "[events][warp][train][gpu]") {
   namespace fs = std::filesystem;
   REQUIRE(fs::exists(test::evflow_binary()));
@@ -260,9 +260,10 @@ TEST_CASE("blur+events+warp trains on a simulated folder with ground-truth and w
                            "simulate --scene gallery --out sim --width 32 --height 24 --blur-px 4 --seed 3 "
                            "--train-views 3 --novel-views 1",
                            out) == 0);
-  auto train = [&](const std::string& data, const std::string& run, const std::string& flow) {
-    const std::string a = "train " + data + " --out " + run +
-                          " method=blur+events+warp event_from=0 iterations=4 init_gaussians=300 max_gaussians=600 "
+  auto train = [&](const std::string& data, const std::string& run, const std::string& flow,
+                   const std::string& method = "blur+events+warp") {
+    const std::string a = "train " + data + " --out " + run + " method=" + method +
+                          " event_from=0 iterations=4 init_gaussians=300 max_gaussians=600 "
                           "sh_degree=0 flow=" +
                           flow;
     const int rc = test::run_evflow(dir, a, out);
@@ -281,6 +282,9 @@ TEST_CASE("blur+events+warp trains on a simulated folder with ground-truth and w
   };
   check_term(train("sim", "gt", "gt"));
   CHECK(out.find("estimated") == std::string::npos);
+  // With the flow-upsampled blur (2NM+1 = 13 frames in the mean) as well.
+  check_term(train("sim", "gt_flow", "gt", "blur+events+flow"));
+  CHECK(test::slurp(dir / "gt_flow" / "config.json").find("\"blur_upsample\": 4") != std::string::npos);
 
   // Estimated from the events: once, then read back from the dataset's cache.
   check_term(train("sim", "ev", "events"));
@@ -288,7 +292,8 @@ TEST_CASE("blur+events+warp trains on a simulated folder with ground-truth and w
   for (size_t at = out.find("flow: view"); at != std::string::npos; at = out.find("flow: view", at + 1)) ++estimated;
   CHECK(estimated == 3);
   size_t cached = 0;
-  for (auto& e : fs::directory_iterator(dir / "sim" / ".evflow-cache" / "flow")) cached += e.path().extension() == ".npy";
+  for (auto& e : fs::directory_iterator(dir / "sim" / ".evflow-cache" / "flow"))
+    cached += e.path().extension() == ".npy";
   CHECK(cached == 3);
   check_term(train("sim", "ev2", "events"));
   CHECK(out.find("flow: view") == std::string::npos);

@@ -6,23 +6,30 @@
 
 namespace evflow {
 
-ImageModel::ImageModel(gpu::Context& ctx, uint32_t frames, size_t values, LossSpace space)
+ImageModel::ImageModel(gpu::Context& ctx, uint32_t frames, uint32_t width, uint32_t height, LossSpace space,
+                       uint32_t upsample)
     : ctx_(ctx),
       frames_(frames),
-      values_(values),
+      width_(width),
+      height_(height),
+      upsample_(upsample),
+      values_(size_t(width) * height * 3),
       space_(space),
       identity_(frames == 1 && space == LossSpace::Srgb),
-      v_prediction_(ctx, values * 4, "v_prediction") {
+      v_prediction_(ctx, size_t(width) * height * 12, "v_prediction") {
   if (frames == 0) throw std::invalid_argument("image model: no frames");
+  if (upsample == 0 || (upsample > 1 && frames < 2))
+    throw std::invalid_argument("image model: upsampling needs M >= 1 and, for M > 1, at least 2 frames");
   if (identity_) return;
   for (uint32_t i = 0; i < frames; ++i) {
-    linear_.emplace_back(ctx, values * 4, "linear_frame");
-    v_render_.emplace_back(ctx, values * 4, "v_render");
+    linear_.emplace_back(ctx, values_ * 4, "linear_frame");
+    v_render_.emplace_back(ctx, values_ * 4, "v_render");
+    if (upsample > 1) v_share_.emplace_back(ctx, values_ * 4, "v_frame_share");
   }
-  if (frames > 1) mean_ = gpu::Buffer(ctx, values * 4, "blur_mean_image");
+  if (frames > 1) mean_ = gpu::Buffer(ctx, values_ * 4, "blur_mean_image");
   if (space == LossSpace::Srgb) {
-    encoded_ = gpu::Buffer(ctx, values * 4, "prediction_srgb");
-    v_mean_ = gpu::Buffer(ctx, values * 4, "v_mean");
+    encoded_ = gpu::Buffer(ctx, values_ * 4, "prediction_srgb");
+    v_mean_ = gpu::Buffer(ctx, values_ * 4, "v_mean");
   }
 }
 
@@ -33,20 +40,53 @@ void ImageModel::colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, c
                pc, cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kColourGroupSize)));
 }
 
-void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders) {
+void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const gpu::Buffer* flow) {
   if (renders.size() != frames_) throw std::invalid_argument("image model: wrong number of renders");
+  if (upsample_ > 1 && !flow) throw std::invalid_argument("image model: upsampling needs the view's flow");
   renders_ = renders;
+  flow_ = flow;
   if (identity_) return;
   for (uint32_t i = 0; i < frames_; ++i) colour(cmd, shaderio::kColourDecode, *renders[i], *renders[i], linear_[i]);
   if (frames_ > 1)
     for (uint32_t i = 0; i < frames_; ++i) {
-      shaderio::AccumulatePC pc{uint32_t(values_), 1.0f / float(frames_), i > 0 ? 1u : 0u, 0};
+      shaderio::AccumulatePC pc{uint32_t(values_), 1.0f / float(mean_count()), i > 0 ? 1u : 0u, 0};
       cmd.dispatch("train/accumulate",
                    {{shaderio::kTrainAccumulateBindX, linear_[i]}, {shaderio::kTrainAccumulateBindY, mean_}}, pc,
                    cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kAccumulateGroupSize)));
     }
+  if (upsample_ > 1) upsample_forward(cmd, *flow);
   const gpu::Buffer& m = frames_ > 1 ? mean_ : linear_[0];
   if (space_ == LossSpace::Srgb) colour(cmd, shaderio::kColourEncode, m, m, encoded_);
+}
+
+// The sub-frames of every interval, added into the mean.
+void ImageModel::upsample_forward(gpu::Commands& cmd, const gpu::Buffer& flow) {
+  const uint64_t hw = uint64_t(width_) * height_;
+  if (flow.size() < 2 * hw * (frames_ - 1) * 4)
+    throw std::invalid_argument("image model: the flow holds fewer than 2 planes per interval");
+  for (uint32_t i = 0; i + 1 < frames_; ++i) {
+    shaderio::UpsamplePC pc{width_, height_, i, upsample_, 1.0f / float(mean_count()), 0, 0, 0};
+    cmd.dispatch("train/upsample",
+                 {{shaderio::kUpsampleBindFlow, flow},
+                  {shaderio::kUpsampleBindFrame, linear_[i]},
+                  {shaderio::kUpsampleBindMean, mean_}},
+                 pc, cmd.linear_groups(gpu::Commands::div_up(hw, shaderio::kUpsampleGroupSize)));
+  }
+}
+
+void ImageModel::frame_share(gpu::Commands& cmd, uint32_t i, const gpu::Buffer& out) {
+  const gpu::Buffer& g = (identity_ || space_ == LossSpace::Linear) ? v_prediction_ : v_mean_;
+  if (upsample_ == 1 || i + 1 == frames_) {
+    cmd.copy(g, out, values_ * 4);
+    return;
+  }
+  const uint64_t hw = uint64_t(width_) * height_;
+  shaderio::UpsamplePC pc{width_, height_, i, upsample_, 1.0f, 0, 0, 0};
+  cmd.dispatch("train/upsample_bwd",
+               {{shaderio::kUpsampleBwdBindFlow, *flow_},
+                {shaderio::kUpsampleBwdBindGrad, g},
+                {shaderio::kUpsampleBwdBindShare, out}},
+               pc, cmd.linear_groups(gpu::Commands::div_up(hw, shaderio::kUpsampleGroupSize)));
 }
 
 const gpu::Buffer& ImageModel::prediction() const {
@@ -67,8 +107,14 @@ void ImageModel::render_grads(gpu::Commands& cmd, const std::vector<const gpu::B
   if (!frame_grads.empty() && frame_grads.size() != frames_)
     throw std::invalid_argument("image model: wrong number of frame gradients");
   const gpu::Buffer* shared = frame_grads.empty() ? &mean_grad(cmd) : nullptr;
-  for (uint32_t i = 0; i < frames_; ++i)
-    colour(cmd, shaderio::kColourDecodeBwd, *renders_[i], shared ? *shared : *frame_grads[i], v_render_[i]);
+  for (uint32_t i = 0; i < frames_; ++i) {
+    const gpu::Buffer* g = shared ? shared : frame_grads[i];
+    if (shared && upsample_ > 1) {  // each frame's own share
+      frame_share(cmd, i, v_share_[i]);
+      g = &v_share_[i];
+    }
+    colour(cmd, shaderio::kColourDecodeBwd, *renders_[i], *g, v_render_[i]);
+  }
 }
 
 }  // namespace evflow

@@ -8,6 +8,13 @@
 // The blur is physical: the frames are averaged in linear light. Exposure terms (the event loss)
 // see the linear frames, since events respond to linear log intensity. Plain mode with
 // loss_space = srgb is the identity (P = C_0): nothing is converted, as in 3DGS.
+//
+// Flow-upsampled blur (paper Eq. 9, upsample M > 1): each interval i of the frames also gives
+// M - 1 sub-frames, frame i moved along the interval's flow, S_m(L_i)(x) = L_i(x - (m/M) d_i(x))
+// (bilinear; d_i: the displacement over the interval, so the sub-frame shows the scene m/M of the
+// way to frame i + 1), and M is the mean of all 2NM + 1 frames. Taps are limited to those whose
+// own warped position lies within kUpsampleReach of the target (shaders/train/train_layout.h), so
+// that the exact adjoint is a gather: no float atomics, a fixed order.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -20,24 +27,32 @@ namespace evflow {
 
 class ImageModel {
  public:
-  // frames: renders per step (2N+1, or 1 in plain mode); values: floats per image (3 H W).
-  ImageModel(gpu::Context& ctx, uint32_t frames, size_t values, LossSpace space);
+  // frames: renders per step (2N+1, or 1 in plain mode) of width x height; upsample: M (1: off).
+  ImageModel(gpu::Context& ctx, uint32_t frames, uint32_t width, uint32_t height, LossSpace space,
+             uint32_t upsample = 1);
 
   bool identity() const { return identity_; }
   uint32_t frames() const { return frames_; }
+  // The frames the mean averages: 2NM + 1 (frames() without upsampling).
+  uint32_t mean_count() const { return frames_ + (frames_ - 1) * (upsample_ - 1); }
+  uint32_t upsample() const { return upsample_; }
 
-  // Records the forward pass over the step's renders (one per frame, in frame order).
-  void forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders);
+  // Records the forward pass over the step's renders (one per frame, in frame order). flow: with
+  // upsample > 1, the view's displacement planes (dx, dy per interval, H * W floats each).
+  void forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const gpu::Buffer* flow = nullptr);
   // The image the image terms compare with the target.
   const gpu::Buffer& prediction() const;
   // Frame i in linear light (what exposure terms see). Not available when identity().
   const gpu::Buffer& linear_frame(uint32_t i) const { return linear_[i]; }
 
-  // Where the image terms write d(loss)/d(prediction), already divided by frames() (each
+  // Where the image terms write d(loss)/d(prediction), already divided by mean_count() (each
   // frame's share of the mean).
   const gpu::Buffer& prediction_grad() const { return v_prediction_; }
-  // Records d(loss)/d(M) / frames() from prediction_grad(); returns the buffer that holds it.
+  // Records d(loss)/d(M) / mean_count() from prediction_grad(); returns the buffer that holds it.
   const gpu::Buffer& mean_grad(gpu::Commands& cmd);
+  // Records frame i's share of the mean's gradient into `out` (the mean_grad() of the step,
+  // recorded before): a copy of it, plus its sub-frames' adjoint when upsampling.
+  void frame_share(gpu::Commands& cmd, uint32_t i, const gpu::Buffer& out);
   // Records each render's gradient. frame_grads: per frame d(loss)/d(L_i) with the mean's share
   // already in it (exposure terms on), or empty (then every frame takes the mean's share).
   void render_grads(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads);
@@ -45,9 +60,12 @@ class ImageModel {
 
  private:
   void colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y);
+  void upsample_forward(gpu::Commands& cmd, const gpu::Buffer& flow);
   gpu::Context& ctx_;
-  uint32_t frames_;
+  uint32_t frames_, width_, height_, upsample_;
   size_t values_;
+  const gpu::Buffer* flow_ = nullptr;
+  std::vector<gpu::Buffer> v_share_;  // per frame, when upsampling without exposure terms
   LossSpace space_;
   bool identity_;
   std::vector<const gpu::Buffer*> renders_;

@@ -19,7 +19,7 @@ void LossTerms::add(std::unique_ptr<ExposureLossTerm> term) {
 void LossTerms::record_image_terms(gpu::Commands& cmd, const ImageModel& m, const gpu::Buffer& target) const {
   bool first = true;
   for (auto& t : image_) {
-    t->record(cmd, m.prediction(), target, m.prediction_grad(), t->weight() / float(m.frames()), !first);
+    t->record(cmd, m.prediction(), target, m.prediction_grad(), t->weight() / float(m.mean_count()), !first);
     first = false;
   }
 }

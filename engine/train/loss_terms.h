@@ -27,7 +27,7 @@ class LossTerms {
   bool has_exposure_terms() const { return !exposure_.empty(); }
 
   // Image terms: d(loss)/d(prediction) into image_model.prediction_grad(), each frame's share
-  // (1/frames of it) already applied.
+  // (1/mean_count of it) already applied.
   void record_image_terms(gpu::Commands& cmd, const ImageModel& image_model, const gpu::Buffer& target) const;
   // Exposure terms add their per-frame gradients into frames.grad.
   void record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames) const;

@@ -131,9 +131,12 @@ std::vector<Setting> run_settings() {
        "`fast` (sized for CPUs) or `paper` (the paper's sizes: 40k iterations, 100k initial Gaussians); "
        "resets every other key to the preset's value, so it is applied first"},
       {"method", [](TrainConfig& c, const std::string& v) { c.apply_method(v); }, nullptr,
-       "sets `mode`, `target`, `event_weight` and `warp_weight` for one of the paper's configurations: `plain` "
+       "sets `mode`, `target`, `event_weight`, `warp_weight` and `blur_upsample` for one of the paper's "
+       "configurations: `plain` "
        "(3DGS on the blurry images), `edi` (3DGS on EDI-deblurred images), `blur-only` (mode=blur), "
-       "`blur+events` (mode=blur, event_weight 0.1), `blur+events+warp` (also warp_weight 0.1). Applied after `preset` "
+       "`blur+events` (mode=blur, event_weight 0.1), `blur+events+warp` (also warp_weight 0.1), "
+       "`blur+events+flow` (also blur_upsample 4); the others set warp_weight 0 and blur_upsample 1. Applied after "
+       "`preset` "
        "and before the other keys of a config file; on "
        "the command line, in order"},
       field("iterations", &TrainConfig::iterations, "optimisation steps, one training view per step"),
@@ -194,6 +197,10 @@ std::vector<Setting> blur_settings() {
             "decoded to linear light, along the view's learned Bézier exposure trajectory (9 se(3) knots, paper "
             "Sec. 4.1, [trajectory.md](trajectory.md)), the blur-only baseline of the paper"),
       field("virtual_frames", &TrainConfig::virtual_frames, "N: 2N+1 virtual poses per exposure"),
+      field("blur_upsample", &TrainConfig::blur_upsample,
+            "M of the flow-upsampled blur (paper Eq. 9): each interval of the virtual frames adds M−1 sub-frames, "
+            "its first frame moved m/M of the way along the interval's optical flow (`flow`), and the blurry "
+            "image is the mean of all 2NM+1 in linear light; 1: off (the paper: 4); > 1 needs `mode=blur`"),
       field("lr_trajectory_init", &TrainConfig::lr_trajectory_init,
             "the knots' Adam learning rate at the start; the fast preset's 1500 steps leave the paper's "
             "1e-3 → 1e-5 too little room to learn the exposure motion"),
@@ -363,21 +370,26 @@ void TrainConfig::apply_method(const std::string& name) {
     mode = TrainMode::Plain;
     target = TrainTarget::Blurry;
     event_weight = warp_weight = 0;
+    blur_upsample = 1;
   } else if (name == "edi") {
     mode = TrainMode::Plain;
     target = TrainTarget::Edi;
     event_weight = warp_weight = 0;
+    blur_upsample = 1;
   } else if (name == "blur-only") {
     mode = TrainMode::Blur;
     target = TrainTarget::Blurry;
     event_weight = warp_weight = 0;
-  } else if (name == "blur+events" || name == "blur+events+warp") {
+    blur_upsample = 1;
+  } else if (name == "blur+events" || name == "blur+events+warp" || name == "blur+events+flow") {
     mode = TrainMode::Blur;
     target = TrainTarget::Blurry;
     event_weight = 0.1;
     warp_weight = name == "blur+events" ? 0 : 0.1;
+    blur_upsample = name == "blur+events+flow" ? 4 : 1;
   } else
-    throw std::invalid_argument("unknown method '" + name + "' (plain, edi, blur-only, blur+events, blur+events+warp)");
+    throw std::invalid_argument("unknown method '" + name +
+                                "' (plain, edi, blur-only, blur+events, blur+events+warp, blur+events+flow)");
 }
 
 void TrainConfig::set(const std::string& key, const std::string& value) {

@@ -43,6 +43,7 @@ struct TrainConfig {
   LossSpace loss_space = LossSpace::Srgb;
   TrainMode mode = TrainMode::Plain;
   uint32_t virtual_frames = 3;
+  uint32_t blur_upsample = 1;
   double lr_trajectory_init = 6e-3, lr_trajectory_final = 6e-4;
   double event_weight = 0.0;
   double event_theta_pos = 0.0, event_theta_neg = 0.0;
@@ -69,9 +70,12 @@ struct TrainConfig {
   static TrainConfig preset_named(const std::string& name);  // "fast" (CPU) or "paper" (GPU)
   // The paper's configurations and baselines (key "method"): plain (3DGS on the blurry images),
   // edi (3DGS on EDI-deblurred images), blur-only (BAD-Gaussians-like: mode=blur), blur+events
-  // (mode=blur + the event loss, lambda 0.1), blur+events+warp (+ the warped-event loss, lambda 0.1).
+  // (mode=blur + the event loss, lambda 0.1), blur+events+warp (+ the warped-event loss, lambda 0.1), blur+events+flow
+  // (+ the flow-upsampled blur, M = 4).
   void apply_method(const std::string& name);
-  static std::vector<std::string> methods() { return {"plain", "edi", "blur-only", "blur+events", "blur+events+warp"}; }
+  static std::vector<std::string> methods() {
+    return {"plain", "edi", "blur-only", "blur+events", "blur+events+warp", "blur+events+flow"};
+  }
   void set(const std::string& key, const std::string& value);  // throws naming the key and what it expects
   // "preset" first, then "method", then every other key (so explicit keys win).
   void apply_json(const nlohmann::json& j);

@@ -87,10 +87,10 @@ void Trainer::setup(const GaussianCloud& start) {
   cameras_ = std::make_unique<CameraModel>(data_, cfg_);
   const uint32_t frames = uint32_t(cameras_->frame_times().size());
   exposure_ = std::make_unique<ExposureRender>(ctx_, frames);
-  image_model_ = std::make_unique<ImageModel>(ctx_, frames, hw * 3, cfg_.loss_space);
+  image_model_ = std::make_unique<ImageModel>(ctx_, frames, c0.width, c0.height, cfg_.loss_space, cfg_.blur_upsample);
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
   if (cfg_.event_weight > 0) add_event_term();
-  if (cfg_.warp_weight > 0) add_warp_term();
+  setup_flows();
   optimizer_ = std::make_unique<GaussianOptimizer>(ctx_, cmd_, *params_, *grads_, cfg_, scene_extent(data_));
 }
 
@@ -119,15 +119,31 @@ void Trainer::add_event_term() {
   add_loss(std::move(term));
 }
 
-// The warped-event loss L_ev^w: each view's events warped along its intervals' flows.
-void Trainer::add_warp_term() {
+// The training views' interval flows, when the warped-event loss or the upsampled blur needs
+// them: estimated from the events (cached) or the simulator's ground truth (cfg.flow).
+void Trainer::setup_flows() {
+  const bool warp = cfg_.warp_weight > 0, upsample = cfg_.blur_upsample > 1;
+  if (!warp && !upsample) return;
   if (cfg_.mode != TrainMode::Blur)
-    throw std::invalid_argument("warp_weight > 0 needs mode=blur (the warped-event loss compares virtual frames)");
-  if (data_.events.size() == 0)
+    throw std::invalid_argument("warp_weight > 0 and blur_upsample > 1 need mode=blur (the virtual frames)");
+  if (warp && data_.events.size() == 0)
     throw std::invalid_argument("warp_weight > 0 needs an event stream with times, and the dataset in '" + data_.root +
                                 "' has none");
-  const std::vector<double>& u = cameras_->frame_times();
-  const auto planes = warped_event_planes(data_, cfg_, u, training_flows(ctx_, data_, cfg_.flow, u));
+  const auto flows = training_flows(ctx_, data_, cfg_.flow, cameras_->frame_times());
+  if (upsample)
+    for (const auto& view : flows) {
+      std::vector<float> planes;
+      for (const auto& d : view) append_displacement_planes(d, planes);
+      ctx_.check_binding_size(planes.size() * 4, "upsampled blur flow");
+      flow_planes_.emplace_back(ctx_, planes.size() * 4, "flow_planes");
+      flow_planes_.back().write(planes);
+    }
+  if (warp) add_warp_term(flows);
+}
+
+// The warped-event loss L_ev^w: each view's events warped along its intervals' flows.
+void Trainer::add_warp_term(const std::vector<std::vector<std::vector<float>>>& flows) {
+  const auto planes = warped_event_planes(data_, cfg_, cameras_->frame_times(), flows);
   WarpedEventOptions o;
   o.norm_floor_rms = float(cfg_.event_norm_floor);
   add_loss(std::make_unique<WarpedEventLoss>(ctx_, data_.events.width, data_.events.height, planes,
@@ -170,7 +186,7 @@ void Trainer::render_exposure(uint32_t view) {
   std::vector<Camera> cameras;
   for (uint32_t i = 0; i < exposure_->frames(); ++i) cameras.push_back(cameras_->frame_camera(view, i));
   exposure_->forward(raster_, *params_, cameras, render_settings());
-  image_model_->forward(cmd_, exposure_->images());
+  image_model_->forward(cmd_, exposure_->images(), flow_planes_.empty() ? nullptr : &flow_planes_[view]);
   cmd_.submit();
 }
 
@@ -199,9 +215,9 @@ void Trainer::record_exposure_terms(StepStats& st) {
   for (uint32_t i = 0; i < frames; ++i) ef.rgb.push_back(&image_model_->linear_frame(i));
   const bool check = direction_ && direction_->active(step_);
   if (check) direction_->score_reversed(cmd_, ef);
-  const gpu::Buffer& mean_grad = image_model_->mean_grad(cmd_);
+  image_model_->mean_grad(cmd_);
   for (uint32_t i = 0; i < frames; ++i) {
-    cmd_.copy(mean_grad, frame_grad_[i], n_pix * 4);
+    image_model_->frame_share(cmd_, i, frame_grad_[i]);
     ef.grad.push_back(&frame_grad_[i]);
   }
   terms_.record_exposure_terms(cmd_, ef);

@@ -90,7 +90,8 @@ class Trainer {
   void setup(const GaussianCloud& start);
   void upload_targets();
   void add_event_term();
-  void add_warp_term();
+  void setup_flows();
+  void add_warp_term(const std::vector<std::vector<std::vector<float>>>& flows);
   RenderSettings render_settings() const;
   // The stages of a step.
   void render_exposure(uint32_t view);
@@ -113,7 +114,8 @@ class Trainer {
   LossTerms terms_;
   std::unique_ptr<IntervalEvents> events_;  // training views' events (when a term needs them)
   std::unique_ptr<DirectionCheck> direction_;
-  std::vector<gpu::Buffer> frame_grad_;  // per virtual frame, linear light (exposure terms only)
+  std::vector<gpu::Buffer> frame_grad_;   // per virtual frame, linear light (exposure terms only)
+  std::vector<gpu::Buffer> flow_planes_;  // per view, the upsampled blur's displacement planes
   std::unique_ptr<GaussianOptimizer> optimizer_;
   RenderState preview_;  // render()
   uint32_t step_ = 0;

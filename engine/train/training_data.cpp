@@ -9,6 +9,7 @@
 #include "events/edi.h"
 #include "events/gpu_events.h"
 #include "events/warped_events.h"
+#include "train/training_flows.h"
 
 namespace evflow {
 
@@ -83,7 +84,6 @@ std::vector<std::vector<float>> warped_event_planes(const io::Dataset& data, con
                                                     const std::vector<double>& frame_u,
                                                     const std::vector<std::vector<std::vector<float>>>& flows) {
   const auto [pos, neg] = event_thresholds(data, cfg);
-  const size_t hw = size_t(data.events.width) * data.events.height;
   std::vector<std::vector<float>> out;
   for (size_t v = 0; v < data.train.size(); ++v) {
     const io::View& view = data.train[v];
@@ -94,8 +94,7 @@ std::vector<std::vector<float>> warped_event_planes(const io::Dataset& data, con
       const std::vector<float> m =
           warp_events_to_end(data.events, t0 + frame_u[i] * span, t0 + frame_u[i + 1] * span, d, pos, neg);
       planes.insert(planes.end(), m.begin(), m.end());
-      for (size_t c = 0; c < 2; ++c)
-        for (size_t p = 0; p < hw; ++p) planes.push_back(std::isfinite(d[2 * p + c]) ? d[2 * p + c] : 0.0f);
+      append_displacement_planes(d, planes);
     }
     out.push_back(std::move(planes));
   }

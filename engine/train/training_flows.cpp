@@ -1,6 +1,7 @@
 #include "train/training_flows.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -108,6 +109,12 @@ std::vector<std::vector<std::vector<float>>> flows_from_truth(const io::Dataset&
 }
 
 }  // namespace
+
+void append_displacement_planes(const std::vector<float>& d, std::vector<float>& out) {
+  const size_t hw = d.size() / 2;
+  for (size_t c = 0; c < 2; ++c)
+    for (size_t p = 0; p < hw; ++p) out.push_back(std::isfinite(d[2 * p + c]) ? d[2 * p + c] : 0.0f);
+}
 
 std::string flow_cache_path(const io::Dataset& data, size_t v, const std::vector<double>& frame_u) {
   const io::View& view = data.train.at(v);

@@ -18,6 +18,10 @@ namespace evflow {
 std::vector<std::vector<std::vector<float>>> training_flows(gpu::Context& ctx, const io::Dataset& data,
                                                             FlowSource source, const std::vector<double>& frame_u);
 
+// Appends a displacement field d (H * W * 2, u and v interleaved) to `out` as two planes, u then
+// v, with 0 where d is not finite: the layout the GPU kernels read.
+void append_displacement_planes(const std::vector<float>& d, std::vector<float>& out);
+
 // Where flow=events keeps view `name`'s estimate: DATA/.evflow-cache/flow/<name>-<key>.npy, the key a
 // hash of the view's events, the frame times and the estimator's settings (a changed input is a
 // new file, never a stale hit).

@@ -25,10 +25,38 @@ struct ColourPC {
   uint pad0, pad1;
 };
 
+// Flow-upsampled blur (train/upsample, train/upsample_bwd; engine/train/image_model.h). For
+// interval i of the exposure, its displacement planes dx, dy (H*W each, at flow[2 i H W]) and
+// sub-frames m = 1..upsample-1 at s = m / upsample:
+//   S_m(L)(x) = sum over the included taps q of w_q L(q) / sum of their w_q,
+//   taps: the bilinear taps of x - s d(x); tap q is included when
+//   max(|x - (q + roundEven(s d(q)))|) <= kUpsampleReach (so the adjoint is a gather over that
+//   square), else no tap: S_m(L)(x) = L(x).
+// upsample:     y[c][x] += scale * sum_m S_m(L)[c][x]
+// upsample_bwd: y[c][q] = g[c][q] + sum_m S_m^T(g)[c][q]   (frame i's share of the mean's gradient)
+EVF_CONST(uint, kUpsampleGroupSize, 64u)
+EVF_CONST(int, kUpsampleReach, 2)
+struct UpsamplePC {
+  uint width;
+  uint height;
+  uint interval;
+  uint upsample;  // M
+  float scale;
+  uint pad0, pad1, pad2;
+};
+
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
 // train/accumulate
 EVF_BIND(kTrainAccumulateBindX, 0u, X)
 EVF_BIND(kTrainAccumulateBindY, 1u, Y)
+// train/upsample
+EVF_BIND(kUpsampleBindFlow, 0u, Flow)
+EVF_BIND(kUpsampleBindFrame, 1u, Frame)
+EVF_BIND(kUpsampleBindMean, 2u, Mean)
+// train/upsample_bwd
+EVF_BIND(kUpsampleBwdBindFlow, 0u, Flow)
+EVF_BIND(kUpsampleBwdBindGrad, 1u, Grad)
+EVF_BIND(kUpsampleBwdBindShare, 2u, Share)
 
 EVF_NAMESPACE_END
 #endif
