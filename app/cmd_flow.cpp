@@ -15,6 +15,7 @@
 #include "io/npy.h"
 #include "sim/flow_truth.h"
 #include "train/train_config.h"
+#include "train/training_flows.h"
 
 namespace evflow::app {
 
@@ -29,7 +30,9 @@ const char* kUsage =
     "  defaults). Writes DIR/<view>/flow_<j>.npy (float32 [H, W, 2], pixels over interval j),\n"
     "  flow_<j>.png (colour wheel), iwe_before.png and iwe_after.png (the exposure's events warped\n"
     "  to mid-exposure with zero and with the estimated flow) and DIR/flow.json. With the\n"
-    "  simulator's ground truth (gt/), the average endpoint error on pixels with events.\n"
+    "  simulator's ground truth (gt/), the average endpoint error on pixels with events. Each\n"
+    "  estimate also goes into DATA/.evflow-cache/flow/, where training with flow=events and the\n"
+    "  same frames finds it.\n"
     "  --json prints {aee_px, contrast_before, contrast_after, iwe_variance_before,\n"
     "  iwe_variance_after, seconds} over the views.\n";
 
@@ -80,8 +83,9 @@ nlohmann::json flow_view(flow::FlowEstimator& est, const io::Dataset& data, size
   const auto truth = sim::ground_truth_interval_flow(data.root, view.name, u);
   nlohmann::json j = {{"view", view.name}, {"events", ev.size()}, {"contrast_after", f.contrast}, {"seconds", seconds}};
   Aee all;
+  std::vector<std::vector<float>> dense;
   for (size_t k = 0; k < f.intervals.size(); ++k) {
-    const std::vector<float> d = flow::dense_flow(f.intervals[k].grid, f.width, f.height);
+    const std::vector<float>& d = dense.emplace_back(flow::dense_flow(f.intervals[k].grid, f.width, f.height));
     char name[32];
     std::snprintf(name, sizeof name, "flow_%02zu", k);
     io::write_npy<float>(dir / (std::string(name) + ".npy"), {f.height, f.width, 2}, d);
@@ -93,6 +97,7 @@ nlohmann::json flow_view(flow::FlowEstimator& est, const io::Dataset& data, size
     all.sum += a.sum, all.n += a.n;
   }
   if (truth) j["aee_mean_px"] = all.mean(), j["aee_sum"] = all.sum, j["aee_pixels"] = all.n;
+  store_cached_flow(data, v, u, dense);  // training with flow=events and these frames reuses it
   const auto [vb, va] = write_iwe(est, f, dir);
   j["iwe_variance_before"] = vb, j["iwe_variance_after"] = va;
   return j;

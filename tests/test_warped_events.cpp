@@ -19,6 +19,8 @@
 #include "gpu_fixture.h"
 #include "loss/warped_event_loss.h"
 #include "plot/curve_plot.h"
+
+#include <nlohmann/json.hpp>
 #include "reference/warped_event_reference.h"
 
 using namespace evflow;
@@ -286,16 +288,29 @@ TEST_CASE("blur+events+warp and +flow train on a simulated folder with ground-tr
   check_term(train("sim", "gt_flow", "gt", "blur+events+flow"));
   CHECK(test::slurp(dir / "gt_flow" / "config.json").find("\"blur_upsample\": 4") != std::string::npos);
 
-  // Estimated from the events: once, then read back from the dataset's cache.
+  // `evflow flow` estimates every view, scores it against the ground truth and fills the cache
+  // that training with flow=events reads.
+  REQUIRE(test::run_evflow(dir, "flow sim --out F --json", out) == 0);
+  const nlohmann::json j = nlohmann::json::parse(out.substr(out.find('{')));
+  CHECK(std::isfinite(j["aee_px"].get<double>()));
+  CHECK(j["iwe_variance_after"].get<double>() > j["iwe_variance_before"].get<double>());
+  CHECK(fs::exists(dir / "F" / "000" / "flow_05.npy"));
+  auto cached = [&] {
+    size_t n = 0;
+    for (auto& e : fs::directory_iterator(dir / "sim" / ".evflow-cache" / "flow")) n += e.path().extension() == ".npy";
+    return n;
+  };
+  CHECK(cached() == 3);
   check_term(train("sim", "ev", "events"));
+  CHECK(out.find("flow: view") == std::string::npos);
+  // Without the cache: estimated once per view, then read back.
+  fs::remove_all(dir / "sim" / ".evflow-cache");
+  check_term(train("sim", "ev2", "events"));
   size_t estimated = 0;
   for (size_t at = out.find("flow: view"); at != std::string::npos; at = out.find("flow: view", at + 1)) ++estimated;
   CHECK(estimated == 3);
-  size_t cached = 0;
-  for (auto& e : fs::directory_iterator(dir / "sim" / ".evflow-cache" / "flow"))
-    cached += e.path().extension() == ".npy";
-  CHECK(cached == 3);
-  check_term(train("sim", "ev2", "events"));
+  CHECK(cached() == 3);
+  check_term(train("sim", "ev3", "events"));
   CHECK(out.find("flow: view") == std::string::npos);
 
   // Without the simulator's ground truth, flow=gt is refused by name.

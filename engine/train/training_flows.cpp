@@ -86,7 +86,7 @@ std::vector<std::vector<std::vector<float>>> flows_from_events(gpu::Context& ctx
     if (flows.empty()) {
       const auto start = std::chrono::steady_clock::now();
       flows = estimate_view(est, data, v, frame_u);
-      write_cache(file, flows);
+      store_cached_flow(data, v, frame_u, flows);
       std::fprintf(stderr, "flow: view %s estimated in %.1f s\n", data.train[v].name.c_str(),
                    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     }
@@ -132,6 +132,11 @@ std::string flow_cache_path(const io::Dataset& data, size_t v, const std::vector
   char key[17];
   std::snprintf(key, sizeof key, "%016llx", static_cast<unsigned long long>(h.value()));
   return (fs::path(data.root) / ".evflow-cache" / "flow" / (view.name + "-" + key + ".npy")).string();
+}
+
+void store_cached_flow(const io::Dataset& data, size_t view, const std::vector<double>& frame_u,
+                       const std::vector<std::vector<float>>& flows) {
+  write_cache(flow_cache_path(data, view, frame_u), flows);
 }
 
 std::vector<std::vector<std::vector<float>>> training_flows(gpu::Context& ctx, const io::Dataset& data,

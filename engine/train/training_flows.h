@@ -26,5 +26,9 @@ void append_displacement_planes(const std::vector<float>& d, std::vector<float>&
 // hash of the view's events, the frame times and the estimator's settings (a changed input is a
 // new file, never a stale hit).
 std::string flow_cache_path(const io::Dataset& data, size_t view, const std::vector<double>& frame_u);
+// Keeps an estimate there (`evflow flow` fills the cache this way); a folder that cannot be
+// written gets one line on stderr, not an error.
+void store_cached_flow(const io::Dataset& data, size_t view, const std::vector<double>& frame_u,
+                       const std::vector<std::vector<float>>& flows);
 
 }  // namespace evflow

@@ -49,8 +49,7 @@ std::vector<double> upsampled_mean(const std::vector<std::vector<double>>& frame
       for (uint32_t m = 1; m < M; ++m)
         for (int y = 0; y < int(H); ++y)
           for (int x = 0; x < int(W); ++x)
-            mean[c * hw + size_t(y) * W + size_t(x)] +=
-                sub_frame(g, plane, x, y, float(m) / float(M), reach) / count;
+            mean[c * hw + size_t(y) * W + size_t(x)] += sub_frame(g, plane, x, y, float(m) / float(M), reach) / count;
     }
   }
   return mean;
