@@ -59,15 +59,22 @@ void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer
   if (space_ == LossSpace::Srgb) colour(cmd, shaderio::kColourEncode, m, m, encoded_);
 }
 
-// The sub-frames of every interval, added into the mean.
+// The sub-frames of every interval, added into the mean: each target's taps once (kept for the
+// backward), then the sampling.
 void ImageModel::upsample_forward(gpu::Commands& cmd, const gpu::Buffer& flow) {
-  const uint64_t hw = uint64_t(width_) * height_;
+  const uint64_t hw = uint64_t(width_) * height_, subframes = uint64_t(frames_ - 1) * (upsample_ - 1);
   if (flow.size() < 2 * hw * (frames_ - 1) * 4)
     throw std::invalid_argument("image model: the flow holds fewer than 2 planes per interval");
+  const uint64_t tap_bytes = subframes * hw * shaderio::kUpsampleTapFloats * 4;
+  ctx_.check_binding_size(tap_bytes, "upsampled blur taps");
+  if (taps_.size() < tap_bytes) taps_ = gpu::Buffer(ctx_, tap_bytes, "upsample_taps");
   for (uint32_t i = 0; i + 1 < frames_; ++i) {
     shaderio::UpsamplePC pc{width_, height_, i, upsample_, 1.0f / float(mean_count()), 0, 0, 0};
+    cmd.dispatch("train/upsample_taps",
+                 {{shaderio::kUpsampleTapsBindFlow, flow}, {shaderio::kUpsampleTapsBindTaps, taps_}}, pc,
+                 cmd.linear_groups(gpu::Commands::div_up(hw * (upsample_ - 1), shaderio::kUpsampleGroupSize)));
     cmd.dispatch("train/upsample",
-                 {{shaderio::kUpsampleBindFlow, flow},
+                 {{shaderio::kUpsampleBindTaps, taps_},
                   {shaderio::kUpsampleBindFrame, linear_[i]},
                   {shaderio::kUpsampleBindMean, mean_}},
                  pc, cmd.linear_groups(gpu::Commands::div_up(hw, shaderio::kUpsampleGroupSize)));
@@ -84,6 +91,7 @@ void ImageModel::frame_share(gpu::Commands& cmd, uint32_t i, const gpu::Buffer& 
   shaderio::UpsamplePC pc{width_, height_, i, upsample_, 1.0f, 0, 0, 0};
   cmd.dispatch("train/upsample_bwd",
                {{shaderio::kUpsampleBwdBindFlow, *flow_},
+                {shaderio::kUpsampleBwdBindTaps, taps_},
                 {shaderio::kUpsampleBwdBindGrad, g},
                 {shaderio::kUpsampleBwdBindShare, out}},
                pc, cmd.linear_groups(gpu::Commands::div_up(hw, shaderio::kUpsampleGroupSize)));

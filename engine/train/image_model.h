@@ -66,6 +66,7 @@ class ImageModel {
   size_t values_;
   const gpu::Buffer* flow_ = nullptr;
   std::vector<gpu::Buffer> v_share_;  // per frame, when upsampling without exposure terms
+  gpu::Buffer taps_;                  // the sub-frames' taps of the last forward
   LossSpace space_;
   bool identity_;
   std::vector<const gpu::Buffer*> renders_;

@@ -32,10 +32,14 @@ struct ColourPC {
 //   taps: the bilinear taps of x - s d(x); tap q is included when
 //   max(|x - (q + roundEven(s d(q)))|) <= kUpsampleReach (so the adjoint is a gather over that
 //   square), else no tap: S_m(L)(x) = L(x).
+// upsample_taps: each target's taps for every m of interval i, kUpsampleTapFloats floats per
+//               (m, x) at taps[((i (M - 1) + m - 1) H W + x) * kUpsampleTapFloats]: the top-left
+//               tap's x and y (int bits) and the four normalised weights (all 0: no tap)
 // upsample:     y[c][x] += scale * sum_m S_m(L)[c][x]
 // upsample_bwd: y[c][q] = g[c][q] + sum_m S_m^T(g)[c][q]   (frame i's share of the mean's gradient)
 EVF_CONST(uint, kUpsampleGroupSize, 64u)
 EVF_CONST(int, kUpsampleReach, 2)
+EVF_CONST(uint, kUpsampleTapFloats, 6u)
 struct UpsamplePC {
   uint width;
   uint height;
@@ -49,14 +53,18 @@ struct UpsamplePC {
 // train/accumulate
 EVF_BIND(kTrainAccumulateBindX, 0u, X)
 EVF_BIND(kTrainAccumulateBindY, 1u, Y)
+// train/upsample_taps
+EVF_BIND(kUpsampleTapsBindFlow, 0u, Flow)
+EVF_BIND(kUpsampleTapsBindTaps, 1u, Taps)
 // train/upsample
-EVF_BIND(kUpsampleBindFlow, 0u, Flow)
+EVF_BIND(kUpsampleBindTaps, 0u, Taps)
 EVF_BIND(kUpsampleBindFrame, 1u, Frame)
 EVF_BIND(kUpsampleBindMean, 2u, Mean)
 // train/upsample_bwd
 EVF_BIND(kUpsampleBwdBindFlow, 0u, Flow)
-EVF_BIND(kUpsampleBwdBindGrad, 1u, Grad)
-EVF_BIND(kUpsampleBwdBindShare, 2u, Share)
+EVF_BIND(kUpsampleBwdBindTaps, 1u, Taps)
+EVF_BIND(kUpsampleBwdBindGrad, 2u, Grad)
+EVF_BIND(kUpsampleBwdBindShare, 3u, Share)
 
 EVF_NAMESPACE_END
 #endif
