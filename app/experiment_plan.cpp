@@ -72,7 +72,7 @@ std::string ExperimentPlan::help() {
   char buf[4096];
   std::snprintf(
       buf, sizeof buf,
-      "usage: evflow experiment --out DIR [--scenes %s] [--blur-px 6,4,9]\n"
+      "usage: evflow experiment --out DIR [--scenes %s] [--blur-px B,...]\n"
       "         [--width 173] [--height 130] [--methods plain,edi,blur-only,blur+events(,blur+events+warp)] [--preset "
       "fast]\n"
       "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device "
@@ -104,7 +104,15 @@ ExperimentPlan ExperimentPlan::from_args(ArgParser& p) {
   ExperimentPlan e;
   const std::string out = p.value("--out");
   const auto scenes = split(value_or("--scenes", join(sim::builtin_scene_names(), ",")));
-  const auto blur = split(value_or("--blur-px", "6,4,9"));
+  std::vector<std::string> blur = split(p.value("--blur-px"));
+  if (blur.empty())  // each scene's own: a built-in's, else the default scene's
+    for (const auto& sc : scenes) {
+      const auto names = sim::builtin_scene_names();
+      const bool builtin = std::find(names.begin(), names.end(), sc) != names.end();
+      char v[32];
+      std::snprintf(v, sizeof v, "%g", sim::builtin_scene_blur_px(builtin ? sc : "default"));
+      blur.push_back(v);
+    }
   e.width = value_or("--width", e.width), e.height = value_or("--height", e.height);
   e.methods = split(value_or("--methods", "plain,edi,blur-only,blur+events"));
   e.preset = value_or("--preset", e.preset);

@@ -77,3 +77,21 @@ TEST_CASE("experiment: the emitted job lines, run one by one, collect into the d
   CHECK(out.find("experiment_plan.json") != std::string::npos);
   fs::remove_all(dir);
 }
+
+TEST_CASE("experiment: each scene's own blur unless --blur-px is given", "[experiment]") {
+  const fs::path dir = fs::temp_directory_path() / ("evflow_blur_px_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string out;
+  REQUIRE(run_evflow(dir, "experiment --out a --scenes workshop,gallery --methods plain --emit-jobs a.txt", out) == 0);
+  const std::string jobs = slurp(dir / "a.txt");
+  INFO(jobs);
+  CHECK(jobs.find("--scenes 'workshop' --blur-px '9'") != std::string::npos);
+  CHECK(jobs.find("--scenes 'gallery' --blur-px '4'") != std::string::npos);
+  REQUIRE(run_evflow(dir, "experiment --out b --scenes gallery --blur-px 7 --methods plain --emit-jobs b.txt", out) ==
+          0);
+  CHECK(slurp(dir / "b.txt").find("--scenes 'gallery' --blur-px '7'") != std::string::npos);
+  CHECK(run_evflow(dir, "experiment --out c --scenes gallery --blur-px 7,8 --emit-jobs c.txt", out) != 0);
+  CHECK(out.find("--blur-px needs one value per scene (1)") != std::string::npos);
+  fs::remove_all(dir);
+}

@@ -53,6 +53,13 @@ Scene make_default_scene() {
 
 std::vector<std::string> builtin_scene_names() { return {"default", "gallery", "workshop"}; }
 
+double builtin_scene_blur_px(const std::string& name) {
+  if (name == "default") return 6;
+  if (name == "gallery") return 4;
+  if (name == "workshop") return 9;
+  throw std::invalid_argument("no built-in scene '" + name + "'");
+}
+
 Scene make_builtin_scene(const std::string& name) {
   if (name == "default") return make_default_scene();
   // Same room, other surfaces: fine print everywhere and bright noise (high-frequency texture).

@@ -15,5 +15,9 @@ Scene make_default_scene();
 // textures ("gallery": fine print and noise; "workshop": coarse bricks, gratings, dark corners).
 Scene make_builtin_scene(const std::string& name);
 std::vector<std::string> builtin_scene_names();
+// The mean blur (pixels per exposure at 173 x 130) `evflow experiment` simulates a built-in scene
+// with unless told otherwise: default 6, gallery 4 (its fine print is unreadable beyond), workshop
+// 9 (coarse textures stay legible); throws for another name.
+double builtin_scene_blur_px(const std::string& name);
 
 }  // namespace evflow::sim
