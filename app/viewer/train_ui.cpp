@@ -44,10 +44,10 @@ void TrainView::build_ui(const std::vector<std::pair<Rect, std::string>>& labels
   ImGui::SetNextWindowBgAlpha(0.8f);
   ImGui::Begin("evflow train", nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse);
-  ui_->track("window");
   build_stats();
   build_controls();
   build_weights();
+  ui_->track_window("window");
   ImGui::End();
 }
 
@@ -148,19 +148,20 @@ void TrainView::request_view(uint32_t v) {
   if (v < data_.train.size()) view_ = v;
 }
 
-// Presses the left button over the named widget (from the last drawn frame) through ImGui's
-// input: a frame hovering, one pressing, one releasing, each running the UI (not presented).
+// Presses the left button over the named widget through ImGui's input: a frame hovering, one
+// pressing, one releasing, each running the UI (not presented). Each frame aims at the widget's
+// rectangle as the frame before drew it (the first at the last presented frame's), so a layout
+// that settles (a scroll bar appearing) is followed.
 void TrainView::run_widget_action(const ScriptAction& a) {
-  const auto& w = ui_->widgets();
-  const auto it = w.find(a.widget);
-  if (it == w.end()) {
-    std::string known;
-    for (auto& [name, r] : w) known += (known.empty() ? "" : ", ") + name;
-    throw std::runtime_error("--view-script: no widget '" + a.widget + "' on screen (widgets: " + known + ")");
-  }
-  const float x = it->second.press_x(a.at), y = it->second.y + 0.5f * it->second.h;
   for (bool down : {false, true, false}) {
-    ui_->script_pointer(x, y, down);
+    const auto& w = ui_->widgets();
+    const auto it = w.find(a.widget);
+    if (it == w.end()) {
+      std::string known;
+      for (auto& [name, r] : w) known += (known.empty() ? "" : ", ") + name;
+      throw std::runtime_error("--view-script: no widget '" + a.widget + "' on screen (widgets: " + known + ")");
+    }
+    ui_->script_pointer(it->second.press_x(a.at), it->second.y + 0.5f * it->second.h, down);
     ui_->begin();
     build_ui({});
     ui_->discard();

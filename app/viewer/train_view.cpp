@@ -20,6 +20,10 @@ namespace evflow::viewer {
 
 namespace {
 
+// While training runs the free camera renders at most this many times the shown training
+// view's pixel count (its frames then cost about what the side panels' renders cost).
+constexpr double kFreeCameraPixels = 2.0;
+
 double now_s() {
   using namespace std::chrono;
   return duration<double>(steady_clock::now().time_since_epoch()).count();
@@ -282,7 +286,7 @@ void TrainView::after_step(const StepStats& st) {
   // Credit: budget x wall time since the last mark (viewer time included: the share is of the
   // whole), capped so that a long stretch without frames does not buy a burst of them.
   training_wall_s_ += t - last_mark_;
-  credit_ = std::min(credit_ + opt_.budget * (t - last_mark_), 0.1);
+  credit_ = std::min(credit_ + opt_.budget * (t - last_mark_), std::max(0.1, frame_cost_));
   if (last_step_time_ > 0) {
     const double its = 1.0 / std::max(t - last_step_time_, 1e-9);
     its_ema_ = its_ema_ > 0 ? 0.8 * its_ema_ + 0.2 * its : its;
@@ -292,7 +296,9 @@ void TrainView::after_step(const StepStats& st) {
   poll();
   if (!open_) return;
   const bool due = opt_.fps_cap <= 0 || t >= next_frame_;
-  if (paused_ || (credit_ >= 0 && due)) draw_frame();
+  // A frame is drawn when the credit covers what frames have been costing, so that a short run
+  // does not end in debt.
+  if (paused_ || (credit_ >= frame_cost_ && due)) draw_frame();
 }
 
 void TrainView::after_training() {
@@ -375,25 +381,31 @@ void TrainView::refresh_content(bool force) {
   for (auto& p : panels_) p->refresh(shown_);
 }
 
-// The free camera's view, rendered at the size it is shown: again when the camera moved or the
-// size changed, and when the splats changed (at most every refresh_s while training runs).
+// The free camera's view: rendered again when the camera moved, the size changed, or the splats
+// changed (at most every refresh_s while training runs). While training runs it is rendered at
+// no more than kFreeCameraPixels x the shown view's pixel count and enlarged by the blit;
+// paused or done, at the size it is shown.
 void TrainView::render_free_view(const Rect& m) {
   if (m.empty()) return;
+  const bool running = !paused_ && !training_done_;
+  const double budget_px = kFreeCameraPixels * double(shown_.width) * double(shown_.height);
+  const double scale = running && budget_px > 0 ? std::min(1.0, std::sqrt(budget_px / (double(m.w) * m.h))) : 1.0;
+  const uint32_t w = std::max(1u, uint32_t(std::lround(m.w * scale)));
+  const uint32_t h = std::max(1u, uint32_t(std::lround(m.h * scale)));
   const Orbit& o = display_.input().orbit;
   const bool moved = o.target != free_orbit_.target || o.distance != free_orbit_.distance || o.yaw != free_orbit_.yaw ||
                      o.pitch != free_orbit_.pitch || o.fov_y_deg != free_orbit_.fov_y_deg;
   const uint32_t step = trainer_.current_step();
-  const bool running = !paused_ && !training_done_;
   const bool stale = step != free_step_ && (!running || now_s() - last_free_ >= opt_.refresh_s);
-  if (!moved && !stale && m.w == free_w_ && m.h == free_h_) return;
+  if (!moved && !stale && w == free_w_ && h == free_h_) return;
   RenderSettings s;
   s.background = trainer_.config().background;
   s.antialiased = trainer_.config().antialiased;
-  raster_.forward(trainer_.params(), orbit_camera(o, m.w, m.h), s, free_view_);
+  raster_.forward(trainer_.params(), orbit_camera(o, w, h), s, free_view_);
   free_orbit_ = o;
   free_step_ = step;
-  free_w_ = m.w;
-  free_h_ = m.h;
+  free_w_ = w;
+  free_h_ = h;
   last_free_ = now_s();
 }
 
@@ -424,7 +436,7 @@ void TrainView::draw_frame() {
   render_free_view(m);
 
   canvas_.fill({0, 0, W, H}, kBackground);
-  if (!m.empty()) canvas_.blit(free_view_.outputs().rgb, m.w, m.h, m);
+  if (!m.empty()) canvas_.blit(free_view_.outputs().rgb, free_w_, free_h_, m);
   last_tiles_.clear();
   std::vector<std::pair<Rect, std::string>> labels;
   for (size_t i = 0; i < shown.size(); ++i) {
@@ -461,7 +473,10 @@ void TrainView::draw_frame() {
   }
   const double t1 = now_s();
   (charged ? viewer_s_ : other_s_) += t1 - t0;
-  if (charged) credit_ -= t1 - t0;
+  if (charged) {
+    credit_ -= t1 - t0;
+    frame_cost_ = frame_cost_ > 0 ? 0.7 * frame_cost_ + 0.3 * (t1 - t0) : t1 - t0;
+  }
   next_frame_ = opt_.fps_cap > 0 ? std::max(next_frame_ + 1.0 / opt_.fps_cap, t1) : t1;
   if (!ok) return;
   ++frames_shown_;

@@ -174,6 +174,7 @@ class TrainView {
   // viewer_s_ counts frames drawn while training runs; other_s_ the frames while paused or after
   // training (not charged).
   double credit_ = 0, viewer_s_ = 0, other_s_ = 0, training_wall_s_ = 0;
+  double frame_cost_ = 0;  // running average of a charged frame's duration
   double last_mark_ = 0, next_frame_ = 0, last_poll_ = 0, last_refresh_ = -1e9;
   double start_ = 0;
   // Statistics for the overlay.

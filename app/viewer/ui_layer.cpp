@@ -157,6 +157,11 @@ void UiLayer::track(const std::string& name, float grab) {
   widgets_[name] = {a.x, a.y, b.x - a.x, b.y - a.y, grab};
 }
 
+void UiLayer::track_window(const std::string& name) {
+  const ImVec2 p = ImGui::GetWindowPos(), s = ImGui::GetWindowSize();
+  widgets_[name] = {p.x, p.y, s.x, s.y, 0};
+}
+
 void UiLayer::script_pointer(float x, float y, bool down) {
   scripted_ = true;
   px_ = x;

@@ -40,6 +40,7 @@ class UiLayer {
 
   // Remembers the last drawn widget's rectangle under `name` (for scripted input and reports).
   void track(const std::string& name, float grab = 0);
+  void track_window(const std::string& name);  // the current window's rectangle
   // The grab width of a slider as wide as `width` over `steps` integer values (0: a float slider).
   static float slider_grab(float width, int steps = 0);
   const std::map<std::string, UiRect>& widgets() const { return widgets_; }
