@@ -50,6 +50,7 @@ class BlurryPanel : public Panel {
 class MidPanel : public Panel {
  public:
   explicit MidPanel(bool blur) : Panel("mid", GLFW_KEY_2), blur_(blur) {}
+  bool available(const ShownView& s) const override { return s.step != UINT32_MAX; }
   std::string label(const ShownView& s) const override {
     char u[32];
     std::snprintf(u, sizeof u, " at u = %.3f", s.u);
@@ -179,7 +180,12 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
 
   start_ = last_mark_ = last_poll_ = next_frame_ = now_s();
   apply_script(1);
-  draw_frame();  // something to look at before the first (possibly long) step
+  // Something to look at before the first (possibly long) step. While training runs, this frame
+  // leaves the renders of the side panels to the first budgeted frame: in a short run the
+  // first frame is most of the viewer's share.
+  first_frame_light_ = !paused_;
+  draw_frame();
+  first_frame_light_ = false;
 }
 
 TrainView::~TrainView() {
@@ -317,13 +323,13 @@ void TrainView::after_training() {
 
 // Re-renders what the side panels show: the view's inputs when the view changed, the renders
 // when the view changed or training advanced (at most every refresh_s while training runs).
-void TrainView::refresh_content(bool force) {
+void TrainView::refresh_content(bool renders) {
   const io::View& view = data_.train[view_];
   const bool new_view = !shown_.inputs_ready || shown_.view != view_;
   const uint32_t step = trainer_.current_step();
   const bool running = !paused_ && !training_done_;
   const bool stale = shown_.step != step && (!running || now_s() - last_refresh_ >= opt_.refresh_s);
-  if (!new_view && !stale && !force && shown_.u == u_) return;
+  if (!new_view && !stale && shown_.u == u_) return;
   const uint32_t W = view.camera.width, H = view.camera.height;
   const size_t n = size_t(W) * H * 3;
   if (new_view) {
@@ -346,8 +352,9 @@ void TrainView::refresh_content(bool force) {
     shown_.events.write(ev.rgb);
     shown_.inputs_ready = true;
   }
+  if (!renders) return;
   const bool blur = trainer_.config().mode == TrainMode::Blur;
-  if (new_view || stale || force) {
+  if (new_view || stale || shown_.step == UINT32_MAX) {
     // The exposure as training sees it, from the trainer: its frames, its image model, its target.
     const ViewSnapshot snap = trainer_.snapshot(view_);
     shown_.times = snap.frames.size() > 1 ? snap.times : std::vector<double>{};
@@ -426,7 +433,7 @@ void TrainView::draw_frame() {
   for (const ScriptAction& a : pending_widgets_) run_widget_action(a);
   pending_widgets_.clear();
 
-  refresh_content(false);
+  refresh_content(!first_frame_light_);
   std::vector<Panel*> shown;
   for (auto& p : panels_)
     if (p->visible && p->available(shown_)) shown.push_back(p.get());

@@ -118,7 +118,8 @@ class TrainView {
 
  private:
   void draw_frame();
-  void refresh_content(bool force);
+  // The side panels' content; `renders` false: only the view's inputs (blurry, events).
+  void refresh_content(bool renders);
   void render_free_view(const Rect& m);
   void poll();
   void apply_script(int frame);
@@ -152,6 +153,7 @@ class TrainView {
   std::vector<ScriptAction> pending_widgets_;        // widget actions for the next frame
   double u_ = 0.5;                                   // the u slider: exposure time the render panel shows
   bool shot_requested_ = false;
+  bool first_frame_light_ = false;  // the first frame while training runs: no panel renders
   int shots_ = 0;
   std::string last_shot_;
   // What the free camera last rendered: the splats' step, the orbit and the size.
