@@ -175,6 +175,9 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
   panels_.push_back(std::make_unique<EventsPanel>());
 
   centre_ = initial_orbit(trainer_.cloud());
+  std::vector<Camera> cams;
+  for (const io::View& v : data_.train) cams.push_back(v.camera);
+  frame_ = basis_from_cameras(cams);
   display_.input().orbit = home_ = view_orbit(view_);
   display_.input().on_key = [this](int key, int) { press(key); };
 
@@ -204,7 +207,7 @@ Orbit TrainView::view_orbit(uint32_t v) const {
   for (int k = 0; k < 3; ++k) depth += (centre_.target[k] - c[k]) * cam.R[6 + k];
   if (!(depth > 0))
     depth = data_.near > 0 && data_.far > data_.near ? 0.5 * (data_.near + data_.far) : centre_.distance;
-  return orbit_from_camera(cam, depth);
+  return orbit_from_camera(cam, depth, frame_);
 }
 
 void TrainView::press(int key) {

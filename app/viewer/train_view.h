@@ -168,6 +168,7 @@ class TrainView {
   bool plots_ = true;              // the loss plots shown in the UI
   Orbit home_;                     // where the free camera started or was last sent (R)
   Orbit centre_;                   // the initial cloud's centre and size
+  std::array<double, 9> frame_;    // the orbit's frame: up as the training cameras hold it
   bool open_ = true, paused_ = false, overlay_ = true, training_done_ = false;
   int step_requests_ = 0;
   uint32_t view_ = 0;
