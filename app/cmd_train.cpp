@@ -186,7 +186,7 @@ static int run_train(const Args& a) {
     print_keys_brief();
     std::printf(
         "  --view: watch training live in a window (docs/viewer.md): the splats from a free camera, and for\n"
-        "    one training view its blurry input, the mid-exposure render, the virtual frames along the\n"
+        "    one training view its blurry input, a render at u along the exposure, the virtual frames along the\n"
         "    exposure and the events; a UI window (Dear ImGui) with step, loss plots, PSNR, Gaussians, it/s,\n"
         "    pause / step / view / u / panel / screenshot controls and the loss weights, live.\n"
         "    keys: Space pause/resume, N single step (pauses first), Right/] and Left/[ next/previous view,\n"

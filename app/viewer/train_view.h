@@ -169,7 +169,8 @@ class TrainView {
   Orbit home_;                     // where the free camera started or was last sent (R)
   Orbit centre_;                   // the initial cloud's centre and size
   std::array<double, 9> frame_;    // the orbit's frame: up as the training cameras hold it
-  bool open_ = true, paused_ = false, overlay_ = true, training_done_ = false;
+  bool open_ = true, paused_ = false, training_done_ = false;
+  bool overlay_ = true;  // the UI window shown (O)
   int step_requests_ = 0;
   uint32_t view_ = 0;
   // Time budget (seconds): credit grows by budget x wall time while training runs, a frame costs
@@ -180,7 +181,7 @@ class TrainView {
   double frame_cost_ = 0;  // running average of a charged frame's duration
   double last_mark_ = 0, next_frame_ = 0, last_poll_ = 0, last_refresh_ = -1e9;
   double start_ = 0;
-  // Statistics for the overlay.
+  // Statistics for the UI.
   uint32_t last_step_ = 0;
   double loss_ema_ = -1, last_loss_ = 0, its_ema_ = 0, last_step_time_ = -1;
   int frames_shown_ = 0;
