@@ -324,6 +324,30 @@ void TrainView::after_training() {
   close();
 }
 
+// The shown view's inputs: its blurry image and its events.
+void TrainView::load_view_inputs() {
+  const io::View& view = data_.train[view_];
+  const uint32_t W = view.camera.width, H = view.camera.height;
+  shown_.view = view_;
+  shown_.width = W;
+  shown_.height = H;
+  if (view.blurry.width != W || view.blurry.height != H)
+    throw std::runtime_error("train --view: view '" + view.name + "': blurry image " +
+                             std::to_string(view.blurry.width) + "x" + std::to_string(view.blurry.height) +
+                             " differs from its camera's " + std::to_string(W) + "x" + std::to_string(H));
+  shown_.blurry.ensure(size_t(W) * H * 3 * 4);
+  shown_.blurry.write(encoded(io::planar_rgb(view.blurry)));  // the canvas shows sRGB values
+  EventImage ev = event_image(data_, view_);
+  shown_.events_w = ev.width;
+  shown_.events_h = ev.height;
+  shown_.events_pos = ev.positive;
+  shown_.events_neg = ev.negative;
+  shown_.has_events = ev.has_events;
+  shown_.events.ensure(ev.rgb.size() * 4);
+  shown_.events.write(ev.rgb);
+  shown_.inputs_ready = true;
+}
+
 // Re-renders what the side panels show: the view's inputs when the view changed, the renders
 // when the view changed or training advanced (at most every refresh_s while training runs).
 void TrainView::refresh_content(bool renders) {
@@ -335,26 +359,7 @@ void TrainView::refresh_content(bool renders) {
   if (!new_view && !stale && shown_.u == u_) return;
   const uint32_t W = view.camera.width, H = view.camera.height;
   const size_t n = size_t(W) * H * 3;
-  if (new_view) {
-    shown_.view = view_;
-    shown_.width = W;
-    shown_.height = H;
-    if (view.blurry.width != W || view.blurry.height != H)
-      throw std::runtime_error("train --view: view '" + view.name + "': blurry image " +
-                               std::to_string(view.blurry.width) + "x" + std::to_string(view.blurry.height) +
-                               " differs from its camera's " + std::to_string(W) + "x" + std::to_string(H));
-    shown_.blurry.ensure(n * 4);
-    shown_.blurry.write(encoded(io::planar_rgb(view.blurry)));  // the canvas shows sRGB values
-    EventImage ev = event_image(data_, view_);
-    shown_.events_w = ev.width;
-    shown_.events_h = ev.height;
-    shown_.events_pos = ev.positive;
-    shown_.events_neg = ev.negative;
-    shown_.has_events = ev.has_events;
-    shown_.events.ensure(ev.rgb.size() * 4);
-    shown_.events.write(ev.rgb);
-    shown_.inputs_ready = true;
-  }
+  if (new_view) load_view_inputs();
   if (!renders) return;
   const bool blur = trainer_.config().mode == TrainMode::Blur;
   if (new_view || stale || shown_.step == UINT32_MAX) {
@@ -426,61 +431,12 @@ void TrainView::draw_frame() {
     next_frame_ = t0 + 0.1;
     return;
   }
-  gpu::Swapchain& sc = display_.swapchain();
-  const uint32_t W = sc.width(), H = sc.height();
-  canvas_.resize(W, H, sc.bgr());
-  const uint32_t label_h = uint32_t(ui_->font_size()) + 4;
-
   // Scripted widget actions use the widgets' rectangles from the last frame; they may change
   // the view, u or the panels, so they run before the content is refreshed.
   for (const ScriptAction& a : pending_widgets_) run_widget_action(a);
   pending_widgets_.clear();
-
   refresh_content(!first_frame_light_);
-  std::vector<Panel*> shown;
-  for (auto& p : panels_)
-    if (p->visible && p->available(shown_)) shown.push_back(p.get());
-  const TrainLayout layout = train_layout(W, H, uint32_t(shown.size()), label_h);
-  main_rect_ = layout.main;
-  const Rect& m = layout.main;
-  render_free_view(m);
-
-  canvas_.fill({0, 0, W, H}, kBackground);
-  if (!m.empty()) canvas_.blit(free_view_.outputs().rgb, free_w_, free_h_, m);
-  last_tiles_.clear();
-  std::vector<std::pair<Rect, std::string>> labels;
-  for (size_t i = 0; i < shown.size(); ++i) {
-    labels.push_back({layout.labels[i], shown[i]->label(shown_)});
-    const std::vector<Tile> tiles = shown[i]->tiles(shown_);
-    std::vector<std::pair<Rect, Tile>> placed;
-    if (!tiles.empty()) {
-      const std::vector<Rect> rects =
-          tile_grid(layout.boxes[i], uint32_t(tiles.size()), tiles[0].width, tiles[0].height);
-      for (size_t k = 0; k < rects.size() && k < tiles.size(); ++k) {
-        canvas_.blit(*tiles[k].rgb, tiles[k].width, tiles[k].height, rects[k]);
-        placed.push_back({rects[k], tiles[k]});
-      }
-    }
-    last_tiles_.push_back({shown[i]->id(), std::move(placed)});
-  }
-  cmd_.submit();
-
-  ui_->begin();
-  build_ui(labels);
-  ui_->end();
-  display_.input().ui_mouse = ui_->wants_mouse();
-  display_.input().ui_keys = ui_->wants_keys();
-  const bool capture = shot_requested_ || !opt_.screenshot.empty();
-  if (capture) readback_.ensure(uint64_t(W) * H * 4);
-  const bool ok = sc.present(
-      canvas_.packed(), [this](VkCommandBuffer cb) { ui_->draw(cb); }, capture ? &readback_ : nullptr);
-  if (ok && shot_requested_) {
-    shot_requested_ = false;
-    char name[64];
-    std::snprintf(name, sizeof name, "view-step%06u-%d.png", trainer_.current_step(), ++shots_);
-    last_shot_ = (std::filesystem::path(opt_.shot_dir) / name).string();
-    save_frame(last_shot_);
-  }
+  const bool ok = present_frame(compose());
   const double t1 = now_s();
   (charged ? viewer_s_ : other_s_) += t1 - t0;
   if (charged) {
@@ -506,6 +462,64 @@ void TrainView::draw_frame() {
     return;
   }
   apply_script(frames_shown_ + 1);
+}
+
+// Draws the free camera and the visible panels' tiles on the canvas (submitted); returns each
+// panel's label strip and text for the UI to write.
+std::vector<std::pair<Rect, std::string>> TrainView::compose() {
+  gpu::Swapchain& sc = display_.swapchain();
+  const uint32_t W = sc.width(), H = sc.height();
+  canvas_.resize(W, H, sc.bgr());
+  std::vector<Panel*> shown;
+  for (auto& p : panels_)
+    if (p->visible && p->available(shown_)) shown.push_back(p.get());
+  const TrainLayout layout = train_layout(W, H, uint32_t(shown.size()), uint32_t(ui_->font_size()) + 4);
+  main_rect_ = layout.main;
+  const Rect& m = layout.main;
+  render_free_view(m);
+  canvas_.fill({0, 0, W, H}, kBackground);
+  if (!m.empty()) canvas_.blit(free_view_.outputs().rgb, free_w_, free_h_, m);
+  last_tiles_.clear();
+  std::vector<std::pair<Rect, std::string>> labels;
+  for (size_t i = 0; i < shown.size(); ++i) {
+    labels.push_back({layout.labels[i], shown[i]->label(shown_)});
+    const std::vector<Tile> tiles = shown[i]->tiles(shown_);
+    std::vector<std::pair<Rect, Tile>> placed;
+    if (!tiles.empty()) {
+      const std::vector<Rect> rects =
+          tile_grid(layout.boxes[i], uint32_t(tiles.size()), tiles[0].width, tiles[0].height);
+      for (size_t k = 0; k < rects.size() && k < tiles.size(); ++k) {
+        canvas_.blit(*tiles[k].rgb, tiles[k].width, tiles[k].height, rects[k]);
+        placed.push_back({rects[k], tiles[k]});
+      }
+    }
+    last_tiles_.push_back({shown[i]->id(), std::move(placed)});
+  }
+  cmd_.submit();
+  return labels;
+}
+
+// Runs the UI, presents the canvas with the UI drawn over it (read back when a screenshot is
+// due) and writes the screenshot the button asked for. False when nothing was presented.
+bool TrainView::present_frame(const std::vector<std::pair<Rect, std::string>>& labels) {
+  ui_->begin();
+  build_ui(labels);
+  ui_->end();
+  display_.input().ui_mouse = ui_->wants_mouse();
+  display_.input().ui_keys = ui_->wants_keys();
+  gpu::Swapchain& sc = display_.swapchain();
+  const bool capture = shot_requested_ || !opt_.screenshot.empty();
+  if (capture) readback_.ensure(uint64_t(sc.width()) * sc.height() * 4);
+  const bool ok = sc.present(
+      canvas_.packed(), [this](VkCommandBuffer cb) { ui_->draw(cb); }, capture ? &readback_ : nullptr);
+  if (ok && shot_requested_) {
+    shot_requested_ = false;
+    char name[64];
+    std::snprintf(name, sizeof name, "view-step%06u-%d.png", trainer_.current_step(), ++shots_);
+    last_shot_ = (std::filesystem::path(opt_.shot_dir) / name).string();
+    save_frame(last_shot_);
+  }
+  return ok;
 }
 
 // The presented frame with the UI (read back by the last present) as an 8-bit PNG, written

@@ -118,8 +118,11 @@ class TrainView {
 
  private:
   void draw_frame();
+  std::vector<std::pair<Rect, std::string>> compose();
+  bool present_frame(const std::vector<std::pair<Rect, std::string>>& labels);
   // The side panels' content; `renders` false: only the view's inputs (blurry, events).
   void refresh_content(bool renders);
+  void load_view_inputs();
   void render_free_view(const Rect& m);
   void poll();
   void apply_script(int frame);
