@@ -82,26 +82,31 @@ static const std::vector<ViewOption>& view_options() {
                           "in (0, 1]", [](const double& b) { return b > 0 && b <= 1; }),
       view_option<double>("--view-fps-cap", "F", &O::fps_cap, "at most F frames per second; 0: no cap"),
       view_option<double>("--view-refresh", "S", &O::refresh_s,
-                          "while training runs, re-render the training-view panels at most every S seconds", ">= 0",
-                          [](const double& s) { return s >= 0; }),
+                          "while training runs, re-render the training-view panels and the free camera's splats at "
+                          "most every S seconds",
+                          ">= 0", [](const double& s) { return s >= 0; }),
       view_option<int>("--view-index", "V", &O::view,
                        "training view shown first, 0-based, checked against the dataset"),
       view_option<bool>("--view-paused", "", &O::start_paused, "start paused (look first, then Space)"),
       view_option<bool>("--view-hold", "", &O::hold,
-                        "after the last step keep the window open (state \"DONE\") until it is closed"),
+                        "after the last step keep the window open (state \"done\") until it is closed"),
       view_option<bool>("--view-vsync", "", &O::vsync, "present with vsync (FIFO)"),
       view_option<int>("--view-frames", "N", &O::frames,
                        "close the viewer after N presented frames (training goes on); 0: never", ">= 0",
                        [](const int& n) { return n >= 0; }),
       view_option<std::string>("--view-screenshot", "F.png", &O::screenshot,
-                               "the last presented frame, written when the viewer closes"),
+                               "the last presented frame with the UI, written when the viewer closes"),
       view_option<std::string>(
           "--view-report", "F.json", &O::report,
-          "written when the viewer closes: per frame {frame, step, paused, view, content_step, ms}, the "
-          "panels' tile rectangles (with source sizes), the free-camera rectangle, the shown view's PSNR and "
-          "event counts, viewer and training wall seconds"),
-      view_option<std::string>("--view-script", "\"F:KEY,...\"", &O::script,
-                               "testing: presses KEY (space, n, right, left, 1-9, o, r) just before frame F is drawn"),
+          "written when the viewer closes: per frame {frame, step, paused, view, content_step, u, ms}, the "
+          "panels' tile rectangles (with source sizes), the free-camera rectangle, the UI widgets' rectangles, "
+          "the shown view's PSNR and event counts, u, the loss weights, screenshots taken, viewer and training "
+          "wall seconds"),
+      view_option<std::string>(
+          "--view-script", "\"F:ACTION,...\"", &O::script,
+          "testing: just before frame F is drawn, presses a key (space, n, right, left, 1-9, o, r), clicks a UI "
+          "widget (click=pause) or presses a slider at a fraction of its range (slide=u@0.25); widget names in "
+          "docs/viewer.md"),
   };
   return table;
 }
@@ -181,10 +186,12 @@ static int run_train(const Args& a) {
     print_keys_brief();
     std::printf(
         "  --view: watch training live in a window (docs/viewer.md): the splats from a free camera, and for\n"
-        "    one training view its blurry input, the mid-exposure render, the virtual frames along the\n"
-        "    exposure and the events; overlay with step, loss, PSNR, Gaussians, it/s.\n"
+        "    one training view its blurry input, a render at u along the exposure, the virtual frames along the\n"
+        "    exposure and the events; a UI window (Dear ImGui) with step, loss plots, PSNR, Gaussians, it/s,\n"
+        "    pause / step / view / u / panel / screenshot controls and the loss weights, live.\n"
         "    keys: Space pause/resume, N single step (pauses first), Right/] and Left/[ next/previous view,\n"
-        "    1-4 toggle panels, O overlay, R reset camera, Esc close the viewer (training goes on);\n"
+        "    1-4 toggle panels, O the UI window, R camera to the shown view, Esc close the viewer (training\n"
+        "    goes on);\n"
         "    mouse: left-drag orbit, wheel zoom; W/A/S/D/Q/E fly. Its options (--view-options: as a table):\n");
     for (const ViewOption& v : view_options())
       std::printf("    %-26s %s%s\n", (std::string(v.name) + (*v.arg ? " " : "") + v.arg).c_str(), v.doc,
@@ -196,7 +203,7 @@ static int run_train(const Args& a) {
   const std::string preset = p.value("--preset");
   const bool resume = p.flag("--resume");
   const bool view = p.flag("--view");
-  const viewer::TrainViewOptions vo = read_view_options(p);
+  viewer::TrainViewOptions vo = read_view_options(p);
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   std::vector<std::string> pos = p.positional(), overrides;
@@ -256,6 +263,7 @@ static int run_train(const Args& a) {
               data.layout.c_str(), ctx.caps().name.c_str(), cfg.init_gaussians, cfg.iterations, cfg.preset.c_str());
   std::signal(SIGINT, on_sigint);
   std::unique_ptr<viewer::TrainView> tv;
+  vo.shot_dir = out;  // the UI's screenshot button writes into the run folder
   if (display) tv = std::make_unique<viewer::TrainView>(*display, *trainer, data, vo, &g_interrupted);
   // The curve and the log reach the disk before the checkpoint does: a run killed after a save
   // has every row up to the checkpoint's step (--resume drops the rows past it).

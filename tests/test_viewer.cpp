@@ -121,3 +121,28 @@ TEST_CASE("evflow view under Xvfb presents frames and its screenshot matches the
 TEST_CASE("evflow view rebuilds its swapchain on a resize and renders at the new size", "[viewer]") {
   view_and_compare("resize", 320, 240, "--resize-to 256x200", 256, 200);
 }
+
+TEST_CASE("viewer orbit: a training view's pose in a world whose up is +y, and its whole width in a tall window",
+          "[viewer]") {
+  using viewer::Orbit;
+  // Level cameras of a world whose up is +y (glTF's): image down is world -y.
+  const std::array<double, 3> up{0, 1, 0};
+  std::vector<Camera> level;
+  for (double x : {-1.0, 0.0, 1.0}) level.push_back(Camera::look_at(160, 120, 50, {0, 0, -4}, {x, 0, 0}, up));
+  const std::array<double, 9> basis = viewer::basis_from_cameras(level);
+  // A training camera looking down and to the side, without roll about world up.
+  const Camera cam = Camera::look_at(160, 120, 50, {1, 0.5, -4}, {0.2, -0.3, 0}, up);
+  const Orbit o = viewer::orbit_from_camera(cam, 3.0, basis);
+  const Camera back = viewer::orbit_camera(o, cam.width, cam.height);
+  for (int i = 0; i < 9; ++i) CHECK(std::abs(back.R[i] - cam.R[i]) < 1e-9);
+  const auto c0 = cam.center(), c1 = back.center();
+  for (int k = 0; k < 3; ++k) CHECK(std::abs(c0[k] - c1[k]) < 1e-9);
+  CHECK(std::abs(back.fy - cam.fy) < 1e-9);
+  // Without the cameras' frame the orbit keeps OpenCV's up (-y): the image comes out upside down.
+  const Camera opencv = viewer::orbit_camera(viewer::orbit_from_camera(cam, 3.0), cam.width, cam.height);
+  CHECK(opencv.R[4] * cam.R[4] < 0);
+  // In a window half as wide the horizontal field of view stays the camera's.
+  const Camera tall = viewer::orbit_camera(o, cam.width / 2, cam.height);
+  CHECK(std::abs(0.5 * tall.width / tall.fx - 0.5 * cam.width / cam.fx) < 1e-9);
+  CHECK(tall.fy < cam.fy);
+}

@@ -1,6 +1,7 @@
 // Drawing on the viewer's canvas (the packed RGBA8 buffer the swapchain presents) with the
-// kernels of shaders/view: fill a rectangle, blit a planar float RGB image into a rectangle,
-// and bitmap-font text. Header-only so the tests can draw with it offscreen.
+// kernels of shaders/view: fill a rectangle, blit a planar float RGB image into a rectangle.
+// Text is the UI's (Dear ImGui, drawn over the presented frame). Header-only so the tests can
+// draw with it offscreen.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -9,7 +10,6 @@
 #include "gpu/buffer.h"
 #include "gpu/commands.h"
 #include "view/view_layout.h"
-#include "viewer/font.h"
 #include "viewer/layout.h"
 
 namespace evflow::viewer {
@@ -21,13 +21,7 @@ inline constexpr uint32_t rgba(uint32_t r, uint32_t g, uint32_t b, uint32_t a = 
 
 class Canvas {
  public:
-  Canvas(gpu::Context& ctx, gpu::Commands& cmd)
-      : cmd_(cmd),
-        packed_(ctx, 16, "view_canvas"),
-        font_(ctx, uint64_t(shaderio::kFontGlyphs) * 8, "view_font"),
-        glyphs_(ctx, 4096, "view_glyphs") {
-    font_.write(font_table());
-  }
+  Canvas(gpu::Context& ctx, gpu::Commands& cmd) : cmd_(cmd), packed_(ctx, 16, "view_canvas") {}
 
   // Sets the size (contents undefined afterwards) and the byte order of the swapchain.
   void resize(uint32_t w, uint32_t h, bool bgr) {
@@ -55,39 +49,13 @@ class Canvas {
                   groups(uint64_t(r.w) * r.h));
   }
 
-  // Queues a line of text with its top-left corner at (x, y); draw_text() draws all queued text.
-  void text(uint32_t x, uint32_t y, const std::string& s, uint32_t color = rgba(255, 255, 255)) {
-    for (size_t i = 0; i < s.size(); ++i)
-      queued_.push_back(
-          {x + uint32_t(i) * shaderio::kGlyphCellW * scale_, y, uint32_t(static_cast<uint8_t>(s[i])), color});
-  }
-  void set_text_scale(uint32_t s) { scale_ = std::max(1u, s); }
-  uint32_t text_scale() const { return scale_; }
-  uint32_t line_height() const { return text_height(scale_); }
-
-  // Records the queued text (drawn over everything recorded before), then forgets it. Uploads
-  // the glyph records at once: call it once per frame, before the frame's submit.
-  void draw_text(bool backdrop = true, uint32_t bg = rgba(0, 0, 0)) {
-    if (queued_.empty()) return;
-    glyphs_.ensure(queued_.size() * sizeof(shaderio::Glyph));
-    glyphs_.write(queued_);
-    shaderio::TextPC pc{uint32_t(queued_.size()), scale_, w_, h_, bg, backdrop ? 1u : 0u, bgr_ ? 1u : 0u};
-    const uint64_t cell = uint64_t(shaderio::kGlyphCellW) * shaderio::kGlyphCellH * scale_ * scale_;
-    cmd_.dispatch(
-        "view/text",
-        {{shaderio::kTextBindFont, font_}, {shaderio::kTextBindGlyphs, glyphs_}, {shaderio::kTextBindCanvas, packed_}},
-        pc, groups(queued_.size() * cell));
-    queued_.clear();
-  }
-
  private:
   gpu::Groups groups(uint64_t n) const {
     return cmd_.linear_groups(gpu::Commands::div_up(n, shaderio::kViewGroupSize));
   }
   gpu::Commands& cmd_;
-  gpu::Buffer packed_, font_, glyphs_;
-  std::vector<shaderio::Glyph> queued_;
-  uint32_t w_ = 0, h_ = 0, scale_ = 1;
+  gpu::Buffer packed_;
+  uint32_t w_ = 0, h_ = 0;
   bool bgr_ = false;
 };
 

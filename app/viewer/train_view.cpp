@@ -3,11 +3,15 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
 
+#include <imgui.h>
+
+#include "io/image.h"
 #include "metrics/srgb_metrics.h"
 #include "viewer/event_image.h"
 #include "viewer/view_camera.h"
@@ -16,20 +20,16 @@ namespace evflow::viewer {
 
 namespace {
 
+// While training runs the free camera renders at most this many times the shown training
+// view's pixel count (its frames then cost about what the side panels' renders cost).
+constexpr double kFreeCameraPixels = 2.0;
+
 double now_s() {
   using namespace std::chrono;
   return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
 
 constexpr uint32_t kBackground = rgba(32, 32, 32);
-constexpr uint32_t kLabelColor = rgba(230, 230, 230);
-constexpr uint32_t kOverlayColor = rgba(255, 255, 120);
-
-std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 // PSNR on 8-bit sRGB images, as `evflow eval` scores (metrics/srgb_metrics.h).
 double psnr(const std::vector<float>& a, const std::vector<float>& b) { return metrics::psnr_srgb(a, b); }
@@ -43,15 +43,18 @@ std::vector<float> encoded(std::vector<float> linear) {
 class BlurryPanel : public Panel {
  public:
   BlurryPanel() : Panel("blurry", GLFW_KEY_1) {}
-  std::string label(const ShownView& s) const override { return "1 BLURRY INPUT"; }
+  std::string label(const ShownView& s) const override { return "1 blurry input"; }
   std::vector<Tile> tiles(const ShownView& s) const override { return {{&s.blurry, s.width, s.height}}; }
 };
 
 class MidPanel : public Panel {
  public:
   explicit MidPanel(bool blur) : Panel("mid", GLFW_KEY_2), blur_(blur) {}
+  bool available(const ShownView& s) const override { return s.step != UINT32_MAX; }
   std::string label(const ShownView& s) const override {
-    return std::string(blur_ ? "2 MID-EXPOSURE" : "2 RENDER") + " STEP " + std::to_string(s.step);
+    char u[32];
+    std::snprintf(u, sizeof u, " at u = %.3f", s.u);
+    return std::string("2 render") + (blur_ ? u : "") + ", step " + std::to_string(s.step);
   }
   std::vector<Tile> tiles(const ShownView& s) const override { return {{&s.mid, s.width, s.height}}; }
 
@@ -64,7 +67,7 @@ class VirtualFramesPanel : public Panel {
   VirtualFramesPanel() : Panel("virtual", GLFW_KEY_3) {}
   bool available(const ShownView& s) const override { return !s.frames.empty(); }
   std::string label(const ShownView& s) const override {
-    return "3 VIRTUAL FRAMES X" + std::to_string(s.frames.size());
+    return "3 virtual frames x" + std::to_string(s.frames.size());
   }
   std::vector<Tile> tiles(const ShownView& s) const override {
     std::vector<Tile> t;
@@ -77,8 +80,8 @@ class EventsPanel : public Panel {
  public:
   EventsPanel() : Panel("events", GLFW_KEY_4) {}
   std::string label(const ShownView& s) const override {
-    if (!s.has_events) return "4 EVENTS: NONE IN DATASET";
-    return "4 EVENTS +" + std::to_string(s.events_pos) + " -" + std::to_string(s.events_neg);
+    if (!s.has_events) return "4 events: none in the dataset";
+    return "4 events +" + std::to_string(s.events_pos) + " -" + std::to_string(s.events_neg);
   }
   std::vector<Tile> tiles(const ShownView& s) const override { return {{&s.events, s.events_w, s.events_h}}; }
 };
@@ -96,8 +99,8 @@ int TrainView::key_from_name(const std::string& n) {
   throw std::invalid_argument("--view-script: unknown key '" + n + "' (space, n, right, left, o, r, 1..9)");
 }
 
-std::map<int, std::vector<int>> TrainView::parse_script(const std::string& script) {
-  std::map<int, std::vector<int>> out;
+std::map<int, std::vector<ScriptAction>> TrainView::parse_script(const std::string& script) {
+  std::map<int, std::vector<ScriptAction>> out;
   std::stringstream ss(script);
   for (std::string item; std::getline(ss, item, ',');) {
     if (item.empty()) continue;
@@ -111,7 +114,29 @@ std::map<int, std::vector<int>> TrainView::parse_script(const std::string& scrip
     } catch (...) {
       throw std::invalid_argument("--view-script: '" + item + "' is not FRAME:KEY with FRAME >= 1 (e.g. 3:space,5:n)");
     }
-    out[frame].push_back(key_from_name(item.substr(colon + 1)));
+    const std::string what = item.substr(colon + 1);
+    ScriptAction a;
+    if (what.rfind("click=", 0) == 0) {
+      a.widget = what.substr(6);
+    } else if (what.rfind("slide=", 0) == 0) {
+      const size_t at = what.find('@');
+      bool ok = at != std::string::npos && at > 6;
+      if (ok) {
+        a.widget = what.substr(6, at - 6);
+        char* end = nullptr;
+        const std::string f = what.substr(at + 1);
+        a.at = std::strtod(f.c_str(), &end);
+        ok = !f.empty() && *end == 0 && a.at >= 0 && a.at <= 1;
+      }
+      if (!ok)
+        throw std::invalid_argument(
+            "--view-script: '" + item +
+            "' is not FRAME:slide=WIDGET@FRACTION with FRACTION in [0, 1] (e.g. 3:slide=u@0.25)");
+    } else {
+      a.key = key_from_name(what);
+    }
+    if (a.key == 0 && a.widget.empty()) throw std::invalid_argument("--view-script: '" + item + "' names no widget");
+    out[frame].push_back(a);
   }
   return out;
 }
@@ -127,7 +152,9 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
       cmd_(ctx_),
       raster_(ctx_),
       free_view_(ctx_),
-      canvas_(ctx_, cmd_) {
+      canvas_(ctx_, cmd_),
+      ui_(std::make_unique<UiLayer>(display)),
+      readback_(ctx_, 16, "view_readback") {
   if (data_.train.empty()) throw std::invalid_argument("train --view: the dataset has no training views");
   if (opt_.view < 0 || size_t(opt_.view) >= data_.train.size())
     throw std::invalid_argument("--view-index " + std::to_string(opt_.view) + ": the dataset has " +
@@ -147,23 +174,21 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
   panels_.push_back(std::make_unique<VirtualFramesPanel>());
   panels_.push_back(std::make_unique<EventsPanel>());
 
-  // The free camera starts at the first shown training view, aimed at the cloud's centre depth.
-  {
-    const Camera& cam = data_.train[view_].camera;
-    const Orbit centre = initial_orbit(trainer_.cloud());
-    const auto c = cam.center();
-    double depth = 0;
-    for (int k = 0; k < 3; ++k) depth += (centre.target[k] - c[k]) * cam.R[6 + k];
-    if (!(depth > 0))
-      depth = data_.near > 0 && data_.far > data_.near ? 0.5 * (data_.near + data_.far) : centre.distance;
-    home_ = orbit_from_camera(cam, depth);
-  }
-  display_.input().orbit = home_;
+  centre_ = initial_orbit(trainer_.cloud());
+  std::vector<Camera> cams;
+  for (const io::View& v : data_.train) cams.push_back(v.camera);
+  frame_ = basis_from_cameras(cams);
+  display_.input().orbit = home_ = view_orbit(view_);
   display_.input().on_key = [this](int key, int) { press(key); };
 
   start_ = last_mark_ = last_poll_ = next_frame_ = now_s();
   apply_script(1);
-  draw_frame();  // something to look at before the first (possibly long) step
+  // Something to look at before the first (possibly long) step. While training runs, this frame
+  // leaves the renders of the side panels to the first budgeted frame: in a short run the
+  // first frame is most of the viewer's share.
+  first_frame_light_ = !paused_;
+  draw_frame();
+  first_frame_light_ = false;
 }
 
 TrainView::~TrainView() {
@@ -171,6 +196,18 @@ TrainView::~TrainView() {
     close();
   } catch (const std::exception& e) { std::fprintf(stderr, "train --view: %s\n", e.what()); }
   display_.input().on_key = nullptr;
+  display_.input().ui_mouse = display_.input().ui_keys = false;
+}
+
+// Training view v's pose as an orbit, aimed at the depth of the initial cloud's centre.
+Orbit TrainView::view_orbit(uint32_t v) const {
+  const Camera& cam = data_.train[v].camera;
+  const auto c = cam.center();
+  double depth = 0;
+  for (int k = 0; k < 3; ++k) depth += (centre_.target[k] - c[k]) * cam.R[6 + k];
+  if (!(depth > 0))
+    depth = data_.near > 0 && data_.far > data_.near ? 0.5 * (data_.near + data_.far) : centre_.distance;
+  return orbit_from_camera(cam, depth, frame_);
 }
 
 void TrainView::press(int key) {
@@ -196,8 +233,8 @@ void TrainView::press(int key) {
     case GLFW_KEY_O:
       overlay_ = !overlay_;
       break;
-    case GLFW_KEY_R:
-      display_.input().orbit = home_;
+    case GLFW_KEY_R:  // to the shown view's pose
+      display_.input().orbit = home_ = view_orbit(view_);
       break;
     default:
       for (auto& p : panels_)
@@ -208,7 +245,12 @@ void TrainView::press(int key) {
 void TrainView::apply_script(int frame) {
   auto it = script_.find(frame);
   if (it == script_.end()) return;
-  for (int k : it->second) press(k);
+  for (const ScriptAction& a : it->second) {
+    if (a.key)
+      press(a.key);
+    else
+      pending_widgets_.push_back(a);
+  }
 }
 
 void TrainView::poll() {
@@ -245,12 +287,15 @@ void TrainView::after_step(const StepStats& st) {
   if (!st.skipped) {
     last_loss_ = st.loss;
     loss_ema_ = loss_ema_ < 0 ? st.loss : 0.9 * loss_ema_ + 0.1 * st.loss;
+    loss_hist_.push_back(float(st.loss));
+    term_hist_.resize(st.term_values.size());
+    for (size_t i = 0; i < st.term_values.size(); ++i) term_hist_[i].push_back(float(st.term_values[i]));
   }
   if (!open_) return;
   // Credit: budget x wall time since the last mark (viewer time included: the share is of the
   // whole), capped so that a long stretch without frames does not buy a burst of them.
   training_wall_s_ += t - last_mark_;
-  credit_ = std::min(credit_ + opt_.budget * (t - last_mark_), 0.1);
+  credit_ = std::min(credit_ + opt_.budget * (t - last_mark_), std::max(0.1, frame_cost_));
   if (last_step_time_ > 0) {
     const double its = 1.0 / std::max(t - last_step_time_, 1e-9);
     its_ema_ = its_ema_ > 0 ? 0.8 * its_ema_ + 0.2 * its : its;
@@ -260,7 +305,9 @@ void TrainView::after_step(const StepStats& st) {
   poll();
   if (!open_) return;
   const bool due = opt_.fps_cap <= 0 || t >= next_frame_;
-  if (paused_ || (credit_ >= 0 && due)) draw_frame();
+  // A frame is drawn when the credit covers what frames have been costing, so that a short run
+  // does not end in debt.
+  if (paused_ || (credit_ >= frame_cost_ && due)) draw_frame();
 }
 
 void TrainView::after_training() {
@@ -277,101 +324,165 @@ void TrainView::after_training() {
   close();
 }
 
+// The shown view's inputs: its blurry image and its events.
+void TrainView::load_view_inputs() {
+  const io::View& view = data_.train[view_];
+  const uint32_t W = view.camera.width, H = view.camera.height;
+  shown_.view = view_;
+  shown_.width = W;
+  shown_.height = H;
+  if (view.blurry.width != W || view.blurry.height != H)
+    throw std::runtime_error("train --view: view '" + view.name + "': blurry image " +
+                             std::to_string(view.blurry.width) + "x" + std::to_string(view.blurry.height) +
+                             " differs from its camera's " + std::to_string(W) + "x" + std::to_string(H));
+  shown_.blurry.ensure(size_t(W) * H * 3 * 4);
+  shown_.blurry.write(encoded(io::planar_rgb(view.blurry)));  // the canvas shows sRGB values
+  EventImage ev = event_image(data_, view_);
+  shown_.events_w = ev.width;
+  shown_.events_h = ev.height;
+  shown_.events_pos = ev.positive;
+  shown_.events_neg = ev.negative;
+  shown_.has_events = ev.has_events;
+  shown_.events.ensure(ev.rgb.size() * 4);
+  shown_.events.write(ev.rgb);
+  shown_.inputs_ready = true;
+}
+
 // Re-renders what the side panels show: the view's inputs when the view changed, the renders
 // when the view changed or training advanced (at most every refresh_s while training runs).
-void TrainView::refresh_content(bool force) {
+void TrainView::refresh_content(bool renders) {
   const io::View& view = data_.train[view_];
   const bool new_view = !shown_.inputs_ready || shown_.view != view_;
   const uint32_t step = trainer_.current_step();
   const bool running = !paused_ && !training_done_;
   const bool stale = shown_.step != step && (!running || now_s() - last_refresh_ >= opt_.refresh_s);
-  if (!new_view && !stale && !force) return;
+  if (!new_view && !stale && shown_.u == u_) return;
   const uint32_t W = view.camera.width, H = view.camera.height;
   const size_t n = size_t(W) * H * 3;
-  if (new_view) {
-    shown_.view = view_;
-    shown_.width = W;
-    shown_.height = H;
-    if (view.blurry.width != W || view.blurry.height != H)
-      throw std::runtime_error("train --view: view '" + view.name + "': blurry image " +
-                               std::to_string(view.blurry.width) + "x" + std::to_string(view.blurry.height) +
-                               " differs from its camera's " + std::to_string(W) + "x" + std::to_string(H));
-    shown_.blurry.ensure(n * 4);
-    shown_.blurry.write(encoded(io::planar_rgb(view.blurry)));  // the canvas shows sRGB values
-    EventImage ev = event_image(data_, view_);
-    shown_.events_w = ev.width;
-    shown_.events_h = ev.height;
-    shown_.events_pos = ev.positive;
-    shown_.events_neg = ev.negative;
-    shown_.has_events = ev.has_events;
-    shown_.events.ensure(ev.rgb.size() * 4);
-    shown_.events.write(ev.rgb);
-    shown_.inputs_ready = true;
+  if (new_view) load_view_inputs();
+  if (!renders) return;
+  const bool blur = trainer_.config().mode == TrainMode::Blur;
+  if (new_view || stale || shown_.step == UINT32_MAX) {
+    // The exposure as training sees it, from the trainer: its frames, its image model, its target.
+    const ViewSnapshot snap = trainer_.snapshot(view_);
+    shown_.times = snap.frames.size() > 1 ? snap.times : std::vector<double>{};
+    while (shown_.frames.size() < shown_.times.size())
+      shown_.frames.emplace_back(ctx_, n * 4, "view_frame" + std::to_string(shown_.frames.size()));
+    shown_.frames.resize(shown_.times.size());
+    for (size_t i = 0; i < shown_.frames.size(); ++i) {
+      shown_.frames[i].ensure(n * 4);
+      cmd_.copy(*snap.frames[i], shown_.frames[i], n * 4);
+    }
+    cmd_.submit();
+    shown_.psnr = psnr(snap.model, snap.target);
+    shown_.step = step;
+    last_refresh_ = now_s();
   }
-  // The exposure as training sees it, from the trainer: its frames, its image model, its target.
-  const ViewSnapshot snap = trainer_.snapshot(view_);
-  const bool blur = snap.frames.size() > 1;
-  shown_.times = blur ? snap.times : std::vector<double>{};
-  while (shown_.frames.size() < shown_.times.size())
-    shown_.frames.emplace_back(ctx_, n * 4, "view_frame" + std::to_string(shown_.frames.size()));
-  shown_.frames.resize(shown_.times.size());
-  for (size_t i = 0; i < shown_.frames.size(); ++i) {
-    shown_.frames[i].ensure(n * 4);
-    cmd_.copy(*snap.frames[i], shown_.frames[i], n * 4);
-  }
-  const auto mid_at = std::find(snap.times.begin(), snap.times.end(), 0.5);
+  // The render panel: the virtual frame at u when there is one, else a render at u along the
+  // view's trajectory (plain mode: the view's training camera).
+  const auto at = std::find(shown_.times.begin(), shown_.times.end(), u_);
   std::vector<float> mid;
-  if (mid_at != snap.times.end()) {
-    const gpu::Buffer& m = *snap.frames[size_t(mid_at - snap.times.begin())];
-    mid = m.read<float>(n);
-  } else {
+  if (at != shown_.times.end())
+    mid = shown_.frames[size_t(at - shown_.times.begin())].read<float>(n);
+  else if (blur)
+    mid = trainer_.render(trainer_.trajectories()[view_].camera_at(u_));
+  else
     mid = trainer_.render(trainer_.training_camera(view_));
-  }
+  shown_.u = u_;
   shown_.mid.ensure(n * 4);
   shown_.mid.write(mid);
-  cmd_.submit();
-  shown_.psnr = psnr(snap.model, snap.target);
-  shown_.psnr_mid_sharp = view.sharp_mid ? psnr(mid, encoded(io::planar_rgb(*view.sharp_mid))) : -1;
-  shown_.step = step;
-  last_refresh_ = now_s();
+  const bool at_mid = !blur || u_ == 0.5;
+  shown_.psnr_mid_sharp = view.sharp_mid && at_mid ? psnr(mid, encoded(io::planar_rgb(*view.sharp_mid))) : -1;
   for (auto& p : panels_) p->refresh(shown_);
+}
+
+// The free camera's view: rendered again when the camera moved, the size changed, or the splats
+// changed (at most every refresh_s while training runs). While training runs it is rendered at
+// no more than kFreeCameraPixels x the shown view's pixel count and enlarged by the blit;
+// paused or done, at the size it is shown.
+void TrainView::render_free_view(const Rect& m) {
+  if (m.empty()) return;
+  const bool running = !paused_ && !training_done_;
+  const double budget_px = kFreeCameraPixels * double(shown_.width) * double(shown_.height);
+  const double scale = running && budget_px > 0 ? std::min(1.0, std::sqrt(budget_px / (double(m.w) * m.h))) : 1.0;
+  const uint32_t w = std::max(1u, uint32_t(std::lround(m.w * scale)));
+  const uint32_t h = std::max(1u, uint32_t(std::lround(m.h * scale)));
+  const Orbit& o = display_.input().orbit;
+  const bool moved = o.target != free_orbit_.target || o.distance != free_orbit_.distance || o.yaw != free_orbit_.yaw ||
+                     o.pitch != free_orbit_.pitch || o.fov_y_deg != free_orbit_.fov_y_deg;
+  const uint32_t step = trainer_.current_step();
+  const bool stale = step != free_step_ && (!running || now_s() - last_free_ >= opt_.refresh_s);
+  if (!moved && !stale && w == free_w_ && h == free_h_) return;
+  RenderSettings s;
+  s.background = trainer_.config().background;
+  s.antialiased = trainer_.config().antialiased;
+  raster_.forward(trainer_.params(), orbit_camera(o, w, h), s, free_view_);
+  free_orbit_ = o;
+  free_step_ = step;
+  free_w_ = w;
+  free_h_ = h;
+  last_free_ = now_s();
 }
 
 void TrainView::draw_frame() {
   const double t0 = now_s();
-  if (!display_.sync_swapchain()) {  // minimised: nothing to draw
+  const bool charged = !paused_ && !training_done_;  // frames while training runs count against the budget
+  if (!display_.sync_swapchain()) {                  // minimised: nothing to draw
     next_frame_ = t0 + 0.1;
     return;
   }
+  // Scripted widget actions use the widgets' rectangles from the last frame; they may change
+  // the view, u or the panels, so they run before the content is refreshed.
+  for (const ScriptAction& a : pending_widgets_) run_widget_action(a);
+  pending_widgets_.clear();
+  refresh_content(!first_frame_light_);
+  const bool ok = present_frame(compose());
+  const double t1 = now_s();
+  (charged ? viewer_s_ : other_s_) += t1 - t0;
+  if (charged) {
+    credit_ -= t1 - t0;
+    frame_cost_ = frame_cost_ > 0 ? 0.7 * frame_cost_ + 0.3 * (t1 - t0) : t1 - t0;
+  }
+  next_frame_ = opt_.fps_cap > 0 ? std::max(next_frame_ + 1.0 / opt_.fps_cap, t1) : t1;
+  if (!ok) return;
+  ++frames_shown_;
+  frame_log_.push_back({{"frame", frames_shown_},
+                        {"step", trainer_.current_step()},
+                        {"paused", paused_},
+                        {"view", view_},
+                        {"content_step", shown_.step},
+                        {"u", shown_.u},
+                        {"ms", 1000.0 * (t1 - t0)}});
+  char title[256];
+  std::snprintf(title, sizeof title, "evflow train - step %u/%u - %.2f it/s - view %u - %s", trainer_.current_step(),
+                trainer_.config().iterations, its_ema_, view_ + 1, paused_ ? "paused" : "running");
+  display_.set_title(title);
+  if (opt_.frames > 0 && frames_shown_ >= opt_.frames) {
+    close();
+    return;
+  }
+  apply_script(frames_shown_ + 1);
+}
+
+// Draws the free camera and the visible panels' tiles on the canvas (submitted); returns each
+// panel's label strip and text for the UI to write.
+std::vector<std::pair<Rect, std::string>> TrainView::compose() {
   gpu::Swapchain& sc = display_.swapchain();
   const uint32_t W = sc.width(), H = sc.height();
   canvas_.resize(W, H, sc.bgr());
-  canvas_.set_text_scale(H >= 600 ? 2 : 1);
-  const uint32_t lh = canvas_.line_height();
-
-  refresh_content(false);
   std::vector<Panel*> shown;
   for (auto& p : panels_)
     if (p->visible && p->available(shown_)) shown.push_back(p.get());
-  const TrainLayout layout = train_layout(W, H, uint32_t(shown.size()), lh + 2);
+  const TrainLayout layout = train_layout(W, H, uint32_t(shown.size()), uint32_t(ui_->font_size()) + 4);
   main_rect_ = layout.main;
-
-  // The free camera's view, rendered at the size it is shown.
-  RenderSettings s;
-  s.background = trainer_.config().background;
-  s.antialiased = trainer_.config().antialiased;
   const Rect& m = layout.main;
-  if (!m.empty()) raster_.forward(trainer_.params(), orbit_camera(display_.input().orbit, m.w, m.h), s, free_view_);
-
+  render_free_view(m);
   canvas_.fill({0, 0, W, H}, kBackground);
-  if (!m.empty()) canvas_.blit(free_view_.outputs().rgb, m.w, m.h, m);
+  if (!m.empty()) canvas_.blit(free_view_.outputs().rgb, free_w_, free_h_, m);
   last_tiles_.clear();
+  std::vector<std::pair<Rect, std::string>> labels;
   for (size_t i = 0; i < shown.size(); ++i) {
-    const Rect& lab = layout.labels[i];
-    std::string text = shown[i]->label(shown_);
-    const size_t max_chars = lab.w / (shaderio::kGlyphCellW * canvas_.text_scale());
-    if (text.size() > max_chars) text.resize(max_chars);
-    canvas_.text(lab.x + 1, lab.y + 1, text, kLabelColor);
+    labels.push_back({layout.labels[i], shown[i]->label(shown_)});
     const std::vector<Tile> tiles = shown[i]->tiles(shown_);
     std::vector<std::pair<Rect, Tile>> placed;
     if (!tiles.empty()) {
@@ -384,53 +495,47 @@ void TrainView::draw_frame() {
     }
     last_tiles_.push_back({shown[i]->id(), std::move(placed)});
   }
-  if (overlay_) {
-    const io::View& view = data_.train[view_];
-    const TrainConfig& cfg = trainer_.config();
-    const double share = training_wall_s_ > 0 ? viewer_s_ / training_wall_s_ : 0.0;
-    std::vector<std::string> lines;
-    lines.push_back("STEP " + std::to_string(trainer_.current_step()) + "/" + std::to_string(cfg.iterations) +
-                    (training_done_ ? " DONE"
-                     : paused_      ? " PAUSED"
-                                    : "") +
-                    "  LOSS " + (loss_ema_ < 0 ? std::string("-") : fmt("%.4f", loss_ema_)));
-    lines.push_back(fmt("%.2f IT/S", its_ema_) + "  GAUSSIANS " + std::to_string(trainer_.params().count) +
-                    "  VIEWER " + fmt("%.0f%%", 100.0 * share));
-    lines.push_back("VIEW " + std::to_string(view_ + 1) + "/" + std::to_string(data_.train.size()) + " " + view.name +
-                    "  PSNR " + fmt("%.2f DB", shown_.psnr) +
-                    (shown_.psnr_mid_sharp >= 0 ? "  MID VS SHARP " + fmt("%.2f DB", shown_.psnr_mid_sharp) : ""));
-    lines.push_back("SPACE PAUSE N STEP <> VIEW 1-4 PANELS");
-    for (size_t i = 0; i < lines.size(); ++i) {
-      std::string& l = lines[i];
-      const size_t max_chars = std::max<uint32_t>(m.w, 8) / (shaderio::kGlyphCellW * canvas_.text_scale());
-      if (l.size() > max_chars) l.resize(max_chars);
-      canvas_.text(m.x + 4, m.y + 4 + uint32_t(i) * lh, l, kOverlayColor);
-    }
-  }
-  canvas_.draw_text();
   cmd_.submit();
-  const bool ok = sc.present(canvas_.packed());
-  const double t1 = now_s();
-  viewer_s_ += t1 - t0;
-  credit_ -= t1 - t0;
-  next_frame_ = opt_.fps_cap > 0 ? std::max(next_frame_ + 1.0 / opt_.fps_cap, t1) : t1;
-  if (!ok) return;
-  ++frames_shown_;
-  frame_log_.push_back({{"frame", frames_shown_},
-                        {"step", trainer_.current_step()},
-                        {"paused", paused_},
-                        {"view", view_},
-                        {"content_step", shown_.step},
-                        {"ms", 1000.0 * (t1 - t0)}});
-  char title[256];
-  std::snprintf(title, sizeof title, "evflow train - step %u/%u - %.2f it/s - view %u - %s", trainer_.current_step(),
-                trainer_.config().iterations, its_ema_, view_ + 1, paused_ ? "paused" : "running");
-  display_.set_title(title);
-  if (opt_.frames > 0 && frames_shown_ >= opt_.frames) {
-    close();
-    return;
+  return labels;
+}
+
+// Runs the UI, presents the canvas with the UI drawn over it (read back when a screenshot is
+// due) and writes the screenshot the button asked for. False when nothing was presented.
+bool TrainView::present_frame(const std::vector<std::pair<Rect, std::string>>& labels) {
+  ui_->begin();
+  build_ui(labels);
+  ui_->end();
+  display_.input().ui_mouse = ui_->wants_mouse();
+  display_.input().ui_keys = ui_->wants_keys();
+  gpu::Swapchain& sc = display_.swapchain();
+  const bool capture = shot_requested_ || !opt_.screenshot.empty();
+  if (capture) readback_.ensure(uint64_t(sc.width()) * sc.height() * 4);
+  const bool ok = sc.present(
+      canvas_.packed(), [this](VkCommandBuffer cb) { ui_->draw(cb); }, capture ? &readback_ : nullptr);
+  if (ok && shot_requested_) {
+    shot_requested_ = false;
+    char name[64];
+    std::snprintf(name, sizeof name, "view-step%06u-%d.png", trainer_.current_step(), ++shots_);
+    last_shot_ = (std::filesystem::path(opt_.shot_dir) / name).string();
+    save_frame(last_shot_);
   }
-  apply_script(frames_shown_ + 1);
+  return ok;
+}
+
+// The presented frame with the UI (read back by the last present) as an 8-bit PNG, written
+// atomically (a temporary, then a rename).
+void TrainView::save_frame(const std::string& path) {
+  const uint32_t W = display_.swapchain().width(), H = display_.swapchain().height();
+  const std::vector<uint32_t> px = readback_.read<uint32_t>(size_t(W) * H);
+  std::vector<uint8_t> rgb(px.size() * 3);
+  const bool bgr = display_.swapchain().bgr();
+  for (size_t i = 0; i < px.size(); ++i) {
+    const uint8_t c0 = px[i] & 0xFF, c1 = (px[i] >> 8) & 0xFF, c2 = (px[i] >> 16) & 0xFF;
+    rgb[i * 3 + 0] = bgr ? c2 : c0;
+    rgb[i * 3 + 1] = c1;
+    rgb[i * 3 + 2] = bgr ? c0 : c2;
+  }
+  io::write_png8(path, W, H, 3, rgb);
 }
 
 nlohmann::json TrainView::report() const {
@@ -447,6 +552,10 @@ nlohmann::json TrainView::report() const {
     }
     panels.push_back({{"id", id}, {"tiles", tiles}});
   }
+  json weights = json::object();
+  for (const LossTerm* t : trainer_.losses()) weights[t->name()] = t->weight();
+  json widgets = json::object();
+  for (auto& [name, r] : ui_->widgets()) widgets[name] = {{"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}};
   return json{{"canvas", {canvas_.width(), canvas_.height()}},
               {"main", rect(main_rect_)},
               {"panels", panels},
@@ -459,7 +568,13 @@ nlohmann::json TrainView::report() const {
                 {"events_pos", shown_.events_pos},
                 {"events_neg", shown_.events_neg},
                 {"virtual_times", shown_.times}}},
+              {"u", u_},
+              {"weights", weights},
+              {"widgets", widgets},
+              {"screenshots", shots_},
+              {"last_screenshot", last_shot_},
               {"viewer_seconds", viewer_s_},
+              {"viewer_seconds_untimed", other_s_},
               {"training_wall_seconds", training_wall_s_},
               {"budget", opt_.budget}};
 }
@@ -471,7 +586,7 @@ void TrainView::close() {
   step_requests_ = 0;
   if (!opt_.screenshot.empty()) {
     if (frames_shown_ == 0) throw std::runtime_error("train --view: no frame was presented, no screenshot written");
-    save_screenshot(canvas_.packed(), canvas_.width(), canvas_.height(), canvas_.bgr(), opt_.screenshot);
+    save_frame(opt_.screenshot);
     std::fprintf(stderr, "train --view: %d frame(s) presented, wrote %s (%ux%u)\n", frames_shown_,
                  opt_.screenshot.c_str(), canvas_.width(), canvas_.height());
   }
@@ -480,11 +595,12 @@ void TrainView::close() {
     f << report().dump(1) << "\n";
     if (!f) throw std::runtime_error(opt_.report + ": cannot write the viewer report");
   }
-  std::fprintf(
-      stderr,
-      "train --view: viewer closed after %d frame(s); its time %.2f s of %.2f s training wall time (%.1f%%)%s\n",
-      frames_shown_, viewer_s_, training_wall_s_, training_wall_s_ > 0 ? 100.0 * viewer_s_ / training_wall_s_ : 0.0,
-      training_done_ ? "" : "; training goes on");
+  std::fprintf(stderr,
+               "train --view: viewer closed after %d frame(s); its time %.2f s of %.2f s training wall time (%.1f%%), "
+               "%.2f s more while paused or after training%s\n",
+               frames_shown_, viewer_s_, training_wall_s_,
+               training_wall_s_ > 0 ? 100.0 * viewer_s_ / training_wall_s_ : 0.0, other_s_,
+               training_done_ ? "" : "; training goes on");
   glfwHideWindow(display_.window());
   glfwPollEvents();
 }

@@ -17,6 +17,7 @@
 #include "train/trainer.h"
 #include "viewer/canvas.h"
 #include "viewer/layout.h"
+#include "viewer/ui_layer.h"
 #include "viewer/window.h"
 
 namespace evflow::viewer {
@@ -32,8 +33,17 @@ struct TrainViewOptions {
   bool start_paused = false;
   bool hold = false;   // keep the window open after training ends, until it is closed
   int view = 0;        // training view shown first
-  std::string script;  // testing: "FRAME:KEY,..." presses KEY just before frame FRAME is drawn
+  std::string script;  // testing: "FRAME:ACTION,..." (a key or a widget action) just before frame FRAME is drawn
   bool vsync = false;
+  std::string shot_dir = ".";  // where the UI's screenshot button writes
+};
+
+// One item of --view-script: a key press, a click on a named widget, or a press at a fraction of
+// a named slider's width (which sets the slider there).
+struct ScriptAction {
+  int key = 0;         // GLFW key, or 0 for a widget action
+  std::string widget;  // "pause", "u", "weight.l1", ... (docs/viewer.md)
+  double at = -1;      // < 0: click the widget's centre; else the fraction of its width to press at
 };
 
 // Everything the side panels show for the chosen training view, refreshed together.
@@ -47,7 +57,8 @@ struct ShownView {
   gpu::Buffer events;  // planar linear RGB, events_w x events_h
   size_t events_pos = 0, events_neg = 0;
   bool has_events = false;
-  gpu::Buffer mid;                  // render at mid-exposure (plain mode: the view's camera)
+  double u = 0.5;                   // the exposure time `mid` was rendered at (blur mode)
+  gpu::Buffer mid;                  // render at u along the exposure (plain mode: the view's camera)
   std::vector<double> times;        // blur mode: the virtual frames' exposure times u
   std::vector<gpu::Buffer> frames;  // blur mode: renders at those times
   double psnr = 0;                  // model image (blur: mean of the frames) vs the training target
@@ -101,14 +112,30 @@ class TrainView {
   // The key handler (window keys and the test script). Keys are documented in docs/viewer.md.
   void press(int key);
   static int key_from_name(const std::string& name);  // "space", "n", "right", "1", ...; throws on unknown names
-  // "FRAME:KEY,..." -> frame -> keys; throws std::invalid_argument naming the bad item.
-  static std::map<int, std::vector<int>> parse_script(const std::string& script);
+  // "FRAME:KEY,FRAME:click=WIDGET,FRAME:slide=WIDGET@FRACTION,..." -> frame -> actions; throws
+  // std::invalid_argument naming the bad item.
+  static std::map<int, std::vector<ScriptAction>> parse_script(const std::string& script);
 
  private:
   void draw_frame();
-  void refresh_content(bool force);
+  std::vector<std::pair<Rect, std::string>> compose();
+  bool present_frame(const std::vector<std::pair<Rect, std::string>>& labels);
+  // The side panels' content; `renders` false: only the view's inputs (blurry, events).
+  void refresh_content(bool renders);
+  void load_view_inputs();
+  void render_free_view(const Rect& m);
   void poll();
   void apply_script(int frame);
+  void run_widget_action(const ScriptAction& a);
+  // The ImGui windows and the panels' labels (train_ui.cpp); `labels`: each shown panel's label
+  // strip and text.
+  void build_ui(const std::vector<std::pair<Rect, std::string>>& labels);
+  void build_stats();
+  void build_controls();
+  void build_weights();
+  void request_view(uint32_t v);
+  Orbit view_orbit(uint32_t v) const;
+  void save_frame(const std::string& path);
   nlohmann::json report() const;
 
   Display& display_;
@@ -121,19 +148,43 @@ class TrainView {
   Rasterizer raster_;
   RenderState free_view_;  // the free camera's render
   Canvas canvas_;
+  std::unique_ptr<UiLayer> ui_;
+  gpu::Buffer readback_;  // the presented frame with the UI, for screenshots
   ShownView shown_;
   std::vector<std::unique_ptr<Panel>> panels_;
-  std::map<int, std::vector<int>> script_;  // frame -> keys
-  Orbit home_;
-  bool open_ = true, paused_ = false, overlay_ = true, training_done_ = false;
+  std::map<int, std::vector<ScriptAction>> script_;  // frame -> actions
+  std::vector<ScriptAction> pending_widgets_;        // widget actions for the next frame
+  double u_ = 0.5;                                   // the u slider: exposure time the render panel shows
+  bool shot_requested_ = false;
+  bool first_frame_light_ = false;  // the first frame while training runs: no panel renders
+  int shots_ = 0;
+  std::string last_shot_;
+  // What the free camera last rendered: the splats' step, the orbit and the size.
+  uint32_t free_step_ = UINT32_MAX;
+  Orbit free_orbit_;
+  uint32_t free_w_ = 0, free_h_ = 0;
+  double last_free_ = -1e9;
+  // Loss history for the plots: the total and each term's unweighted value, one entry per step.
+  std::vector<float> loss_hist_;
+  std::vector<std::vector<float>> term_hist_;
+  std::vector<float> weight_max_;  // each loss weight slider's upper end (fixed when the UI opens)
+  bool plots_ = true;              // the loss plots shown in the UI
+  Orbit home_;                     // where the free camera started or was last sent (R)
+  Orbit centre_;                   // the initial cloud's centre and size
+  std::array<double, 9> frame_;    // the orbit's frame: up as the training cameras hold it
+  bool open_ = true, paused_ = false, training_done_ = false;
+  bool overlay_ = true;  // the UI window shown (O)
   int step_requests_ = 0;
   uint32_t view_ = 0;
   // Time budget (seconds): credit grows by budget x wall time while training runs, a frame costs
   // its duration; a frame is drawn when the credit is >= 0.
-  double credit_ = 0, viewer_s_ = 0, training_wall_s_ = 0;
+  // viewer_s_ counts frames drawn while training runs; other_s_ the frames while paused or after
+  // training (not charged).
+  double credit_ = 0, viewer_s_ = 0, other_s_ = 0, training_wall_s_ = 0;
+  double frame_cost_ = 0;  // running average of a charged frame's duration
   double last_mark_ = 0, next_frame_ = 0, last_poll_ = 0, last_refresh_ = -1e9;
   double start_ = 0;
-  // Statistics for the overlay.
+  // Statistics for the UI.
   uint32_t last_step_ = 0;
   double loss_ema_ = -1, last_loss_ = 0, its_ema_ = 0, last_step_time_ = -1;
   int frames_shown_ = 0;

@@ -15,7 +15,7 @@ void install_callbacks(GLFWwindow* w) {
   glfwSetMouseButtonCallback(w, [](GLFWwindow* win, int button, int action, int) {
     if (button != GLFW_MOUSE_BUTTON_LEFT) return;
     Input& in = input_of(win);
-    in.dragging = action == GLFW_PRESS;
+    in.dragging = action == GLFW_PRESS && !in.ui_mouse;
     glfwGetCursorPos(win, &in.last_x, &in.last_y);
   });
   glfwSetCursorPosCallback(w, [](GLFWwindow* win, double x, double y) {
@@ -27,7 +27,10 @@ void install_callbacks(GLFWwindow* w) {
     in.last_x = x;
     in.last_y = y;
   });
-  glfwSetScrollCallback(w, [](GLFWwindow* win, double, double dy) { orbit_zoom(input_of(win).orbit, dy); });
+  glfwSetScrollCallback(w, [](GLFWwindow* win, double, double dy) {
+    Input& in = input_of(win);
+    if (!in.ui_mouse) orbit_zoom(in.orbit, dy);
+  });
   glfwSetKeyCallback(w, [](GLFWwindow* win, int key, int, int action, int mods) {
     if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
     if (key == GLFW_KEY_ESCAPE) {
@@ -35,7 +38,7 @@ void install_callbacks(GLFWwindow* w) {
       return;
     }
     Input& in = input_of(win);
-    if (in.on_key) in.on_key(key, mods);
+    if (in.on_key && !in.ui_keys) in.on_key(key, mods);
   });
 }
 
@@ -101,6 +104,7 @@ bool Display::sync_swapchain() {
 }
 
 void Display::fly(double dt) {
+  if (input_.ui_keys) return;
   auto key = [&](int k) { return glfwGetKey(window_, k) == GLFW_PRESS ? 1.0 : 0.0; };
   const double right = key(GLFW_KEY_D) - key(GLFW_KEY_A);
   const double forward = key(GLFW_KEY_W) - key(GLFW_KEY_S);

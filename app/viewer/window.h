@@ -25,6 +25,9 @@ struct Input {
   bool dragging = false;
   double last_x = 0, last_y = 0;
   std::function<void(int key, int mods)> on_key;
+  // Set by a UI drawn in the window while it uses the mouse / keyboard: the camera and on_key
+  // then leave them alone.
+  bool ui_mouse = false, ui_keys = false;
 };
 
 // GLFW, one window, a presentation-capable gpu::Context and the window's swapchain. Members are
