@@ -31,10 +31,22 @@ std::string numbered(const std::string& prefix, size_t i) {
   return s.str();
 }
 
-// Around the splats' centre, as `evflow view` first looks at them, turning about world up.
-std::vector<Shot> orbit_shots(const GaussianCloud& cloud, uint32_t w, uint32_t h, uint32_t frames) {
-  std::vector<Shot> out;
+// Around the splats' centre, turning about "up": with a dataset, from its first training view
+// (as `evflow train --view` starts) and about the up its cameras share; without one, as `evflow
+// view` first looks at the splats, about the world's -y (OpenCV's up).
+std::vector<Shot> orbit_shots(const GaussianCloud& cloud, const io::Dataset* data, uint32_t w, uint32_t h,
+                              uint32_t frames) {
   viewer::Orbit o = viewer::initial_orbit(cloud);
+  if (data && !data->train.empty()) {
+    std::vector<Camera> cams;
+    for (const auto& v : data->train) cams.push_back(v.camera);
+    const Camera& cam = cams[0];
+    const auto c = cam.center();
+    double depth = 0;
+    for (int k = 0; k < 3; ++k) depth += (o.target[k] - c[k]) * cam.R[6 + k];
+    o = viewer::orbit_from_camera(cam, depth > 0 ? depth : o.distance, viewer::basis_from_cameras(cams));
+  }
+  std::vector<Shot> out;
   for (uint32_t i = 0; i < frames; ++i) {
     viewer::Orbit at = o;
     at.yaw = o.yaw + 2.0 * M_PI * i / frames;
@@ -74,7 +86,9 @@ void print_help() {
       "  SPLATS: a training run folder, a .ply or a .glb. Writes DIR/<name>.png, 8-bit sRGB, per camera:\n"
       "  --camera F   the cameras of a JSON file (docs/cli.md: intrinsics, size, world-to-camera in OpenCV\n"
       "               axes): camera_000.png, ...\n"
-      "  --path orbit (default) --frames views around the splats' centre at --width x --height: orbit_000.png, ...\n"
+      "  --path orbit (default) --frames views around the splats' centre at --width x --height: orbit_000.png,\n"
+      "               ...; with a dataset (a run's or --data's) from its first training view, turning about\n"
+      "               its cameras' up, else about -y\n"
       "  --path views the dataset's training views (a run: at their learned mid-exposure pose) and novel\n"
       "               views: train_<view>.png, novel_<view>.png; the dataset is the run's or --data's\n"
       "  --path exposure  a blur-mode run: each training view's 2N+1 poses along its learned exposure:\n"
@@ -134,7 +148,9 @@ static int run_render(const Args& a) {
     const auto cams = io::read_cameras_json(camera_file);
     for (size_t i = 0; i < cams.size(); ++i) shots.push_back({numbered("camera_", i), cams[i]});
   } else if (path == "orbit") {
-    shots = orbit_shots(cloud, w, h, frames);
+    const std::string d = !data_dir.empty() ? data_dir : run ? run->data_dir() : "";
+    const std::unique_ptr<io::Dataset> data = d.empty() ? nullptr : std::make_unique<io::Dataset>(io::load_dataset(d));
+    shots = orbit_shots(cloud, data.get(), w, h, frames);
   } else if (path == "views") {
     shots = view_shots(dataset(), run.get());
   } else if (path == "exposure") {

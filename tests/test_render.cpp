@@ -4,6 +4,7 @@
 #include <unistd.h>
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -129,6 +130,25 @@ TEST_CASE("render: a run's exposure path, its mid-exposure frame being the image
   expect_ok(dir, "render blur --path views --out views");
   for (auto& e : fs::directory_iterator(dir / "blur" / "eval" / "deblur"))
     CHECK(slurp(dir / "views" / ("train_" + e.path().filename().string())) == slurp(e.path()));
+  // The orbit of a run starts at its first training view, upright: its first frame is that
+  // view's recorded camera but for the roll, far closer to it than to it upside down.
+  expect_ok(dir, "render blur --path orbit --frames 2 --width 32 --height 24 --out orbit");
+  {
+    std::ofstream f(dir / "first.json");
+    f << io::camera_to_json(data.train[0].camera).dump();
+  }
+  expect_ok(dir, "render blur --camera first.json --out first");
+  const io::Image a = io::read_image(dir / "orbit" / "orbit_000.png");
+  const io::Image b = io::read_image(dir / "first" / "camera_000.png");
+  double same = 0, flipped = 0;
+  for (uint32_t y = 0; y < a.height; ++y)
+    for (size_t k = 0; k < size_t(a.width) * a.channels; ++k) {
+      const float va = a.data[y * a.width * a.channels + k];
+      same += std::abs(va - b.data[y * b.width * b.channels + k]);
+      flipped += std::abs(va - b.data[(b.height - 1 - y) * b.width * b.channels + k]);
+    }
+  INFO("orbit vs first view: " << same << ", vs it upside down: " << flipped);
+  CHECK(same < 0.5 * flipped);
   // A plain run learned no trajectories.
   expect_ok(dir, "train data --out plain method=plain" + small);
   CHECK(run_evflow(dir, "render plain --path exposure --out x", out) != 0);
