@@ -106,6 +106,12 @@ Dataset load_evflow(const fs::path& dir) {
       ds.event_counts = a.to_float();
       ds.event_counts_shape = a.shape;
     }
+    if (m.contains("points") && !m["points"].is_null()) {
+      const fs::path ppath = dir / m["points"].get<std::string>();
+      NpyArray a = read_npy(ppath);
+      if (a.shape.size() != 2 || a.shape[1] != 6) fail(ppath, "sparse points must have shape [N, 6] (x y z r g b)");
+      ds.points = a.to_float();
+    }
   } catch (const json::exception& e) { fail(mpath, std::string("malformed manifest: ") + e.what()); }
   return ds;
 }

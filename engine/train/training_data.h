@@ -26,7 +26,8 @@ std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainC
 std::unique_ptr<IntervalEvents> training_events(gpu::Context& ctx, const io::Dataset& data);
 
 // Random Gaussians inside the training views' frustums between the near and far bounds, coloured
-// from the pixel they were seeded on.
+// from the pixel they were seeded on; with init=points, one Gaussian per sparse point of the
+// dataset (throws when it has none).
 GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg);
 
 }  // namespace evflow
