@@ -19,6 +19,7 @@ Dataset load_e3nerf(const std::filesystem::path& dir, const LoadOptions& opt);
 Dataset load_ebad(const std::filesystem::path& dir, const LoadOptions& opt);
 Dataset load_llff_sharp(const std::filesystem::path& dir, const LoadOptions& opt);
 Dataset load_nerf_synthetic(const std::filesystem::path& dir);
+Dataset load_recording(const std::filesystem::path& dir);
 
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what);
 bool is_image_file(const std::filesystem::path& p);
