@@ -9,22 +9,17 @@
 #include <fstream>
 
 #include "camera/se3.h"
+#include "cli_helpers.h"
 #include "io/colmap_model.h"
 #include "io/dataset.h"
 #include "io/dataset_writer.h"
 #include "train/training_data.h"
 
 using namespace evflow;
+using evflow::test::fresh_dir;
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
 
 void write_text(const fs::path& p, const std::string& s) { std::ofstream(p) << s; }
 

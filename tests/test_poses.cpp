@@ -56,9 +56,7 @@ void write_recording(const fs::path& sim, const fs::path& rec) {
 TEST_CASE("poses: COLMAP on EDI frames registers every view of a simulated scene close to its true poses",
           "[poses][gpu]") {
   REQUIRE(on_path("colmap"));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_poses_test_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_dir("evflow_poses_test");
   std::string out;
   REQUIRE(run_evflow(dir, kSmallScene, out) == 0);
   int rc = run_evflow(dir, "poses sim --out sim_colmap --threads 2 --json", out);
@@ -114,9 +112,7 @@ TEST_CASE("poses: COLMAP on EDI frames registers every view of a simulated scene
 TEST_CASE("experiment --poses colmap: the plan and job lines carry it, its runs have their own folders",
           "[poses][experiment]") {
   REQUIRE(fs::exists(evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_poses_plan_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_dir("evflow_poses_plan");
   std::string out;
   auto plan = [](const std::string& out_dir) {
     return "experiment --out " + out_dir + " --scenes gallery --blur-px 4 --methods blur-only --emit-jobs jobs.txt";

@@ -19,13 +19,7 @@ Dataset load_evflow(const fs::path& dir) {
   Dataset ds;
   ds.layout = "evflow";
   ds.root = dir.string();
-  {
-    std::ifstream f(mpath);
-    if (!f) fail(mpath, "cannot open manifest");
-    try {
-      ds.manifest = json::parse(f);
-    } catch (const std::exception& e) { fail(mpath, std::string("malformed JSON: ") + e.what()); }
-  }
+  ds.manifest = read_json_file(mpath);
   const json& m = ds.manifest;
   try {
     const json& res = get(m, "resolution", mpath, "manifest");

@@ -2,8 +2,6 @@
 // and no poses yet; `evflow poses` turns it into a dataset. docs/datasets.md.
 #include "io/dataset_formats.h"
 
-#include <fstream>
-
 #include "io/events_h5.h"
 #include "io/events_txt.h"
 
@@ -53,10 +51,8 @@ Dataset load_recording(const fs::path& dir) {
   Dataset ds;
   ds.layout = "recording";
   ds.root = dir.string();
-  std::ifstream f(mpath);
-  if (!f) fail(mpath, "cannot open the recording's manifest");
+  const json m = read_json_file(mpath);
   try {
-    const json m = json::parse(f);
     const json& frames = get(m, "frames", mpath, "manifest");
     if (!frames.is_array() || frames.empty()) fail(mpath, "\"frames\" must be a non-empty array");
     const json tests = m.value("test", json::array());
