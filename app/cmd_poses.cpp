@@ -47,9 +47,10 @@ void check_output(const fs::path& out, const fs::path& in) {
 }
 
 void print_summary(const PoseEstimate& e) {
-  std::printf("registered %zu of %zu views, %zu sparse points (mean reprojection error %.2f px), near %.3g far %.3g\n",
-              e.views - e.missing.size(), e.views, e.dataset.points.size() / 6, e.reprojection_px, e.dataset.near,
-              e.dataset.far);
+  std::printf("registered %zu of %zu views, %zu sparse points (mean reprojection error %.2f px)",
+              e.views - e.missing.size(), e.views, e.dataset.points.size() / 6, e.reprojection_px);
+  if (e.missing.empty()) std::printf(", near %.3g far %.3g", e.dataset.near, e.dataset.far);
+  std::printf("\n");
   if (e.errors)
     std::printf(
         "vs the input's poses after a similarity alignment: rotation mean %.3f max %.3f deg, translation mean "

@@ -128,9 +128,9 @@ PoseEstimate estimate_poses(const io::Dataset& input, const fs::path& work, cons
     place(e.dataset.novel[i], frame_name(true, i, input.novel[i].name));
   if (input.layout != "recording" && estimated.size() >= 3)
     e.errors = pose_errors(estimated, reference, camera_extent(reference));
-  if (model.images.empty()) return e;
-  std::tie(e.dataset.near, e.dataset.far) = depth_bounds(model);
   e.dataset.points = sparse_points(model, e.reprojection_px);
+  if (!e.missing.empty()) return e;  // no dataset will be written: the bounds are not needed
+  std::tie(e.dataset.near, e.dataset.far) = depth_bounds(model);
   return e;
 }
 
