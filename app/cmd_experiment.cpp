@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -38,25 +39,35 @@ double run_command(const std::string& cmd, const fs::path& log) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// A scene's data, simulated unless they are there: into a fresh folder that is then renamed into
-// place, so jobs of one scene running at the same time never read half a dataset (the first
-// rename wins; the other copies, identical, are dropped).
-void ensure_data(const ExperimentPlan& plan, size_t si, const std::string& self, const fs::path& log) {
-  const fs::path data = plan.data_dir(si);
+// A dataset folder made by `command(tmp)` unless it holds dataset.json: into a fresh folder that
+// is then renamed into place, so jobs of one scene running at the same time never read half a
+// dataset (the first rename wins; the other copies, identical, are dropped).
+void ensure_dataset(const fs::path& data, const std::string& label, const fs::path& log,
+                    const std::function<std::string(const fs::path&)>& command) {
   if (fs::exists(data / "dataset.json")) return;
   char host[256] = "host";
   gethostname(host, sizeof host - 1);
   const fs::path tmp = data.string() + ".partial-" + host + "-" + std::to_string(getpid());
-  std::printf("[%s] simulate\n", plan.scenes[si].label.c_str());
+  std::printf("%s\n", label.c_str());
   fs::remove_all(tmp);
-  run_command(plan.simulate_command(self, si, tmp), log);
+  run_command(command(tmp), log);
   std::error_code ec;
   fs::rename(tmp, data, ec);
   if (ec) {
     fs::remove_all(tmp);
     if (!fs::exists(data / "dataset.json"))
-      throw std::runtime_error(data.string() + ": cannot move the simulated data into place: " + ec.message());
+      throw std::runtime_error(data.string() + ": cannot move the dataset into place: " + ec.message());
   }
+}
+
+// A scene's simulated data and, with --poses colmap, their COLMAP-posed copy.
+void ensure_data(const ExperimentPlan& plan, size_t si, const std::string& self, const fs::path& log) {
+  const std::string scene = "[" + plan.scenes[si].label + "] ";
+  ensure_dataset(plan.data_dir(si), scene + "simulate", log,
+                 [&](const fs::path& tmp) { return plan.simulate_command(self, si, tmp); });
+  if (plan.poses == "colmap")
+    ensure_dataset(plan.train_data_dir(si), scene + "poses (COLMAP)", log,
+                   [&](const fs::path& tmp) { return plan.poses_command(self, si, tmp); });
 }
 
 // One (scene, method) run: trained and evaluated unless its eval.json exists; its training time
@@ -128,6 +139,7 @@ std::string write_table(const ExperimentPlan& plan, std::vector<std::string>& mi
                             {"pose_noise_rot_deg", std::stod(plan.noise_rot)},
                             {"pose_noise_trans", std::stod(plan.noise_trans)},
                             {"baseline_pose_refine", plan.baseline_pose_refine},
+                            {"poses", plan.poses},
                             {"runs", table}};
   io::write_file_atomic(plan.out / "experiment.md", [&](const fs::path& tmp) { std::ofstream(tmp) << md; });
   io::write_file_atomic(plan.out / "experiment.json",

@@ -225,6 +225,9 @@ static int run_train(const Args& a) {
   for (auto& kv : overrides) cfg.set(kv.substr(0, kv.find('=')), kv.substr(kv.find('=') + 1));
 
   io::Dataset data = io::load_dataset(data_dir);
+  if (data.layout == "recording")
+    throw std::invalid_argument(data_dir + ": a recording has no camera poses yet; run `evflow poses " + data_dir +
+                                "` and train on its output");
   if (view) {
     if (vo.view < 0 || size_t(vo.view) >= data.train.size())
       throw std::invalid_argument("--view-index " + std::to_string(vo.view) + ": the dataset has " +

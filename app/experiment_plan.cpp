@@ -77,7 +77,7 @@ std::string ExperimentPlan::help() {
       "fast]\n"
       "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device "
       "N|name]\n"
-      "         [--no-baseline-pose-refine] [--emit-jobs FILE | --job] [key=value ...]\n"
+      "         [--no-baseline-pose-refine] [--poses perturbed|colmap] [--emit-jobs FILE | --job] [key=value ...]\n"
       "       evflow experiment --collect DIR\n"
       "  Simulates each built-in scene (blur size per scene; recorded poses perturbed like poses estimated\n"
       "  from blurry images), trains every method on it with the preset\n"
@@ -88,6 +88,9 @@ std::string ExperimentPlan::help() {
       "  A scene may be a glTF file (.glb/.gltf; needs --sim-seed): its data and runs go to DIR/<file stem>/.\n"
       "  plain and edi refine each training view's pose while they train (pose_refine=true), as the blur\n"
       "  methods do through their trajectories; --no-baseline-pose-refine turns that off.\n"
+      "  --poses colmap: every method trains on the scene's poses estimated by COLMAP on EDI frames\n"
+      "  (`evflow poses`, into DIR/<scene>/data_colmap/; runs in DIR/<scene>/colmap/<method>/) instead of\n"
+      "  the perturbed recorded poses (default: perturbed).\n"
       "  --emit-jobs FILE: run nothing; write DIR/experiment_plan.json and FILE, one self-contained command\n"
       "  line per (scene, method) for a batch scheduler (docs/cluster.md). --collect DIR: the table of\n"
       "  those runs once they have finished (an error lists the runs that have not). --job: what an\n"
@@ -122,7 +125,10 @@ ExperimentPlan ExperimentPlan::from_args(ArgParser& p) {
   e.device = p.value("--device");
   e.sim_seed = p.value("--sim-seed");
   e.baseline_pose_refine = !p.flag("--no-baseline-pose-refine");
+  e.poses = value_or("--poses", e.poses);
   p.reject_unknown();
+  if (e.poses != "perturbed" && e.poses != "colmap")
+    throw std::invalid_argument("--poses must be perturbed or colmap, got '" + e.poses + "'");
   if (!e.sim_seed.empty() && e.sim_seed.find_first_not_of("0123456789") != std::string::npos)
     throw std::invalid_argument("--sim-seed needs a non-negative integer, got '" + e.sim_seed + "'");
   for (auto& s : p.positional()) {
@@ -158,6 +164,7 @@ nlohmann::json ExperimentPlan::to_json() const {
           {"sim_seed", sim_seed},
           {"device", device},
           {"baseline_pose_refine", baseline_pose_refine},
+          {"poses", poses},
           {"overrides", overrides}};
 }
 
@@ -180,6 +187,7 @@ ExperimentPlan ExperimentPlan::read(const fs::path& dir) {
     j.at("sim_seed").get_to(e.sim_seed), j.at("device").get_to(e.device);
     j.at("baseline_pose_refine").get_to(e.baseline_pose_refine);
     j.at("overrides").get_to(e.overrides);
+    e.poses = j.value("poses", std::string("perturbed"));
   } catch (const std::exception& ex) { throw std::runtime_error(path.string() + ": " + ex.what()); }
   e.out = fs::absolute(dir);  // the folder it was read from (it may have moved since)
   return e;
@@ -203,8 +211,12 @@ std::string ExperimentPlan::simulate_command(const std::string& self, size_t si,
          shell_quote(noise_trans) + " --seed " + s.seed + device_option(device);
 }
 
+std::string ExperimentPlan::poses_command(const std::string& self, size_t si, const fs::path& dest) const {
+  return shell_quote(self) + " poses " + shell_quote(data_dir(si).string()) + " --out " + shell_quote(dest.string());
+}
+
 std::string ExperimentPlan::train_command(const std::string& self, size_t si, const std::string& m) const {
-  std::string cmd = shell_quote(self) + " train " + shell_quote(data_dir(si).string()) + " --out " +
+  std::string cmd = shell_quote(self) + " train " + shell_quote(train_data_dir(si).string()) + " --out " +
                     shell_quote(run_dir(si, m).string()) + " --preset " + shell_quote(preset) +
                     " method=" + shell_quote(m);
   if (baseline_pose_refine && (m == "plain" || m == "edi")) cmd += " pose_refine=true";  // before the overrides
@@ -226,6 +238,7 @@ std::string ExperimentPlan::job_line(const std::string& self, size_t si, const s
                      shell_quote(noise_rot) + " --pose-noise-trans " + shell_quote(noise_trans);
   if (!sim_seed.empty()) line += " --sim-seed " + sim_seed;
   if (!baseline_pose_refine) line += " --no-baseline-pose-refine";
+  if (poses != "perturbed") line += " --poses " + shell_quote(poses);
   line += device_option(device);
   for (auto& kv : overrides) line.append(" ").append(shell_quote(kv));
   return line;

@@ -25,8 +25,9 @@ struct ExperimentPlan {
   std::vector<std::string> methods;
   std::string width = "173", height = "130", preset = "fast", refine_iters = "30";
   std::string noise_rot = "0.4", noise_trans = "0.01";
-  std::string sim_seed;  // "" when every scene has its own
-  std::string device;    // passed on to every step ("" : the default device)
+  std::string poses = "perturbed";  // or "colmap": train on `evflow poses` of the simulated data
+  std::string sim_seed;             // "" when every scene has its own
+  std::string device;               // passed on to every step ("" : the default device)
   bool baseline_pose_refine = true;
   std::vector<std::string> overrides;  // key=value for every run
 
@@ -40,11 +41,16 @@ struct ExperimentPlan {
   void write() const;
 
   std::filesystem::path data_dir(size_t scene) const { return out / scenes[scene].label / "data"; }
+  // What the methods train on: the simulated data, or their COLMAP-posed copy.
+  std::filesystem::path train_data_dir(size_t scene) const {
+    return poses == "colmap" ? out / scenes[scene].label / "data_colmap" : data_dir(scene);
+  }
   std::filesystem::path run_dir(size_t scene, const std::string& method) const {
-    return out / scenes[scene].label / method;
+    return poses == "colmap" ? out / scenes[scene].label / "colmap" / method : out / scenes[scene].label / method;
   }
   // The steps' command lines, `self` being the evflow binary.
   std::string simulate_command(const std::string& self, size_t scene, const std::filesystem::path& data) const;
+  std::string poses_command(const std::string& self, size_t scene, const std::filesystem::path& out) const;
   std::string train_command(const std::string& self, size_t scene, const std::string& method) const;
   std::string eval_command(const std::string& self, size_t scene, const std::string& method) const;
   // One self-contained line that does one (scene, method) run: `evflow experiment --job ...`.

@@ -10,10 +10,19 @@
 #include <string>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include "io/image.h"
 
 namespace evflow::test {
+
+// An empty folder <tmp>/<name>_<pid> (removed first if it exists).
+inline std::filesystem::path fresh_dir(const std::string& name) {
+  const std::filesystem::path d = std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
 
 // build/evflow, next to build/tests/evflow_tests.
 inline std::filesystem::path evflow_binary() {

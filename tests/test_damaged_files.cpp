@@ -19,15 +19,9 @@
 using namespace evflow;
 namespace fs = std::filesystem;
 using Catch::Contains;
+using evflow::test::fresh_dir;
 
 namespace {
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
 
 void write_bytes(const fs::path& p, const std::string& s) {
   std::ofstream f(p, std::ios::binary);

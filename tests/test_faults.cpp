@@ -28,13 +28,6 @@ extern char** environ;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
 const std::string kSim = "simulate --scene gallery --out data --width 32 --height 24 --blur-px 3";
 const std::string kKeys =
     " init_gaussians=300 max_gaussians=600 sh_degree=1 virtual_frames=2 method=blur-only checkpoint_every=1 "

@@ -36,13 +36,6 @@ void expect_ok(const fs::path& dir, const std::string& args) {
   REQUIRE(rc == 0);
 }
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 }  // namespace
 
 TEST_CASE("render: a PLY from a camera file gives the engine's own render, byte for byte", "[render][gpu]") {

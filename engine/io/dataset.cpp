@@ -23,6 +23,12 @@ const Format kFormats[] = {
        return fs::exists(d / "dataset.json", ec);
      },
      [](const fs::path& d, const LoadOptions&) { return detail::load_evflow(d); }},
+    {"recording",
+     [](const fs::path& d) {
+       std::error_code ec;
+       return fs::exists(d / "recording.json", ec);
+     },
+     [](const fs::path& d, const LoadOptions&) { return detail::load_recording(d); }},
     {"ebad",
      [](const fs::path& d) {
        std::error_code ec;
@@ -56,10 +62,10 @@ Dataset load_dataset(const fs::path& dir, const LoadOptions& opt) {
   if (!fs::is_directory(dir, ec)) detail::fail(dir, "dataset folder is missing");
   for (const Format& f : kFormats)
     if (f.detect(dir)) return f.read(dir, opt);
-  detail::fail(
-      dir,
-      "unrecognised dataset layout: expected dataset.json (EvFlow), events.npy (EBAD-NeRF), events/ + gt/ (E3NeRF), "
-      "transforms_train.json (NeRF-synthetic) or images/ + poses_bounds.npy (LLFF)");
+  detail::fail(dir,
+               "unrecognised dataset layout: expected dataset.json (EvFlow), recording.json (a recording without "
+               "poses), events.npy (EBAD-NeRF), events/ + gt/ (E3NeRF), "
+               "transforms_train.json (NeRF-synthetic) or images/ + poses_bounds.npy (LLFF)");
 }
 
 }  // namespace evflow::io

@@ -25,7 +25,7 @@ struct View {
 };
 
 struct Dataset {
-  std::string layout;       // "evflow", "e3nerf" or "ebad"
+  std::string layout;       // "evflow", "recording", "e3nerf", "ebad", "llff", "nerf_synthetic"
   std::vector<View> train;  // blurry training views
   std::vector<View> novel;  // test views: camera + sharp image (sharp_mid)
   EventStream events;       // t in seconds; empty for EBAD-NeRF
@@ -34,8 +34,11 @@ struct Dataset {
   std::vector<float> event_counts;
   std::vector<size_t> event_counts_shape;
   double near = 0, far = 0;  // scene depth bounds (min near, max far over all poses)
-  nlohmann::json manifest;   // our dataset.json, or a description of the foreign layout
-  std::string root;          // folder it was read from
+  // Optional sparse points (COLMAP's, from `evflow poses`): N x 6 floats, x y z in the poses'
+  // world frame and r g b as display sRGB in [0, 1]; `init=points` starts training from them.
+  std::vector<float> points;
+  nlohmann::json manifest;  // our dataset.json, or a description of the foreign layout
+  std::string root;         // folder it was read from
 };
 
 struct LoadOptions {
@@ -46,7 +49,8 @@ struct LoadOptions {
   int ebad_test_every = 8;
 };
 
-// Detects the layout of `dir` (dataset.json: ours; events.npy: EBAD-NeRF; events/ + gt/:
+// Detects the layout of `dir` (dataset.json: ours; recording.json: a recording, identity poses
+// until `evflow poses` gives it some; events.npy: EBAD-NeRF; events/ + gt/:
 // E3NeRF) and reads it. Throws std::runtime_error naming the offending file and what is wrong
 // (missing folder/file/view, image count vs poses rows, wrong image size, bad events, truncated
 // or malformed files).

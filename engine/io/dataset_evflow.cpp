@@ -19,13 +19,7 @@ Dataset load_evflow(const fs::path& dir) {
   Dataset ds;
   ds.layout = "evflow";
   ds.root = dir.string();
-  {
-    std::ifstream f(mpath);
-    if (!f) fail(mpath, "cannot open manifest");
-    try {
-      ds.manifest = json::parse(f);
-    } catch (const std::exception& e) { fail(mpath, std::string("malformed JSON: ") + e.what()); }
-  }
+  ds.manifest = read_json_file(mpath);
   const json& m = ds.manifest;
   try {
     const json& res = get(m, "resolution", mpath, "manifest");
@@ -105,6 +99,12 @@ Dataset load_evflow(const fs::path& dir) {
         fail(cpath, "event counts must have shape [training views, bins, H*W]");
       ds.event_counts = a.to_float();
       ds.event_counts_shape = a.shape;
+    }
+    if (m.contains("points") && !m["points"].is_null()) {
+      const fs::path ppath = dir / m["points"].get<std::string>();
+      NpyArray a = read_npy(ppath);
+      if (a.shape.size() != 2 || a.shape[1] != 6) fail(ppath, "sparse points must have shape [N, 6] (x y z r g b)");
+      ds.points = a.to_float();
     }
   } catch (const json::exception& e) { fail(mpath, std::string("malformed manifest: ") + e.what()); }
   return ds;

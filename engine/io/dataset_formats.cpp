@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <stdexcept>
 
 namespace evflow::io::detail {
@@ -91,6 +92,14 @@ void set_bounds(Dataset& ds, const PosesBounds& pb) {
   if (pb.near.empty()) return;
   ds.near = *std::min_element(pb.near.begin(), pb.near.end());
   ds.far = *std::max_element(pb.far.begin(), pb.far.end());
+}
+
+json read_json_file(const fs::path& p) {
+  std::ifstream f(p);
+  if (!f) fail(p, "cannot open manifest");
+  try {
+    return json::parse(f);
+  } catch (const std::exception& e) { fail(p, std::string("malformed JSON: ") + e.what()); }
 }
 
 const json& get(const json& j, const char* key, const fs::path& file, const std::string& where) {

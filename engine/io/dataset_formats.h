@@ -19,6 +19,7 @@ Dataset load_e3nerf(const std::filesystem::path& dir, const LoadOptions& opt);
 Dataset load_ebad(const std::filesystem::path& dir, const LoadOptions& opt);
 Dataset load_llff_sharp(const std::filesystem::path& dir, const LoadOptions& opt);
 Dataset load_nerf_synthetic(const std::filesystem::path& dir);
+Dataset load_recording(const std::filesystem::path& dir);
 
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what);
 bool is_image_file(const std::filesystem::path& p);
@@ -33,6 +34,8 @@ Image load_view_image(const std::filesystem::path& p, uint32_t w, uint32_t h);
 void fit_camera_to_image(Camera& cam, uint32_t w, uint32_t h, const std::filesystem::path& poses, size_t row,
                          const std::filesystem::path& image);
 void set_bounds(Dataset& ds, const PosesBounds& pb);
+// The JSON document in `p`, failing with `p` when it cannot be opened or parsed.
+nlohmann::json read_json_file(const std::filesystem::path& p);
 // j[key], failing with `file` and `where` when missing.
 const nlohmann::json& get(const nlohmann::json& j, const char* key, const std::filesystem::path& file,
                           const std::string& where);

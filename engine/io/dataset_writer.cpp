@@ -112,6 +112,13 @@ void write_evflow_dataset(const Dataset& ds, const fs::path& dir, const WriteOpt
   } else {
     m.erase("event_counts");
   }
+  if (!ds.points.empty()) {
+    if (ds.points.size() % 6) throw bad(dir, "points must be x y z r g b per point");
+    write_npy(dir / "points3D.npy", {ds.points.size() / 6, 6}, ds.points);
+    m["points"] = "points3D.npy";
+  } else {
+    m.erase("points");
+  }
   const std::string text = m.dump(2) + "\n";
   write_file_atomic(dir / "dataset.json", [&](const fs::path& tmp) {
     std::ofstream f(tmp, std::ios::binary);

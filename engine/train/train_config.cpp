@@ -91,6 +91,8 @@ struct Codec<FlowSource> : EnumCodec<FlowSource, flow_source_name, FlowSource::E
 template <>
 struct Codec<TrainTarget>
     : EnumCodec<TrainTarget, target_name, TrainTarget::Blurry, TrainTarget::Sharp, TrainTarget::Edi> {};
+template <>
+struct Codec<InitSource> : EnumCodec<InitSource, init_name, InitSource::Random, InitSource::Points> {};
 
 // Enums are written by name, everything else as its JSON number, bool or array.
 template <typename T>
@@ -140,6 +142,10 @@ std::vector<Setting> run_settings() {
        "and before the other keys of a config file; on "
        "the command line, in order"},
       field("iterations", &TrainConfig::iterations, "optimisation steps, one training view per step"),
+      field("init", &TrainConfig::init,
+            "what the Gaussians start from: `random` (`init_gaussians` of them, below) or `points` (one per sparse "
+            "point of the dataset, `points3D.npy` from `evflow poses`: its colour, a scale from its 3 nearest "
+            "neighbours)"),
       field("init_gaussians", &TrainConfig::init_gaussians,
             "random Gaussians seeded in the training views' frustums between near and far, coloured from their pixel"),
       field("seed", &TrainConfig::seed, "initialisation and view order"),
@@ -332,6 +338,7 @@ std::string display_text(const nlohmann::json& v) {
 }  // namespace
 
 const char* loss_space_name(LossSpace s) { return s == LossSpace::Linear ? "linear" : "srgb"; }
+const char* init_name(InitSource s) { return s == InitSource::Random ? "random" : "points"; }
 const char* mode_name(TrainMode m) { return m == TrainMode::Plain ? "plain" : "blur"; }
 const char* flow_source_name(FlowSource f) { return f == FlowSource::Events ? "events" : "gt"; }
 const char* target_name(TrainTarget t) {

@@ -10,7 +10,7 @@
 
 namespace evflow {
 
-// The values of the keys loss_space, mode and target (their settings-table entries say what
+// The values of the keys loss_space, mode, target and init (their settings-table entries say what
 // each value does); the name functions give the keys' text.
 enum class LossSpace { Linear, Srgb };
 const char* loss_space_name(LossSpace s);
@@ -20,6 +20,8 @@ enum class TrainTarget { Blurry, Sharp, Edi };
 const char* target_name(TrainTarget t);
 enum class FlowSource { Events, Gt };
 const char* flow_source_name(FlowSource f);
+enum class InitSource { Random, Points };
+const char* init_name(InitSource s);
 
 // One setting as `evflow train --keys` and docs/training.md show it.
 struct SettingDoc {
@@ -34,6 +36,7 @@ struct SettingDoc {
 struct TrainConfig {
   std::string preset = "fast";
   uint32_t iterations = 1500;
+  InitSource init = InitSource::Random;
   uint32_t init_gaussians = 20000;
   int sh_degree = 3;
   uint32_t sh_increase_every = 500;

@@ -59,6 +59,11 @@ std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainC
     if (e.contains("theta_pos") && e["theta_pos"].is_number()) pos = e["theta_pos"].get<double>();
     if (e.contains("theta_neg") && e["theta_neg"].is_number()) neg = e["theta_neg"].get<double>();
   }
+  if (m.is_object() && m.contains("event_thresholds") && m["event_thresholds"].is_array() &&
+      m["event_thresholds"].size() == 2) {  // a recording's [pos, neg]
+    pos = m["event_thresholds"][0].get<double>();
+    neg = m["event_thresholds"][1].get<double>();
+  }
   if (cfg.event_theta_pos > 0) pos = cfg.event_theta_pos;
   if (cfg.event_theta_neg > 0) neg = cfg.event_theta_neg;
   return {pos, neg};
@@ -101,8 +106,58 @@ std::vector<std::vector<float>> warped_event_planes(const io::Dataset& data, con
   return out;
 }
 
+namespace {
+
+// The mean distance from point i to its 3 nearest other points (brute force).
+double neighbour_distance(const std::vector<float>& pts, size_t i) {
+  const size_t n = pts.size() / 6;
+  double best[3] = {1e300, 1e300, 1e300};
+  for (size_t j = 0; j < n; ++j) {
+    if (j == i) continue;
+    double d = 0;
+    for (int k = 0; k < 3; ++k) d += double(pts[j * 6 + k] - pts[i * 6 + k]) * double(pts[j * 6 + k] - pts[i * 6 + k]);
+    if (d < best[2]) {
+      best[2] = d;
+      std::sort(best, best + 3);
+    }
+  }
+  double sum = 0;
+  int used = 0;
+  for (double b : best)
+    if (b < 1e300) sum += std::sqrt(b), ++used;
+  return used ? sum / used : 0;
+}
+
+// One Gaussian per sparse point: its position and colour, isotropic with the mean distance to its
+// 3 nearest neighbours as scale, opacity 0.1.
+GaussianCloud points_cloud(const io::Dataset& data, const TrainConfig& cfg) {
+  const size_t n = data.points.size() / 6;
+  if (n < 4)
+    throw std::invalid_argument("init=points: the dataset in '" + data.root +
+                                "' has no sparse points (points3D.npy, written by `evflow poses`)");
+  GaussianCloud c;
+  c.resize(n, cfg.sh_degree);
+  const int K = c.coeffs();
+  for (size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) c.means[i * 3 + k] = data.points[i * 6 + k];
+    const float ls = float(std::log(std::max(neighbour_distance(data.points, i), 1e-7)));
+    for (int k = 0; k < 3; ++k) c.log_scales[i * 3 + k] = ls;
+    c.quats[i * 4] = 1;
+    c.quats[i * 4 + 1] = c.quats[i * 4 + 2] = c.quats[i * 4 + 3] = 0;
+    c.opacity_logits[i] = float(std::log(0.1 / 0.9));
+    for (int ch = 0; ch < 3; ++ch) {
+      c.sh[(i * K) * 3 + ch] = float((data.points[i * 6 + 3 + ch] - 0.5) / 0.28209479177387814);
+      for (int k = 1; k < K; ++k) c.sh[(i * K + k) * 3 + ch] = 0;
+    }
+  }
+  return c;
+}
+
+}  // namespace
+
 GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg) {
   if (data.train.empty()) throw std::invalid_argument("dataset has no training views");
+  if (cfg.init == InitSource::Points) return points_cloud(data, cfg);
   std::mt19937_64 rng(cfg.seed * 7919 + 17);
   auto uni = [&](double a, double b) { return a + (b - a) * (double(rng() >> 11) * (1.0 / 9007199254740992.0)); };
   const double near = data.near > 0 ? data.near : 0.5, far = data.far > near ? data.far : near * 20;

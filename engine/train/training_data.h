@@ -35,7 +35,8 @@ std::vector<std::vector<float>> warped_event_planes(const io::Dataset& data, con
                                                     const std::vector<std::vector<std::vector<float>>>& flows);
 
 // Random Gaussians inside the training views' frustums between the near and far bounds, coloured
-// from the pixel they were seeded on.
+// from the pixel they were seeded on; with init=points, one Gaussian per sparse point of the
+// dataset (throws when it has none).
 GaussianCloud initial_cloud(const io::Dataset& data, const TrainConfig& cfg);
 
 }  // namespace evflow
