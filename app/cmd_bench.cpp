@@ -8,6 +8,8 @@
 #include "cli.h"
 #include "flow/flow_estimator.h"
 #include "gpu/commands.h"
+#include "io/camera_json.h"
+#include "run_files.h"
 #include "splat/rasterizer.h"
 #include "splat/synthetic.h"
 #include "train/synthetic_dataset.h"
@@ -20,10 +22,25 @@ static double median(std::vector<double> v) {
   return v.empty() ? 0 : v[v.size() / 2];
 }
 
-static int bench_raster(ArgParser& p) {
+// The bench scene: the first camera of --camera (its size and intrinsics) or a 60-degree camera
+// of --width x --height; the splats of --splats (a run, .ply or .glb) or N synthetic Gaussians in
+// front of that camera.
+static std::pair<Camera, GaussianCloud> raster_scene(ArgParser& p) {
   const uint32_t W = uint32_t(p.integer("--width", 346)), H = uint32_t(p.integer("--height", 260));
   const size_t N = size_t(p.integer("--gaussians", 100000));
   const int degree = int(p.integer("--sh-degree", 3));
+  const std::string camera_file = p.value("--camera"), splats = p.value("--splats");
+  Camera cam = camera_file.empty() ? Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 1}, {0, -1, 0})
+                                   : io::read_cameras_json(camera_file).at(0);
+  GaussianCloud cloud = splats.empty() ? synthetic_cloud(1, N, degree, cam) : load_splats(splats);
+  return {cam, std::move(cloud)};
+}
+
+static int bench_raster(ArgParser& p) {
+  const auto [cam, cloud] = raster_scene(p);
+  const uint32_t W = cam.width, H = cam.height;
+  const size_t N = cloud.size();
+  const int degree = cloud.sh_degree;
   const int repeats = int(p.integer("--repeats", 10));
   const int warmup = int(p.integer("--warmup", 2));
   const bool json = p.flag("--json");
@@ -31,8 +48,6 @@ static int bench_raster(ArgParser& p) {
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   gpu::Context ctx(o);
-  Camera cam = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 1}, {0, -1, 0});
-  GaussianCloud cloud = synthetic_cloud(1, N, degree, cam);
   GaussianBuffers params(ctx, N, degree, "p_"), grads(ctx, N, degree, "v_");
   params.upload(cloud);
   const size_t hw = size_t(W) * H;
@@ -216,12 +231,15 @@ static int run_bench(const Args& a) {
   if (p.flag("--help") || pos.empty()) {
     std::printf(
         "usage: evflow bench raster [--width 346] [--height 260] [--gaussians 100000] [--sh-degree 3]\n"
+        "                           [--camera cams.json] [--splats RUN|F.ply|F.glb]\n"
         "                           [--repeats 10] [--warmup 2] [--antialiased] [--json] [--device N|name]\n"
-        "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians).\n"
+        "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians), on\n"
+        "  synthetic Gaussians in front of a 60-degree camera, or from the first camera of a camera file\n"
+        "  (as evflow render --camera reads; its size replaces --width/--height), of the given splats.\n"
         "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--views 8] "
         "[--json]\n"
-        "                          [--data DIR --method plain|edi|blur-only|blur+events|blur+events+warp] [key=value "
-        "...]\n"
+        "                          [--data DIR --method plain|edi|blur-only|blur+events|blur+events+warp|\n"
+        "                          blur+events+flow] [key=value ...]\n"
         "  Training steps (render, loss terms, backward, Adam): it/s and the split per part. With --data,\n"
         "  the steps train that dataset with the method (blur modes: 2N+1 renders per step).\n"
         "       evflow bench flow --data DIR [--views N] [--json]\n"

@@ -73,7 +73,8 @@ std::string ExperimentPlan::help() {
   std::snprintf(
       buf, sizeof buf,
       "usage: evflow experiment --out DIR [--scenes %s] [--blur-px B,...]\n"
-      "         [--width 173] [--height 130] [--methods plain,edi,blur-only,blur+events(,blur+events+warp)] [--preset "
+      "         [--width 173] [--height 130] [--methods "
+      "plain,edi,blur-only,blur+events(,blur+events+warp,blur+events+flow)] [--preset "
       "fast]\n"
       "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device "
       "N|name]\n"

@@ -86,6 +86,17 @@ TEST_CASE("render: a PLY from a camera file gives the engine's own render, byte 
   CHECK(out.find("exclude") != std::string::npos);
   CHECK(run_evflow(dir, "render s.ply --path exposure --out r4", out) != 0);
   CHECK(out.find("training run folder") != std::string::npos);
+
+  // The same camera file and splats feed the rasterizer benchmark: its first camera's size, the
+  // file's Gaussians, and the intersections of that very view.
+  REQUIRE(run_evflow(dir, "bench raster --camera cams.json --splats s.ply --repeats 1 --warmup 0 --json", out) == 0);
+  const nlohmann::json b = nlohmann::json::parse(out.substr(out.find('{')));
+  CHECK(b["width"] == c0.width);
+  CHECK(b["height"] == c0.height);
+  CHECK(b["gaussians"] == cloud.size());
+  CHECK(b["sh_degree"] == cloud.sh_degree);
+  RenderState st0 = r.forward(params, c0, RenderSettings{});
+  CHECK(b["intersections"] == st0.num_intersections());
 }
 
 TEST_CASE("render: a run's exposure path, its mid-exposure frame being the image eval scores", "[render][gpu]") {
