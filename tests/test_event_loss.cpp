@@ -4,15 +4,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <numeric>
 #include <random>
 
+#include <unistd.h>
+
 #include "camera/trajectory.h"
+#include "cli_helpers.h"
 #include "events/event_model.h"
 #include "events/gpu_events.h"
 #include "gpu/commands.h"
 #include "gpu_fixture.h"
 #include "loss/event_loss.h"
+#include "plot/curve_plot.h"
 #include "reference/event_reference.h"
 
 using namespace evflow;
@@ -85,9 +90,11 @@ Run run_gpu(const EventStream& ev, const std::vector<std::vector<float>>& frames
   return r;
 }
 
-void check_against_reference(const EventStream& ev, const std::vector<std::vector<float>>& frames, uint64_t seed) {
+void check_against_reference(const EventStream& ev, const std::vector<std::vector<float>>& frames, uint64_t seed,
+                             uint32_t pool = 1) {
   EventLossOptions opt;
   opt.theta_pos = 0.2f, opt.theta_neg = 0.3f;
+  opt.pool = pool;
   const float weight = 0.7f;
   Run r = run_gpu(ev, frames, opt, weight, seed);
 
@@ -99,6 +106,7 @@ void check_against_reference(const EventStream& ev, const std::vector<std::vecto
   host_counts(ev, f, in);
   in.pairs = r.pairs;
   in.theta_pos = opt.theta_pos, in.theta_neg = opt.theta_neg, in.eps = opt.eps, in.norm_floor_rms = opt.norm_floor_rms;
+  in.pool = pool;
   const double ref_value = reference::event_loss(in);
   INFO("gpu " << r.value << " reference " << ref_value);
   REQUIRE(std::abs(r.value - ref_value) <= 1e-4 * std::max(1.0, ref_value));
@@ -165,6 +173,10 @@ TEST_CASE("event loss value and frame gradients match the double reference (fini
     check_against_reference(ev, random_frames(W, H, 7, 12, true), 18);
   }
   SECTION("five frames (N = 2)") { check_against_reference(ev, random_frames(W, H, 5, 13, false), 19); }
+  SECTION("pooled over 5 x 5 cells, the last ones cut by the border") {
+    check_against_reference(ev, random_frames(W, H, 7, 14, false), 20, 5);
+  }
+  SECTION("pooled over 2 x 2 cells") { check_against_reference(ev, random_frames(W, H, 5, 15, false), 21, 2); }
   test::require_no_validation_messages();
 }
 
@@ -270,4 +282,50 @@ TEST_CASE(
   CHECK(loss.count_passes() == 2);
   CHECK(loss.value() == Approx(forward1).epsilon(1e-6));
   test::require_no_validation_messages();
+}
+
+TEST_CASE("event terms in training: event_weight_end fades them after the direction check, event_pool sums cells",
+          "[events][train][gpu]") {
+  namespace fs = std::filesystem;
+  REQUIRE(fs::exists(test::evflow_binary()));
+  const fs::path dir = fs::temp_directory_path() / ("evflow_event_schedule_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string out;
+  REQUIRE(test::run_evflow(dir,
+                           "simulate --scene objects --out sim --width 40 --height 30 --seed 2 --train-views 3 "
+                           "--novel-views 1",
+                           out) == 0);
+  auto train = [&](const std::string& run, const std::string& keys) {
+    const std::string a = "train sim --out " + run +
+                          " method=blur+events event_from=0 event_flip_until=0.5 iterations=10 init_gaussians=300 "
+                          "max_gaussians=600 sh_degree=0 " +
+                          keys;
+    const int rc = test::run_evflow(dir, a, out);
+    INFO(a << "\n" << out);
+    REQUIRE(rc == 0);
+    return plot::read_curve_csv(dir / run / "curve.csv");
+  };
+  // The logged total is l1_ssim + 0.1 * f(step) * events: f = 1 up to step 5, then 1 - 0.75 (s - 5) / 5.
+  const plot::CurveTable t = train("fade", "event_weight_end=0.25");
+  const int loss = t.column("loss"), image = t.column("l1_ssim"), events = t.column("events"), step = t.column("step");
+  REQUIRE(t.rows.size() == 10);
+  for (const auto& r : t.rows) {
+    const double s = r[size_t(step)], f = s <= 5 ? 1.0 : 1.0 - 0.75 * (s - 5) / 5;
+    INFO("step " << s);
+    REQUIRE(r[size_t(events)] > 0.0);
+    CHECK(r[size_t(loss)] == Approx(r[size_t(image)] + 0.1 * f * r[size_t(events)]).epsilon(1e-4));
+  }
+  // Pooled: a different event value on the same first step (the renders are the same), no lower
+  // than 0 and below 4.
+  const plot::CurveTable p1 = train("pool1", ""), p3 = train("pool3", "event_pool=3");
+  const double e1 = p1.rows[0][size_t(events)], e3 = p3.rows[0][size_t(events)];
+  INFO("first-step event loss per pixel " << e1 << ", over 3 x 3 cells " << e3);
+  CHECK(p1.rows[0][size_t(image)] == p3.rows[0][size_t(image)]);
+  CHECK(std::abs(e1 - e3) > 1e-3);
+  CHECK(e3 > 0.0);
+  CHECK(e3 < 4.0);
+  CHECK(test::run_evflow(dir, "train sim --out bad2 method=blur+events event_pool=0 iterations=2", out) != 0);
+  CHECK(out.find("pool must be in 1..64") != std::string::npos);
+  fs::remove_all(dir);
 }

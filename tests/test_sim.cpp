@@ -525,7 +525,7 @@ TEST_CASE("sim dataset: the written dataset loads back", "[sim][gpu]") {
   test::require_no_validation_messages();
 }
 
-TEST_CASE("built-in scenes: the default room with other textures, unknown names refused", "[sim]") {
+TEST_CASE("built-in scenes: the default room with other textures, the objects scene, unknown names refused", "[sim]") {
   const sim::Scene def = sim::make_builtin_scene("default");
   for (const char* name : {"gallery", "workshop"}) {
     const sim::Scene s = sim::make_builtin_scene(name);
@@ -536,7 +536,15 @@ TEST_CASE("built-in scenes: the default room with other textures, unknown names 
     for (size_t i = 0; i < s.textures.size(); ++i) differ += s.textures[i].rgba != def.textures[i].rgba;
     CHECK(differ >= 5);  // most surfaces look different
   }
-  REQUIRE(sim::builtin_scene_names().size() == 3);
+  // objects: textured boxes on surfaces without texture.
+  const sim::Scene obj = sim::make_builtin_scene("objects");
+  REQUIRE(obj.source == "objects");
+  int plain = 0, textured = 0;
+  for (const auto& m : obj.materials) (m.texture < 0 ? plain : textured)++;
+  CHECK(plain >= 3);
+  CHECK(textured >= 2);
+  CHECK(sim::builtin_scene_blur_px("objects") == 8);
+  REQUIRE(sim::builtin_scene_names() == std::vector<std::string>{"default", "gallery", "workshop", "objects"});
   REQUIRE_THROWS_WITH(sim::make_builtin_scene("atrium"), Catch::Contains("unknown built-in scene 'atrium'"));
 }
 

@@ -35,11 +35,13 @@ struct Run {
 // Records the term once on planar RGB frames; gradients start at a known pattern so that "adds
 // into" is checked too.
 Run run_gpu(uint32_t W, uint32_t H, const std::vector<std::vector<float>>& frames, const std::vector<float>& planes,
-            float weight) {
+            float weight, uint32_t pool = 1) {
   auto& ctx = test::gpu_context();
   const uint32_t F = uint32_t(frames.size());
   const size_t n = frames[0].size();
-  WarpedEventLoss loss(ctx, W, H, {planes}, weight);
+  WarpedEventOptions opt;
+  opt.pool = pool;
+  WarpedEventLoss loss(ctx, W, H, {planes}, weight, opt);
   std::vector<gpu::Buffer> rgb, grad;
   std::vector<float> init(n);
   for (size_t i = 0; i < n; ++i) init[i] = 0.01f * float(i % 7);
@@ -82,10 +84,11 @@ reference::WarpedEventInputs reference_inputs(uint32_t W, uint32_t H, const std:
 }
 
 void check_against_reference(uint32_t W, uint32_t H, const std::vector<std::vector<float>>& frames,
-                             const std::vector<float>& planes, uint32_t seed) {
+                             const std::vector<float>& planes, uint32_t seed, uint32_t pool = 1) {
   const float weight = 0.7f;
-  const Run r = run_gpu(W, H, frames, planes, weight);
+  const Run r = run_gpu(W, H, frames, planes, weight, pool);
   reference::WarpedEventInputs in = reference_inputs(W, H, frames, planes);
+  in.pool = pool;
   const double ref_value = reference::warped_event_loss(in);
   INFO("gpu " << r.value << " reference " << ref_value);
   REQUIRE(std::abs(r.value - ref_value) <= 1e-4 * std::max(1.0, ref_value));
@@ -185,6 +188,12 @@ TEST_CASE("warped-event loss value and frame gradients match the double referenc
     auto frames = random_frames(W, H, 5, 13, true);
     for (size_t k = 0; k < frames[2].size(); k += 5) frames[2][k] = 0.51f;  // a few tiny edges
     check_against_reference(W, H, frames, random_planes(W, H, 4, 5), 19);
+  }
+  SECTION("pooled over 3 x 3 cells, the last ones cut by the border") {
+    check_against_reference(W, H, random_frames(W, H, 7, 14, false), random_planes(W, H, 6, 6), 20, 3);
+  }
+  SECTION("pooled over 4 x 4 cells") {
+    check_against_reference(W, H, random_frames(W, H, 5, 15, false), random_planes(W, H, 4, 7), 21, 4);
   }
   test::require_no_validation_messages();
 }

@@ -20,6 +20,7 @@ EventLoss::EventLoss(gpu::Context& ctx, const IntervalEvents& events, float weig
     throw std::invalid_argument("event loss: thresholds must be > 0");
   if (!(options.eps > 0)) throw std::invalid_argument("event loss: eps must be > 0");
   if (!(options.norm_floor_rms > 0)) throw std::invalid_argument("event loss: norm_floor_rms must be > 0");
+  check_event_pool(options.pool, "event loss");
 }
 
 std::vector<std::pair<uint32_t, uint32_t>> EventLoss::sample_pairs(uint32_t frames, uint64_t seed) {
@@ -55,9 +56,11 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
                                   " buffers hold less than 3 x H x W floats");
   const uint32_t intervals = F - 1;
   const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
+  const uint64_t cells = event_pool_cells(f.width, f.height, options_.pool);
+  const uint32_t cell_groups = gpu::Commands::div_up(cells, shaderio::kLossGroupSize);
   counts_.ensure(uint64_t(intervals) * 2 * hw * 4);
-  scratch_.ensure(2 * hw * 4);
-  partials_.ensure(uint64_t(groups) * 16);
+  scratch_.ensure(2 * cells * 4);
+  partials_.ensure(uint64_t(cell_groups) * 16);
   sums_.ensure(uint64_t(intervals) * 16);
   ctx_.check_binding_size(uint64_t(intervals) * 2 * hw * 4, "event loss counts");
 
@@ -73,7 +76,7 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
   }
 
   pairs_ = sample_pairs(F, f.seed);
-  const gpu::Groups g = cmd.linear_groups(groups);
+  const gpu::Groups g = cmd.linear_groups(groups), gc = cmd.linear_groups(cell_groups);
   for (uint32_t q = 0; q < pairs_.size(); ++q) {
     const auto [s, j] = pairs_[q];
     shaderio::EventPairPC pc{};
@@ -91,18 +94,19 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     pc.value_index = value_offset();
     pc.pair = q;
     pc.counts_float = events_.float_planes() ? 1u : 0u;
+    pc.pool = options_.pool;
     cmd.dispatch("loss/event_pair",
                  {{shaderio::kEventPairBindCounts, counts_},
                   {shaderio::kEventPairBindFrameS, *f.rgb[s]},
                   {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
                   {shaderio::kEventPairBindScratch, scratch_},
                   {shaderio::kEventPairBindPartials, partials_}},
-                 pc, g);
+                 pc, gc);
     shaderio::ReducePC r{};
     r.coeff0 = glm::vec4(1, 0, 0, 0);
     r.coeff1 = glm::vec4(0, 1, 0, 0);
     r.coeff2 = glm::vec4(0, 0, 1, 0);
-    r.n_partials = groups;
+    r.n_partials = cell_groups;
     r.dst = 4 * q;
     r.n_out = 3;
     cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}}, r,

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "events/interval_events.h"
+#include "loss/event_pooling.h"
 #include "loss/loss_term.h"
 
 namespace evflow {
@@ -29,6 +30,7 @@ struct EventLossOptions {
   float theta_pos = 0.2f, theta_neg = 0.2f;  // log units per positive / negative event
   float eps = 1e-3f;                         // L = log(eps + Y), the event model's eps
   float norm_floor_rms = 1e-3f;              // per-pixel RMS below which a norm is floored
+  uint32_t pool = 1;                         // side of the pooling cells (loss/event_pooling.h)
 };
 
 class EventLoss : public ExposureLossTerm {

@@ -19,6 +19,7 @@ WarpedEventLoss::WarpedEventLoss(gpu::Context& ctx, uint32_t width, uint32_t hei
       sums_(ctx, 16, "warped_sums") {
   if (!(options.eps > 0)) throw std::invalid_argument("warped-event loss: eps must be > 0");
   if (!(options.norm_floor_rms > 0)) throw std::invalid_argument("warped-event loss: norm_floor_rms must be > 0");
+  check_event_pool(options.pool, "warped-event loss");
   const size_t hw = size_t(width) * height;
   if (planes.empty() || hw == 0) throw std::invalid_argument("warped-event loss: no views or an empty image");
   if (planes[0].size() % (3 * hw) != 0 || planes[0].empty())
@@ -33,9 +34,10 @@ WarpedEventLoss::WarpedEventLoss(gpu::Context& ctx, uint32_t width, uint32_t hei
     planes_.emplace_back(ctx, planes[v].size() * 4, "warped_planes");
     planes_.back().write(planes[v]);
   }
-  const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
-  scratch_ = gpu::Buffer(ctx, 2 * hw * 4, "warped_scratch");
-  partials_ = gpu::Buffer(ctx, uint64_t(groups) * 16, "warped_partials");
+  const uint64_t cells = event_pool_cells(width, height, options.pool);
+  scratch_ = gpu::Buffer(ctx, 2 * cells * 4, "warped_scratch");
+  partials_ =
+      gpu::Buffer(ctx, uint64_t(gpu::Commands::div_up(cells, shaderio::kLossGroupSize)) * 16, "warped_partials");
   sums_ = gpu::Buffer(ctx, uint64_t(intervals_) * 16, "warped_sums");
 }
 
@@ -57,7 +59,9 @@ void WarpedEventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float 
   check(f);
   const uint64_t hw = uint64_t(width_) * height_;
   const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
-  const gpu::Groups g = cmd.linear_groups(groups);
+  const uint32_t cell_groups =
+      gpu::Commands::div_up(event_pool_cells(width_, height_, options_.pool), shaderio::kLossGroupSize);
+  const gpu::Groups g = cmd.linear_groups(groups), gc = cmd.linear_groups(cell_groups);
   const gpu::Buffer& planes = planes_[f.view];
   for (uint32_t i = 0; i < intervals_; ++i) {
     shaderio::WarpedEventPC pc{};
@@ -70,17 +74,18 @@ void WarpedEventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float 
     pc.grad_scale = weight / float(intervals_);
     pc.value_scale = 1.0f / float(intervals_);
     pc.value_accumulate = i > 0 ? 1u : 0u;
+    pc.pool = options_.pool;
     cmd.dispatch("loss/warped_event",
                  {{shaderio::kWarpedEventBindPlanes, planes},
                   {shaderio::kWarpedEventBindFrame, *f.rgb[i + 1]},
                   {shaderio::kWarpedEventBindScratch, scratch_},
                   {shaderio::kWarpedEventBindPartials, partials_}},
-                 pc, g);
+                 pc, gc);
     shaderio::ReducePC r{};
     r.coeff0 = glm::vec4(1, 0, 0, 0);
     r.coeff1 = glm::vec4(0, 1, 0, 0);
     r.coeff2 = glm::vec4(0, 0, 1, 0);
-    r.n_partials = groups;
+    r.n_partials = cell_groups;
     r.dst = 4 * i;
     r.n_out = 3;
     cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}}, r,

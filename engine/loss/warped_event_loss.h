@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "loss/event_pooling.h"
 #include "loss/loss_term.h"
 
 namespace evflow {
@@ -24,6 +25,7 @@ namespace evflow {
 struct WarpedEventOptions {
   float eps = 1e-3f;             // L = log(eps + Y), the event model's eps
   float norm_floor_rms = 1e-3f;  // per-pixel RMS below which a norm is floored
+  uint32_t pool = 1;             // side of the pooling cells (loss/event_pooling.h)
 };
 
 class WarpedEventLoss : public ExposureLossTerm {

@@ -43,6 +43,36 @@ Scene make_room(const std::string& source, std::vector<Texture> textures) {
   return s;
 }
 
+// Three boxes (coarse checks, coarse bricks, one flat colour) on plain, untextured floor and walls:
+// large smooth regions that a model can fit almost exactly, so reconstructions here can go well
+// past the room scenes' scores.
+Scene make_objects_scene() {
+  Scene s;
+  s.source = "objects";
+  s.textures = {checker_texture(), brick_texture()};
+  auto mat = [&](const char* name, int tex, std::array<float, 4> f) {
+    s.materials.push_back(Material{name, f, tex});
+    return uint32_t(s.materials.size() - 1);
+  };
+  const uint32_t m_floor = mat("floor", -1, {0.32f, 0.3f, 0.28f, 1}),
+                 m_back = mat("backdrop", -1, {0.55f, 0.52f, 0.46f, 1}),
+                 m_side = mat("side", -1, {0.4f, 0.43f, 0.48f, 1}), m_checker = mat("checker", 0, {1, 1, 1, 1}),
+                 m_brick = mat("brick", 1, {1, 1, 1, 1}), m_blue = mat("blue", -1, {0.12f, 0.2f, 0.5f, 1});
+  s.add_quad({-4, -1, 3}, {4, -1, 3}, {4, -1, -4}, {-4, -1, -4}, m_floor);
+  s.add_quad({-4, -1, -4}, {4, -1, -4}, {4, 3, -4}, {-4, 3, -4}, m_back);
+  s.add_quad({-4, -1, 3}, {-4, -1, -4}, {-4, 3, -4}, {-4, 3, 3}, m_side);
+  s.add_quad({4, -1, -4}, {4, -1, 3}, {4, 3, 3}, {4, 3, -4}, m_side);
+  s.add_box({-2.2f, -1, -2.2f}, {-0.9f, 0.3f, -0.9f}, m_checker, 0.25f);
+  s.add_box({0.5f, -1, -2.8f}, {2.0f, 0.8f, -2.0f}, m_brick, 0.2f);
+  s.add_box({-0.3f, -1, -0.4f}, {0.6f, -0.3f, 0.5f}, m_blue);
+  s.has_view_hint = true;
+  s.view_target = {0, -0.3f, -1.2f};
+  s.view_radius = 4.5f;
+  s.view_height = 1.2f;
+  s.validate();
+  return s;
+}
+
 }  // namespace
 
 Scene make_default_scene() {
@@ -51,12 +81,13 @@ Scene make_default_scene() {
                     grating_texture(), dark_texture(), text_texture(2, 0.04, 0.9, {1.0, 0.85, 0.5})});
 }
 
-std::vector<std::string> builtin_scene_names() { return {"default", "gallery", "workshop"}; }
+std::vector<std::string> builtin_scene_names() { return {"default", "gallery", "workshop", "objects"}; }
 
 double builtin_scene_blur_px(const std::string& name) {
   if (name == "default") return 6;
   if (name == "gallery") return 4;
   if (name == "workshop") return 9;
+  if (name == "objects") return 8;
   throw std::invalid_argument("no built-in scene '" + name + "'");
 }
 
@@ -71,7 +102,8 @@ Scene make_builtin_scene(const std::string& name) {
   if (name == "workshop")
     return make_room("workshop", {brick_texture(), grating_texture(), checker_texture(), dark_texture(),
                                   checker_texture(), brick_texture(), noise_texture(31)});
-  throw std::invalid_argument("unknown built-in scene '" + name + "' (default, gallery, workshop)");
+  if (name == "objects") return make_objects_scene();
+  throw std::invalid_argument("unknown built-in scene '" + name + "' (default, gallery, workshop, objects)");
 }
 
 }  // namespace evflow::sim

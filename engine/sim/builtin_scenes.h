@@ -12,12 +12,14 @@ namespace evflow::sim {
 // Cameras look at it from +z. Deterministic.
 Scene make_default_scene();
 // Built-in scenes by name: "default" (the above) and two variants of its room with other
-// textures ("gallery": fine print and noise; "workshop": coarse bricks, gratings, dark corners).
+// textures ("gallery": fine print and noise; "workshop": coarse bricks, gratings, dark corners),
+// and "objects": three boxes (coarse checks, coarse bricks, a flat colour) on plain, untextured
+// floor and walls.
 Scene make_builtin_scene(const std::string& name);
 std::vector<std::string> builtin_scene_names();
 // The mean blur (pixels per exposure at 173 x 130) `evflow experiment` simulates a built-in scene
 // with unless told otherwise: default 6, gallery 4 (its fine print is unreadable beyond), workshop
-// 9 (coarse textures stay legible); throws for another name.
+// 9 (coarse textures stay legible), objects 8; throws for another name.
 double builtin_scene_blur_px(const std::string& name);
 
 }  // namespace evflow::sim

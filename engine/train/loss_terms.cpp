@@ -24,11 +24,11 @@ void LossTerms::record_image_terms(gpu::Commands& cmd, const ImageModel& m, cons
   }
 }
 
-void LossTerms::record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames) const {
-  for (auto& t : exposure_) t->record(cmd, frames);
+void LossTerms::record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames, double scale) const {
+  for (auto& t : exposure_) t->record(cmd, frames, float(t->weight() * scale));
 }
 
-LossValues LossTerms::read(bool exposure_recorded) const {
+LossValues LossTerms::read(bool exposure_recorded, double exposure_scale) const {
   LossValues out;
   for (size_t i = 0; i < all_.size(); ++i) {
     if (is_exposure_[i] && !exposure_recorded) {
@@ -37,7 +37,7 @@ LossValues LossTerms::read(bool exposure_recorded) const {
     }
     const double v = all_[i]->value();
     out.terms.push_back(v);
-    out.total += all_[i]->weight() * v;
+    out.total += all_[i]->weight() * (is_exposure_[i] ? exposure_scale : 1.0) * v;
     if (!std::isfinite(v) && !out.first_bad) out.first_bad = all_[i];
   }
   return out;

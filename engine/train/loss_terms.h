@@ -29,10 +29,12 @@ class LossTerms {
   // Image terms: d(loss)/d(prediction) into image_model.prediction_grad(), each frame's share
   // (1/mean_count of it) already applied.
   void record_image_terms(gpu::Commands& cmd, const ImageModel& image_model, const gpu::Buffer& target) const;
-  // Exposure terms add their per-frame gradients into frames.grad.
-  void record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames) const;
-  // After the submit: every term's value (exposure terms only when `exposure_recorded`).
-  LossValues read(bool exposure_recorded) const;
+  // Exposure terms add their per-frame gradients into frames.grad, each with its weight times
+  // `scale` (the run's schedule of the event terms; the weights themselves stay as set).
+  void record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames, double scale = 1.0) const;
+  // After the submit: every term's value (exposure terms only when `exposure_recorded`, counted
+  // in the total with their weight times `exposure_scale`).
+  LossValues read(bool exposure_recorded, double exposure_scale = 1.0) const;
 
  private:
   std::vector<std::unique_ptr<ImageLossTerm>> image_;

@@ -235,6 +235,15 @@ std::vector<Setting> event_settings() {
       field("event_flip_margin", &TrainConfig::event_flip_margin, "the margin of the direction check"),
       field("event_norm_floor", &TrainConfig::event_norm_floor,
             "per-pixel RMS below which the event loss holds a norm at its floor (static frame pairs)"),
+      field("event_pool", &TrainConfig::event_pool,
+            "side of the square cells (pixels) that both sides of the event losses (L_ev^gs, L_ev^w, the "
+            "direction check) are summed over before they are compared; 1: per pixel. Summing averages the events' "
+            "per-pixel error (threshold quantisation and spread, noise), which otherwise pulls a good model "
+            "towards a quantised target ([losses.md](losses.md))"),
+      field("event_weight_end", &TrainConfig::event_weight_end,
+            "the event terms' weights (L_ev^gs, L_ev^w) at the last step, as a fraction of `event_weight` and "
+            "`warp_weight`: they fall linearly to it from the end of the direction check (`event_flip_until`); "
+            "1: constant"),
       field("warp_weight", &TrainConfig::warp_weight,
             "λ of the warped-event loss L_ev^w (paper Eq. 6-7: each interval's events moved along its optical "
             "flow to the interval's end, against the frame's edges moved by the flow; [losses.md](losses.md)); "

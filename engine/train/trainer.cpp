@@ -109,10 +109,13 @@ void Trainer::upload_targets() {
 void Trainer::add_event_term() {
   if (cfg_.mode != TrainMode::Blur)
     throw std::invalid_argument("event_weight > 0 needs mode=blur (the event loss compares virtual frames)");
+  if (!(cfg_.event_weight_end >= 0))
+    throw std::invalid_argument("event_weight_end must be >= 0, got " + std::to_string(cfg_.event_weight_end));
   events_ = training_events(ctx_, data_);
   auto [pos, neg] = event_thresholds(data_, cfg_);
   EventLossOptions o;
   o.theta_pos = float(pos), o.theta_neg = float(neg), o.norm_floor_rms = float(cfg_.event_norm_floor);
+  o.pool = cfg_.event_pool;
   auto term = std::make_unique<EventLoss>(ctx_, *events_, float(cfg_.event_weight), o);
   direction_ = std::make_unique<DirectionCheck>(*term, uint32_t(cfg_.event_flip_until * cfg_.iterations),
                                                 cfg_.event_flip_margin);
@@ -146,6 +149,7 @@ void Trainer::add_warp_term(const std::vector<std::vector<std::vector<float>>>& 
   const auto planes = warped_event_planes(data_, cfg_, cameras_->frame_times(), flows);
   WarpedEventOptions o;
   o.norm_floor_rms = float(cfg_.event_norm_floor);
+  o.pool = cfg_.event_pool;
   add_loss(std::make_unique<WarpedEventLoss>(ctx_, data_.events.width, data_.events.height, planes,
                                              float(cfg_.warp_weight), o));
 }
@@ -220,7 +224,7 @@ void Trainer::record_exposure_terms(StepStats& st) {
     image_model_->frame_share(cmd_, i, frame_grad_[i]);
     ef.grad.push_back(&frame_grad_[i]);
   }
-  terms_.record_exposure_terms(cmd_, ef);
+  terms_.record_exposure_terms(cmd_, ef, event_schedule());
   if (check && direction_->prefers_reversed(cmd_)) {
     cameras_->flip(st.view);  // this step's gradients belong to the other direction: the flip is the update
     ++flips_;
@@ -228,8 +232,17 @@ void Trainer::record_exposure_terms(StepStats& st) {
   }
 }
 
+// The event terms' weight factor at this step: 1 until the direction check ends
+// (event_flip_until), then falling linearly to event_weight_end at the last step.
+double Trainer::event_schedule() const {
+  const double from = cfg_.event_flip_until * cfg_.iterations, to = cfg_.iterations;
+  if (cfg_.event_weight_end == 1.0 || double(step_) <= from || !(to > from)) return 1.0;
+  const double a = std::min(1.0, (double(step_) - from) / (to - from));
+  return 1.0 + a * (cfg_.event_weight_end - 1.0);
+}
+
 void Trainer::read_losses(StepStats& st, bool exposure_on) const {
-  LossValues v = terms_.read(exposure_on);
+  LossValues v = terms_.read(exposure_on, event_schedule());
   st.term_values = std::move(v.terms);
   st.loss = v.total;
   if (st.flipped || std::isfinite(st.loss)) return;

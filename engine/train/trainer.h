@@ -98,6 +98,7 @@ class Trainer {
   void record_losses(StepStats& st, bool exposure_on);
   void record_exposure_terms(StepStats& st);
   void read_losses(StepStats& st, bool exposure_on) const;
+  double event_schedule() const;
   void backward(uint32_t view, bool exposure_on);
 
   gpu::Context& ctx_;

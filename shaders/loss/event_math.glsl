@@ -11,6 +11,11 @@ vec3 event_log_luma_grad(vec3 rgb, float eps) {
   return y > 0.0 ? kEventLuma / (eps + y) : vec3(0.0);
 }
 
+// The pooling grid of a shader whose push constants `pc` hold width, height and pool: cells of
+// pool x pool pixels, the last row and column cut by the image border.
+uint event_cells_x() { return (pc.width + pc.pool - 1u) / pc.pool; }
+uint event_cells_y() { return (pc.height + pc.pool - 1u) / pc.pool; }
+
 // A pair's norms from its sums ED, DD, EE (norms below the floor are held at it).
 float event_norm(float sq, float floor2) { return sqrt(max(sq, floor2)); }
 // l = || E/nE - D/nD ||^2 from the sums.

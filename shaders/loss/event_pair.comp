@@ -1,6 +1,6 @@
 #version 450
-// Event loss, forward part of one pair (loss_layout.h, EventPairPC): E and D per pixel and the
-// workgroup sums of E*D, D*D and E*E.
+// Event loss, forward part of one pair (loss_layout.h, EventPairPC): E and D per pooling cell (the
+// sums over its pool x pool pixels; one pixel at pool 1) and the workgroup sums of E*D, D*D, E*E.
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
@@ -8,7 +8,7 @@ layout(local_size_x = kLossGroupSize) in;
 layout(std430, binding = kEventPairBindCounts) readonly buffer Counts { uint event_counts[]; };
 layout(std430, binding = kEventPairBindFrameS) readonly buffer FrameS { float frame_s[]; };     // planar RGB at t_s
 layout(std430, binding = kEventPairBindFrameJ) readonly buffer FrameJ { float frame_j[]; };     // planar RGB at t_j
-layout(std430, binding = kEventPairBindScratch) writeonly buffer Scratch { float scratch[]; };  // [E][D], H*W each
+layout(std430, binding = kEventPairBindScratch) writeonly buffer Scratch { float scratch[]; };  // [E][D], a value per cell each
 layout(std430, binding = kEventPairBindPartials) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant) uniform PC { EventPairPC pc; };
 #include "loss/ssim_math.glsl"
@@ -30,16 +30,22 @@ float event_level(uint p, uint hw) {
 }
 
 void main() {
-  uint hw = pc.width * pc.height;
-  uint p = evf_linear_invocation(kLossGroupSize);
+  uint hw = pc.width * pc.height, cw = event_cells_x(), cells = cw * event_cells_y();
+  uint c = evf_linear_invocation(kLossGroupSize);
   vec4 v = vec4(0.0);
-  if (p < hw) {
-    float e = event_level(p, hw);
-    vec3 cs = vec3(frame_s[p], frame_s[hw + p], frame_s[2u * hw + p]);
-    vec3 cj = vec3(frame_j[p], frame_j[hw + p], frame_j[2u * hw + p]);
-    float d = event_log_luma(cj, pc.eps) - event_log_luma(cs, pc.eps);
-    scratch[p] = e;
-    scratch[hw + p] = d;
+  if (c < cells) {
+    uvec2 x0 = uvec2(c % cw, c / cw) * pc.pool, x1 = min(x0 + pc.pool, uvec2(pc.width, pc.height));
+    float e = 0.0, d = 0.0;
+    for (uint y = x0.y; y < x1.y; ++y)
+      for (uint x = x0.x; x < x1.x; ++x) {
+        uint p = y * pc.width + x;
+        vec3 cs = vec3(frame_s[p], frame_s[hw + p], frame_s[2u * hw + p]);
+        vec3 cj = vec3(frame_j[p], frame_j[hw + p], frame_j[2u * hw + p]);
+        e += event_level(p, hw);
+        d += event_log_luma(cj, pc.eps) - event_log_luma(cs, pc.eps);
+      }
+    scratch[c] = e;
+    scratch[cells + c] = d;
     v = vec4(e * d, d * d, e * e, 0.0);
   }
   vec4 total = loss_group_sum(v);

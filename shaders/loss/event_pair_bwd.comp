@@ -1,7 +1,7 @@
 #version 450
 // Event loss, backward part of one pair (loss_layout.h, EventPairPC): the gradient of
 // l = || E/nE - D/nD ||^2 w.r.t. both frames' RGB, added into their gradient images, and the
-// pair's value.
+// pair's value. A pixel's D is part of its pooling cell's sum, so it takes the cell's dl/dD.
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
@@ -25,7 +25,9 @@ void main() {
     values[pc.value_index] = pc.value_accumulate != 0u ? values[pc.value_index] + v : v;
   }
   if (p >= hw) return;
-  float g = event_pair_dl_dd(scratch[p], scratch[hw + p], ed, dd, ee, pc.norm_floor2);
+  uint cw = event_cells_x(), cells = cw * event_cells_y();
+  uint c = (p / pc.width / pc.pool) * cw + (p % pc.width) / pc.pool;
+  float g = event_pair_dl_dd(scratch[c], scratch[cells + c], ed, dd, ee, pc.norm_floor2);
   g *= pc.grad_scale;
   vec3 cs = vec3(frame_s[p], frame_s[hw + p], frame_s[2u * hw + p]);
   vec3 cj = vec3(frame_j[p], frame_j[hw + p], frame_j[2u * hw + p]);

@@ -73,12 +73,14 @@ struct ReducePC {
 };
 
 // Event loss (paper Eq. 5, engine/loss/event_loss.h). One record per pair (t_s, t_j), s < j:
-// loss/event_pair: per pixel
+// loss/event_pair: per cell of pool x pool pixels (one pixel at pool 1; cells cut by the border),
+// the sums over the cell's pixels of
 //   E = sum over interval planes [plane_first, plane_last] of theta_pos * n_pos - theta_neg * n_neg
 //       (n: uint counts, or with counts_float the planes' float amounts)
 //   D = L_j - L_s,  L = log(eps + max(0, luminance(rgb)))   (the later minus the earlier frame:
 //       the sign of the events, checked against the simulator in tests/test_event_loss.cpp)
-// writes E and D into scratch planes 0 and 1 and partials[g] = (sum E*D, sum D*D, sum E*E, 0);
+// writes E and D into scratch planes 0 and 1 (a value per cell) and partials[g] = (sum E*D,
+// sum D*D, sum E*E, 0) over the group's cells;
 // loss/reduce stores the three sums at sums[4 * pair .. 4 * pair + 2].
 // loss/event_pair_bwd: with nE = sqrt(max(EE, norm_floor2)), nD = sqrt(max(DD, norm_floor2)),
 //   l = || E / nE - D / nD ||^2, grad_j (+)= grad_scale * dl/drgb_j, grad_s (+)= grad_scale * dl/drgb_s,
@@ -99,15 +101,18 @@ struct EventPairPC {
   uint value_index;
   uint pair;
   uint counts_float;  // the count planes hold floats (binned events), else uints
-  uint pad1, pad2;
+  uint pool;          // side of the square pooling cells E and D are summed over (1: per pixel)
+  uint pad2;
 };
 
 // Warped-event loss (paper Eq. 6-7, engine/loss/warped_event_loss.h). One record per interval i
 // of the virtual frames, frame j = i + 1; the view's planes hold, per interval, the measured
 // events warped to t_j (M) and the interval's displacement (dx, dy), H*W floats each.
-// loss/warped_event: per interior pixel (border pixels: both sides 0)
+// loss/warped_event: per cell of pool x pool pixels, the sums over the cell's interior pixels
+// (border pixels: both sides 0) of M and
 //   P = -(Lx dx + Ly dy),  Lx, Ly: central differences of L = log(eps + luminance(rgb_j)),
-// writes M and P into scratch planes 0 and 1 and partials[g] = (sum M*P, sum P*P, sum M*M, 0);
+// writes M and P into scratch planes 0 and 1 (a value per cell) and partials[g] = (sum M*P,
+// sum P*P, sum M*M, 0);
 // loss/reduce stores the sums at sums[4 * interval ..].
 // loss/warped_event_bwd: l = || M / nM - P / nP ||^2 (floored norms as the event loss),
 //   grad_j (+)= grad_scale * dl/drgb_j, and invocation 0 writes (value_accumulate: adds)
@@ -122,7 +127,8 @@ struct WarpedEventPC {
   float grad_scale;
   float value_scale;
   uint value_accumulate;
-  uint pad0, pad1, pad2;
+  uint pool;  // side of the square pooling cells M and P are summed over (1: per pixel)
+  uint pad1, pad2;
 };
 
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).

@@ -1,7 +1,8 @@
 #version 450
 // Warped-event loss, backward part of one interval (loss_layout.h, WarpedEventPC): the gradient
 // of l = || M/nM - P/nP ||^2 w.r.t. frame j's RGB, added into its gradient image (pixel q feeds
-// the central differences of its four neighbours), and the interval's value.
+// the central differences of its four neighbours, each of which takes its pooling cell's dl/dP),
+// and the interval's value.
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
@@ -18,10 +19,11 @@ layout(push_constant) uniform PC { WarpedEventPC pc; };
 
 float mp, pp, mm;  // the interval's sums
 
-// dl/dP at pixel n = (x, y), 0 outside the interior.
-float dl_dp(uint n, uint x, uint y, uint hw) {
+// dl/dP at pixel (x, y): its cell's, 0 outside the interior.
+float dl_dp(uint x, uint y) {
   if (!warped_interior(x, y)) return 0.0;
-  return event_pair_dl_dd(scratch[n], scratch[hw + n], mp, pp, mm, pc.norm_floor2);
+  uint cw = event_cells_x(), cells = cw * event_cells_y(), c = (y / pc.pool) * cw + x / pc.pool;
+  return event_pair_dl_dd(scratch[c], scratch[cells + c], mp, pp, mm, pc.norm_floor2);
 }
 
 void main() {
@@ -39,10 +41,10 @@ void main() {
   // P(n) = -(Lx(n) dx(n) + Ly(n) dy(n)) and Lx(n) = (L(n + 1) - L(n - 1)) / 2: L(q) enters P(q + 1)
   // with -dx(q + 1) * (-1/2) and P(q - 1) with -dx(q - 1) * (1/2); the same along y.
   float gl = 0.0;
-  if (x + 1u < pc.width) gl += 0.5 * dl_dp(q + 1u, x + 1u, y, hw) * planes[dx + q + 1u];
-  if (x > 0u) gl -= 0.5 * dl_dp(q - 1u, x - 1u, y, hw) * planes[dx + q - 1u];
-  if (y + 1u < pc.height) gl += 0.5 * dl_dp(q + pc.width, x, y + 1u, hw) * planes[dy + q + pc.width];
-  if (y > 0u) gl -= 0.5 * dl_dp(q - pc.width, x, y - 1u, hw) * planes[dy + q - pc.width];
+  if (x + 1u < pc.width) gl += 0.5 * dl_dp(x + 1u, y) * planes[dx + q + 1u];
+  if (x > 0u) gl -= 0.5 * dl_dp(x - 1u, y) * planes[dx + q - 1u];
+  if (y + 1u < pc.height) gl += 0.5 * dl_dp(x, y + 1u) * planes[dy + q + pc.width];
+  if (y > 0u) gl -= 0.5 * dl_dp(x, y - 1u) * planes[dy + q - pc.width];
   vec3 c = vec3(frame[q], frame[hw + q], frame[2u * hw + q]);
   vec3 g = pc.grad_scale * gl * event_log_luma_grad(c, pc.eps);
   grad[q] += g.r;

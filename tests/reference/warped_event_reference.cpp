@@ -1,5 +1,7 @@
 #include "reference/warped_event_reference.h"
 
+#include "reference/event_reference.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -23,10 +25,12 @@ double warped_event_loss(const WarpedEventInputs& in) {
         M[p] = in.m[i][p];
         P[p] = -(lx * in.dx[i][p] + ly * in.dy[i][p]);
       }
+    M = pool_plane(M, in.width, in.height, in.pool);
+    P = pool_plane(P, in.width, in.height, in.pool);
     double mm = 0, pp = 0;
-    for (size_t p = 0; p < hw; ++p) mm += M[p] * M[p], pp += P[p] * P[p];
+    for (size_t c = 0; c < M.size(); ++c) mm += M[c] * M[c], pp += P[c] * P[c];
     const double nM = std::sqrt(std::max(mm, floor2)), nP = std::sqrt(std::max(pp, floor2));
-    for (size_t p = 0; p < hw; ++p) total += (M[p] / nM - P[p] / nP) * (M[p] / nM - P[p] / nP);
+    for (size_t c = 0; c < M.size(); ++c) total += (M[c] / nM - P[c] / nP) * (M[c] / nM - P[c] / nP);
   }
   return in.m.empty() ? 0.0 : total / double(in.m.size());
 }

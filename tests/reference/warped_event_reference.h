@@ -11,6 +11,7 @@ struct WarpedEventInputs {
   // Per interval i (frames i -> i + 1): the warped events M and the displacement dx, dy (H * W each).
   std::vector<std::vector<double>> m, dx, dy;
   double eps = 1e-3, norm_floor_rms = 1e-3;
+  uint32_t pool = 1;  // M and P summed over pool x pool cells (cut at the border) before comparing
 };
 
 // (1 / intervals) * sum_i || M_i / nM - P_i / nP ||^2 over interior pixels, P_i = -(grad L_{i+1} . d_i)
