@@ -33,8 +33,7 @@ std::vector<float> depth_flow(const std::vector<float>& depth, const std::vector
 }
 
 std::vector<std::vector<float>> ModelFlow::intervals(Rasterizer& raster, const GaussianBuffers& params,
-                                                     const std::vector<Camera>& cams,
-                                                     const RenderSettings& settings) {
+                                                     const std::vector<Camera>& cams, const RenderSettings& settings) {
   std::vector<std::vector<float>> out;
   for (size_t i = 0; i + 1 < cams.size(); ++i) {
     raster.forward(params, cams[i], settings, state_);
