@@ -93,9 +93,8 @@ class FlowPanel : public Panel {
   FlowPanel() : Panel("flow", GLFW_KEY_5) {}
   bool available(const ShownView& s) const override { return s.has_flow; }
   std::string label(const ShownView& s) const override {
-    char t[96];
-    std::snprintf(t, sizeof t, "5 flow, interval %u/%u, full colour at %.2f px", s.interval, s.intervals,
-                  s.flow_max_px);
+    char t[96];  // short: the label strip is as wide as the panel
+    std::snprintf(t, sizeof t, "5 flow i=%u (%.2f px = full)", s.interval, s.flow_max_px);
     return t;
   }
   std::vector<Tile> tiles(const ShownView& s) const override { return {{&s.flow, s.width, s.height}}; }
@@ -107,7 +106,8 @@ class WarpedPanel : public Panel {
   WarpedPanel() : Panel("warped", GLFW_KEY_6) {}
   bool available(const ShownView& s) const override { return s.has_warped; }
   std::string label(const ShownView& s) const override {
-    return "6 warped events M_" + std::to_string(s.interval) + " | predicted -grad L.d";
+    const std::string i = std::to_string(s.interval);
+    return "6 warped M_" + i + " | render P_" + i;
   }
   std::vector<Tile> tiles(const ShownView& s) const override {
     return {{&s.measured, s.width, s.height}, {&s.predicted, s.width, s.height}};
