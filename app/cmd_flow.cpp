@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli.h"
+#include "flow/flow_colour.h"
 #include "flow/flow_estimator.h"
 #include "flow_images.h"
 #include "io/atomic_file.h"
@@ -89,7 +90,7 @@ nlohmann::json flow_view(flow::FlowEstimator& est, const io::Dataset& data, size
     char name[32];
     std::snprintf(name, sizeof name, "flow_%02zu", k);
     io::write_npy<float>(dir / (std::string(name) + ".npy"), {f.height, f.width, 2}, d);
-    io::write_png8(dir / (std::string(name) + ".png"), f.width, f.height, 3, flow_colour_wheel(d, 4.0));
+    io::write_png8(dir / (std::string(name) + ".png"), f.width, f.height, 3, flow::flow_colour_wheel(d, 4.0));
     if (!truth) continue;
     const Aee a = endpoint_error(d, (*truth)[k], flow::event_counts(ev, u[k], u[k + 1]));
 

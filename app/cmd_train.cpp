@@ -187,10 +187,11 @@ static int run_train(const Args& a) {
     std::printf(
         "  --view: watch training live in a window (docs/viewer.md): the splats from a free camera, and for\n"
         "    one training view its blurry input, a render at u along the exposure, the virtual frames along the\n"
-        "    exposure and the events; a UI window (Dear ImGui) with step, loss plots, PSNR, Gaussians, it/s,\n"
-        "    pause / step / view / u / panel / screenshot controls and the loss weights, live.\n"
+        "    exposure and the events, and in runs that use flow one interval's flow and warped events;\n"
+        "    a UI window (Dear ImGui) with step, loss plots, PSNR, Gaussians, it/s, pause / step / view / u /\n"
+        "    interval / panel / screenshot controls and the loss weights, live.\n"
         "    keys: Space pause/resume, N single step (pauses first), Right/] and Left/[ next/previous view,\n"
-        "    1-4 toggle panels, O the UI window, R camera to the shown view, Esc close the viewer (training\n"
+        "    1-6 toggle panels, O the UI window, R camera to the shown view, Esc close the viewer (training\n"
         "    goes on);\n"
         "    mouse: left-drag orbit, wheel zoom; W/A/S/D/Q/E fly. Its options (--view-options: as a table):\n");
     for (const ViewOption& v : view_options())

@@ -17,15 +17,19 @@
 
 #include "camera/trajectory.h"
 #include "cli_helpers.h"
+#include "events/warped_events.h"
 #include "gpu_fixture.h"
 #include "io/dataset.h"
 #include "io/dataset_writer.h"
 #include "io/image.h"
 #include "metrics/srgb_metrics.h"
+#include "sim/flow_truth.h"
 #include "train/synthetic_dataset.h"
 #include "train/trainer.h"
+#include "train/training_data.h"
 #include "viewer/canvas.h"
 #include "viewer/event_image.h"
+#include "viewer/flow_image.h"
 #include "viewer/layout.h"
 
 using namespace evflow;
@@ -496,5 +500,164 @@ TEST_CASE("train --view under Xvfb: the UI's buttons, sliders and check boxes dr
   CHECK(im.height == rep["canvas"][1].get<uint32_t>());
   for (const auto& e : fs::directory_iterator(run))
     CHECK(e.path().filename().string().find(".tmp") == std::string::npos);
+  fs::remove_all(dir);
+}
+
+namespace {
+
+// Hue in degrees [0, 360) of an 8-bit RGB colour (-1 for greys).
+double hue_deg(const std::array<int, 3>& p) {
+  const int mx = std::max({p[0], p[1], p[2]}), mn = std::min({p[0], p[1], p[2]});
+  if (mx - mn < 8) return -1;
+  const double d = mx - mn;
+  double h = mx == p[0]   ? std::fmod((p[1] - p[2]) / d + 6.0, 6.0)
+             : mx == p[1] ? (p[2] - p[0]) / d + 2.0
+                          : (p[0] - p[1]) / d + 4.0;
+  return 60.0 * h;
+}
+
+// A flow=gt run of the simulated folder `sim` (paused at step 0, 3 frames): returns its report.
+json run_flow_view(const fs::path& dir, const std::string& script, const fs::path& shot) {
+  const fs::path report_json = dir / "report.json";
+  const Run r = run_evflow(dir,
+                           "train sim --out run method=blur+events+warp flow=gt event_from=0 iterations=1"
+                           " init_gaussians=400 sh_degree=0 virtual_frames=2 densify=false seed=3"
+                           " --view --view-width 720 --view-height 480 --view-paused --view-frames 3"
+                           " --view-fps-cap 0 --view-script " +
+                               script + " --view-screenshot " + quote(shot.string()) + " --view-report " +
+                               quote(report_json.string()));
+  INFO(r.out);
+  REQUIRE(r.rc == 0);
+  return json::parse(slurp(report_json));
+}
+
+bool has_panel(const json& rep, const std::string& id) {
+  for (const auto& p : rep["panels"])
+    if (p["id"] == id) return true;
+  return false;
+}
+
+// The fraction of a tile's pixels that differ by more than 8 levels between two screenshots.
+double changed(const io::Image& a, const io::Image& b, const json& tile) {
+  size_t n = 0, diff = 0;
+  for (uint32_t y = tile["y"]; y < tile["y"].get<uint32_t>() + tile["h"].get<uint32_t>(); ++y)
+    for (uint32_t x = tile["x"]; x < tile["x"].get<uint32_t>() + tile["w"].get<uint32_t>(); ++x) {
+      const auto p = shot_px(a, x, y), q = shot_px(b, x, y);
+      int worst = 0;
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(p[c] - q[c]));
+      diff += worst > 8, ++n;
+    }
+  return double(diff) / double(std::max<size_t>(n, 1));
+}
+
+}  // namespace
+
+TEST_CASE("train --view under Xvfb: the flow and warped-event panels show the interval's flow, M_i and P_i",
+          "[viewer]") {
+  require_xvfb();
+  const fs::path dir = fresh_dir("flow");
+  {
+    const Run r = run_evflow(dir,
+                             "simulate --scene gallery --out sim --width 64 --height 48 --blur-px 8 --seed 3 "
+                             "--train-views 2 --novel-views 1",
+                             false);
+    INFO(r.out);
+    REQUIRE(r.rc == 0);
+  }
+  // The interval slider pressed at its right end in frame 2: interval 3 of 4.
+  const fs::path shot_png = dir / "shot.png";
+  const json rep = run_flow_view(dir, "2:slide=interval@1", shot_png);
+  INFO(rep["content"].dump(1));
+  const json& fl = rep["content"]["flow"];
+  REQUIRE(fl["shown"] == true);
+  REQUIRE(fl["warped"] == true);
+  CHECK(fl["intervals"] == 4);
+  REQUIRE(fl["interval"] == 3);
+  const io::Image shot = io::read_image(shot_png);
+
+  // The trainer's snapshot of the same interval, in this process, pictured the viewer's way.
+  auto& ctx = test::gpu_context();
+  const io::Dataset data = io::load_dataset(dir / "sim");
+  TrainConfig cfg;
+  for (const char* kv : {"method=blur+events+warp", "flow=gt", "event_from=0", "iterations=1", "init_gaussians=400",
+                         "sh_degree=0", "virtual_frames=2", "densify=false", "seed=3"}) {
+    const std::string s = kv;
+    cfg.set(s.substr(0, s.find('=')), s.substr(s.find('=') + 1));
+  }
+  Trainer t(ctx, data, cfg);
+  const ViewSnapshot snap = t.snapshot(0, 3);
+  REQUIRE(snap.has_flow);
+  REQUIRE(snap.flow.warped);
+  const viewer::FlowImages im = viewer::flow_images(snap.flow);
+  int max_diff = 0;
+  const json& flow_tile = panel(rep, "flow")["tiles"][0];
+  CHECK(tile_match(shot, flow_tile, im.flow, &max_diff) >= 0.99);
+  const json& warped = panel(rep, "warped")["tiles"];
+  REQUIRE(warped.size() == 2);
+  CHECK(tile_match(shot, warped[0], im.measured, &max_diff) >= 0.99);
+  CHECK(tile_match(shot, warped[1], im.predicted, &max_diff) >= 0.99);
+
+  // The panel's hue is the ground-truth flow's direction + 180 degrees wherever the flow is long
+  // enough to be saturated (the simulator's flow, read independently of the trainer).
+  const auto truth = sim::ground_truth_interval_flow(dir / "sim", data.train[0].name, snap.times);
+  REQUIRE(truth);
+  const std::vector<float>& d = (*truth)[3];
+  const uint32_t W = 64, H = 48, x0 = flow_tile["x"], y0 = flow_tile["y"], w = flow_tile["w"], h = flow_tile["h"];
+  size_t tested = 0, agree = 0;
+  for (uint32_t dy = 0; dy < h; ++dy)
+    for (uint32_t dx = 0; dx < w; ++dx) {
+      const size_t p = size_t(viewer::nearest_source(dy, h, H)) * W + viewer::nearest_source(dx, w, W);
+      if (!(std::hypot(d[2 * p], d[2 * p + 1]) > 0.5 * fl["max_px"].get<double>())) continue;
+      const double want = std::atan2(d[2 * p + 1], d[2 * p]) * 180.0 / M_PI + 180.0;
+      const double got = hue_deg(shot_px(shot, x0 + dx, y0 + dy));
+      const double off = std::fabs(std::remainder(got - want, 360.0));
+      ++tested, agree += got >= 0 && off < 15.0;
+    }
+  WARN("flow panel: " << agree << " of " << tested << " saturated pixels with the gt direction's hue");
+  CHECK(tested > 500);
+  CHECK(agree >= 0.95 * double(tested));
+  // What the trainer gave is what L_ev^w compares, recomputed here independently on the interior:
+  // M_3 = the events of [t_3, t_4) warped along the ground-truth flow to t_4; P_3 = -(grad L_4 . d_3)
+  // of frame 4's render (log luminance of linear light, central differences).
+  const io::View& v0 = data.train[0];
+  const double t3 = v0.exposure_start + 0.75 * (v0.exposure_end - v0.exposure_start);
+  const auto [theta_pos, theta_neg] = event_thresholds(data, t.config());
+  const std::vector<float> m_host = warp_events_to_end(data.events, t3, v0.exposure_end, d, theta_pos, theta_neg);
+  std::vector<float> frame4 = snap.frames[4]->read<float>(size_t(3) * W * H);
+  for (float& x : frame4) x = io::srgb_to_linear(x);
+  auto log_luma = [&](size_t q) {
+    return std::log(1e-3 +
+                    std::max(0.0, 0.2126 * frame4[q] + 0.7152 * frame4[W * H + q] + 0.0722 * frame4[2 * W * H + q]));
+  };
+  double m_max = 0, p_max = 0, m_err = 0, p_err = 0;
+  for (uint32_t y = 1; y + 1 < H; ++y)
+    for (uint32_t x = 1; x + 1 < W; ++x) {
+      const size_t q = size_t(y) * W + x;
+      const double dx = std::isfinite(d[2 * q]) ? d[2 * q] : 0.0, dy = std::isfinite(d[2 * q + 1]) ? d[2 * q + 1] : 0.0;
+      const double p_host =
+          -(0.5 * (log_luma(q + 1) - log_luma(q - 1)) * dx + 0.5 * (log_luma(q + W) - log_luma(q - W)) * dy);
+      m_max = std::max(m_max, std::fabs(double(m_host[q]))), p_max = std::max(p_max, std::fabs(p_host));
+      m_err = std::max(m_err, std::fabs(double(snap.flow.measured[q]) - m_host[q]));
+      p_err = std::max(p_err, std::fabs(double(snap.flow.predicted[q]) - p_host));
+    }
+  WARN("M_3: largest difference " << m_err << " of " << m_max << "; P_3: " << p_err << " of " << p_max);
+  CHECK(m_err <= 1e-4 * m_max);
+  CHECK(p_err <= 1e-3 * p_max);
+  // M_i and P_i carry both signs (the scene moves: edges brighten and darken).
+  for (const auto* v : {&snap.flow.measured, &snap.flow.predicted}) {
+    CHECK(*std::max_element(v->begin(), v->end()) > 0);
+    CHECK(*std::min_element(v->begin(), v->end()) < 0);
+  }
+
+  // Toggled off (key 5 before frame 1, the "warped" check box in frame 2): both leave the
+  // window, and what was drawn where they were changes.
+  const fs::path off_png = dir / "off.png";
+  const json rep_off = run_flow_view(dir, "1:5,2:click=panel.warped", off_png);
+  CHECK_FALSE(has_panel(rep_off, "flow"));
+  CHECK_FALSE(has_panel(rep_off, "warped"));
+  const io::Image off = io::read_image(off_png);
+  CHECK(changed(shot, off, flow_tile) > 0.5);
+  CHECK(changed(shot, off, warped[0]) > 0.5);
+  test::require_no_validation_messages();
   fs::remove_all(dir);
 }

@@ -322,6 +322,24 @@ TEST_CASE("blur+events+warp and +flow train on a simulated folder with ground-tr
   check_term(train("sim", "ev3", "events"));
   CHECK(out.find("flow: view") == std::string::npos);
 
+  // The model's flow (flow=model): computed at step 1 and every 2 steps after; mixed: the ground
+  // truth for steps 1-2, the model's flow from step 3 (flow_model_from=0.5 of 4 steps).
+  auto model_flow_steps = [&] {
+    std::vector<int> steps;
+    for (size_t at = out.find("model's flow of 3 views at step "); at != std::string::npos;
+         at = out.find("model's flow of 3 views at step ", at + 1))
+      steps.push_back(std::atoi(out.c_str() + at + 32));
+    return steps;
+  };
+  check_term(train("sim", "model", "model flow_refresh=2"));
+  CHECK(model_flow_steps() == std::vector<int>{1, 3});
+  check_term(train("sim", "model_flow", "model flow_refresh=3", "blur+events+flow"));
+  CHECK(model_flow_steps() == std::vector<int>{1, 4});
+  check_term(train("sim", "mixed", "gt flow_model_from=0.5 flow_refresh=5"));
+  CHECK(model_flow_steps() == std::vector<int>{3});
+  CHECK(test::run_evflow(dir, "train sim --out bad method=blur+events+warp flow=model flow_model_from=0.5", out) != 0);
+  CHECK(out.find("with flow=model it must be 0") != std::string::npos);
+
   // Without the simulator's ground truth, flow=gt is refused by name.
   fs::remove_all(dir / "sim" / "gt");
   const int rc = test::run_evflow(dir, "train sim --out nogt method=blur+events+warp iterations=1 flow=gt", out);

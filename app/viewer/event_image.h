@@ -11,6 +11,7 @@
 
 #include "io/dataset.h"
 #include "io/image.h"
+#include "viewer/signed_image.h"
 
 namespace evflow::viewer {
 
@@ -22,9 +23,8 @@ struct EventImage {
   bool has_events = false;            // the dataset carries events for this view
 };
 
-// Colour scale: a pixel whose |sum| reaches k = max(1, the 95th percentile of the nonzero
-// |sum|) is pure red (255, 0, 0) or pure blue (0, 0, 255); sum 0 is grey (0.5 in sRGB, byte
-// 128); in between the sRGB values are interpolated linearly: grey + (primary - grey) * |sum| / k.
+// Colour scale (signed_image.h): a pixel whose |sum| reaches k = max(1, the 95th percentile of
+// the nonzero |sum|) is pure red (255, 0, 0) or pure blue (0, 0, 255); sum 0 is grey (byte 128).
 inline EventImage event_image(const io::Dataset& data, size_t v) {
   if (v >= data.train.size())
     throw std::out_of_range("event_image: training view " + std::to_string(v) + " of " +
@@ -62,31 +62,8 @@ inline EventImage event_image(const io::Dataset& data, size_t v) {
       (data.events.p[k] > 0 ? e.positive : e.negative) += 1;
     }
   }
-  std::vector<int32_t> mags;
-  for (int32_t s : e.sum)
-    if (s != 0) mags.push_back(std::abs(s));
-  double k = 1.0;
-  if (!mags.empty()) {
-    const size_t q = size_t(0.95 * double(mags.size() - 1));
-    std::nth_element(mags.begin(), mags.begin() + q, mags.end());
-    k = std::max(1.0, double(mags[q]));
-  }
-  const float grey = 0.5f;
-  e.rgb.assign(3 * hw, 0.f);
-  for (size_t i = 0; i < hw; ++i) {
-    const float a = float(std::min(1.0, std::abs(e.sum[i]) / k));
-    float r = grey, g = grey, b = grey;
-    if (e.sum[i] > 0) {
-      r = grey + (1.f - grey) * a;
-      g = b = grey * (1.f - a);
-    } else if (e.sum[i] < 0) {
-      b = grey + (1.f - grey) * a;
-      r = g = grey * (1.f - a);
-    }
-    e.rgb[i] = r;
-    e.rgb[hw + i] = g;
-    e.rgb[2 * hw + i] = b;
-  }
+  const std::vector<float> sums(e.sum.begin(), e.sum.end());
+  e.rgb = signed_colours(sums, std::max(1.0, signed_scale(sums)));
   return e;
 }
 

@@ -116,11 +116,22 @@ void TrainView::build_controls() {
       ImGui::SetTooltip("the render panel shows the view at time u of its learned exposure trajectory");
   }
 
+  const int intervals = int(trainer_.flow_intervals());
+  if (intervals > 0) {
+    int i = int(interval_);
+    ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x);
+    if (ImGui::SliderInt("##interval", &i, 0, intervals - 1, "flow interval i = %d"))
+      interval_ = uint32_t(std::clamp(i, 0, intervals - 1));
+    ui_->track("interval", UiLayer::slider_grab(ImGui::GetItemRectSize().x, intervals - 1));
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("the flow and warped-event panels show interval i, from virtual frame i to i + 1");
+  }
+
   ImGui::TextUnformatted("panels");
-  for (auto& p : panels_) {
-    ImGui::SameLine();
-    ImGui::Checkbox(p->id().c_str(), &p->visible);
-    ui_->track("panel." + p->id());
+  for (size_t k = 0; k < panels_.size(); ++k) {
+    if (k % 4 != 0 || k == 0) ImGui::SameLine();  // four to a line: the window is narrow
+    ImGui::Checkbox(panels_[k]->id().c_str(), &panels_[k]->visible);
+    ui_->track("panel." + panels_[k]->id());
   }
 }
 

@@ -14,6 +14,7 @@
 #include "io/image.h"
 #include "metrics/srgb_metrics.h"
 #include "viewer/event_image.h"
+#include "viewer/flow_image.h"
 #include "viewer/view_camera.h"
 
 namespace evflow::viewer {
@@ -39,7 +40,7 @@ std::vector<float> encoded(std::vector<float> linear) {
   return linear;
 }
 
-// The side panels. Flow and LDI panels will be appended the same way.
+// The side panels. An LDI panel will be appended the same way.
 class BlurryPanel : public Panel {
  public:
   BlurryPanel() : Panel("blurry", GLFW_KEY_1) {}
@@ -84,6 +85,33 @@ class EventsPanel : public Panel {
     return "4 events +" + std::to_string(s.events_pos) + " -" + std::to_string(s.events_neg);
   }
   std::vector<Tile> tiles(const ShownView& s) const override { return {{&s.events, s.events_w, s.events_h}}; }
+};
+
+// The flow of the chosen interval as training uses it (flow=events, gt or model).
+class FlowPanel : public Panel {
+ public:
+  FlowPanel() : Panel("flow", GLFW_KEY_5) {}
+  bool available(const ShownView& s) const override { return s.has_flow; }
+  std::string label(const ShownView& s) const override {
+    char t[96];  // short: the label strip is as wide as the panel
+    std::snprintf(t, sizeof t, "5 flow i=%u (%.2f px = full)", s.interval, s.flow_max_px);
+    return t;
+  }
+  std::vector<Tile> tiles(const ShownView& s) const override { return {{&s.flow, s.width, s.height}}; }
+};
+
+// What the warped-event loss compares for the interval: measured M_i beside predicted P_i.
+class WarpedPanel : public Panel {
+ public:
+  WarpedPanel() : Panel("warped", GLFW_KEY_6) {}
+  bool available(const ShownView& s) const override { return s.has_warped; }
+  std::string label(const ShownView& s) const override {
+    const std::string i = std::to_string(s.interval);
+    return "6 warped M_" + i + " | render P_" + i;
+  }
+  std::vector<Tile> tiles(const ShownView& s) const override {
+    return {{&s.measured, s.width, s.height}, {&s.predicted, s.width, s.height}};
+  }
 };
 
 }  // namespace
@@ -165,6 +193,9 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
   shown_.blurry = gpu::Buffer(ctx_, 16, "view_blurry");
   shown_.events = gpu::Buffer(ctx_, 16, "view_events");
   shown_.mid = gpu::Buffer(ctx_, 16, "view_mid");
+  shown_.flow = gpu::Buffer(ctx_, 16, "view_flow");
+  shown_.measured = gpu::Buffer(ctx_, 16, "view_measured");
+  shown_.predicted = gpu::Buffer(ctx_, 16, "view_predicted");
   paused_ = opt_.start_paused;
   script_ = parse_script(opt_.script);
 
@@ -173,6 +204,8 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
   panels_.push_back(std::make_unique<MidPanel>(blur));
   panels_.push_back(std::make_unique<VirtualFramesPanel>());
   panels_.push_back(std::make_unique<EventsPanel>());
+  panels_.push_back(std::make_unique<FlowPanel>());
+  panels_.push_back(std::make_unique<WarpedPanel>());
 
   centre_ = initial_orbit(trainer_.cloud());
   std::vector<Camera> cams;
@@ -356,15 +389,20 @@ void TrainView::refresh_content(bool renders) {
   const uint32_t step = trainer_.current_step();
   const bool running = !paused_ && !training_done_;
   const bool stale = shown_.step != step && (!running || now_s() - last_refresh_ >= opt_.refresh_s);
-  if (!new_view && !stale && shown_.u == u_) return;
+  const bool new_interval = shown_.has_flow && shown_.interval != interval_;
+  if (!new_view && !stale && !new_interval && shown_.u == u_) return;
   const uint32_t W = view.camera.width, H = view.camera.height;
   const size_t n = size_t(W) * H * 3;
   if (new_view) load_view_inputs();
   if (!renders) return;
   const bool blur = trainer_.config().mode == TrainMode::Blur;
-  if (new_view || stale || shown_.step == UINT32_MAX) {
-    // The exposure as training sees it, from the trainer: its frames, its image model, its target.
-    const ViewSnapshot snap = trainer_.snapshot(view_);
+  if (new_view || stale || new_interval || shown_.step == UINT32_MAX) {
+    // The exposure as training sees it, from the trainer: its frames, its image model, its
+    // target, and the chosen interval's flow and warped events.
+    const uint32_t intervals = trainer_.flow_intervals();
+    interval_ = std::min(interval_, intervals > 0 ? intervals - 1 : 0u);
+    const ViewSnapshot snap = trainer_.snapshot(view_, intervals > 0 ? int(interval_) : -1);
+    load_flow(snap);
     shown_.times = snap.frames.size() > 1 ? snap.times : std::vector<double>{};
     while (shown_.frames.size() < shown_.times.size())
       shown_.frames.emplace_back(ctx_, n * 4, "view_frame" + std::to_string(shown_.frames.size()));
@@ -394,6 +432,25 @@ void TrainView::refresh_content(bool renders) {
   const bool at_mid = !blur || u_ == 0.5;
   shown_.psnr_mid_sharp = view.sharp_mid && at_mid ? psnr(mid, encoded(io::planar_rgb(*view.sharp_mid))) : -1;
   for (auto& p : panels_) p->refresh(shown_);
+}
+
+// The flow panels' images of the snapshot's interval.
+void TrainView::load_flow(const ViewSnapshot& snap) {
+  shown_.has_flow = snap.has_flow;
+  shown_.has_warped = snap.has_flow && snap.flow.warped;
+  if (!snap.has_flow) return;
+  const FlowImages im = flow_images(snap.flow);
+  shown_.interval = snap.flow.interval;
+  shown_.intervals = snap.flow.intervals;
+  shown_.flow_max_px = im.max_px;
+  auto upload = [](gpu::Buffer& b, const std::vector<float>& v) {
+    b.ensure(v.size() * 4);
+    b.write(v);
+  };
+  upload(shown_.flow, im.flow);
+  if (!shown_.has_warped) return;
+  upload(shown_.measured, im.measured);
+  upload(shown_.predicted, im.predicted);
 }
 
 // The free camera's view: rendered again when the camera moved, the size changed, or the splats
@@ -567,7 +624,13 @@ nlohmann::json TrainView::report() const {
                 {"psnr_mid_sharp", shown_.psnr_mid_sharp},
                 {"events_pos", shown_.events_pos},
                 {"events_neg", shown_.events_neg},
-                {"virtual_times", shown_.times}}},
+                {"virtual_times", shown_.times},
+                {"flow",
+                 {{"shown", shown_.has_flow},
+                  {"warped", shown_.has_warped},
+                  {"interval", shown_.interval},
+                  {"intervals", shown_.intervals},
+                  {"max_px", shown_.flow_max_px}}}}},
               {"u", u_},
               {"weights", weights},
               {"widgets", widgets},

@@ -61,8 +61,13 @@ struct ShownView {
   gpu::Buffer mid;                  // render at u along the exposure (plain mode: the view's camera)
   std::vector<double> times;        // blur mode: the virtual frames' exposure times u
   std::vector<gpu::Buffer> frames;  // blur mode: renders at those times
-  double psnr = 0;                  // model image (blur: mean of the frames) vs the training target
-  double psnr_mid_sharp = -1;       // mid render vs the sharp ground truth (when the view has one)
+  // Flow panels (a run that uses flow): interval `interval` of `intervals`, from the trainer.
+  bool has_flow = false, has_warped = false;
+  uint32_t interval = 0, intervals = 0;
+  double flow_max_px = 0;                 // the colour wheel's full saturation
+  gpu::Buffer flow, measured, predicted;  // colour wheel, M_i, P_i: planar sRGB, width x height
+  double psnr = 0;                        // model image (blur: mean of the frames) vs the training target
+  double psnr_mid_sharp = -1;             // mid render vs the sharp ground truth (when the view has one)
 };
 
 struct Tile {
@@ -71,7 +76,7 @@ struct Tile {
 };
 
 // A side panel: a label and a few images (tiles) of the shown training view. Panels are a
-// list; a new one (flow, LDI) derives from Panel, takes its data from ShownView or its own
+// list; a new one (LDI) derives from Panel, takes its data from ShownView or its own
 // refresh(), and is appended in TrainView's constructor with its toggle key.
 class Panel {
  public:
@@ -123,6 +128,7 @@ class TrainView {
   // The side panels' content; `renders` false: only the view's inputs (blurry, events).
   void refresh_content(bool renders);
   void load_view_inputs();
+  void load_flow(const ViewSnapshot& snap);
   void render_free_view(const Rect& m);
   void poll();
   void apply_script(int frame);
@@ -155,6 +161,7 @@ class TrainView {
   std::map<int, std::vector<ScriptAction>> script_;  // frame -> actions
   std::vector<ScriptAction> pending_widgets_;        // widget actions for the next frame
   double u_ = 0.5;                                   // the u slider: exposure time the render panel shows
+  uint32_t interval_ = 0;                            // the interval slider: the flow panels' interval
   bool shot_requested_ = false;
   bool first_frame_light_ = false;  // the first frame while training runs: no panel renders
   int shots_ = 0;

@@ -7,6 +7,27 @@
 
 namespace evflow {
 
+namespace {
+
+shaderio::WarpedEventPC warped_pc(uint32_t width, uint32_t height, uint32_t interval, uint32_t intervals,
+                                  uint32_t value_index, const WarpedEventOptions& o, float weight) {
+  const uint64_t hw = uint64_t(width) * height;
+  shaderio::WarpedEventPC pc{};
+  pc.width = width;
+  pc.height = height;
+  pc.interval = interval;
+  pc.value_index = value_index;
+  pc.eps = o.eps;
+  pc.norm_floor2 = float(double(o.norm_floor_rms) * o.norm_floor_rms * double(hw));
+  pc.grad_scale = weight / float(intervals);
+  pc.value_scale = 1.0f / float(intervals);
+  pc.value_accumulate = interval > 0 ? 1u : 0u;
+  pc.pool = o.pool;
+  return pc;
+}
+
+}  // namespace
+
 WarpedEventLoss::WarpedEventLoss(gpu::Context& ctx, uint32_t width, uint32_t height,
                                  const std::vector<std::vector<float>>& planes, float weight,
                                  WarpedEventOptions options)
@@ -51,8 +72,56 @@ void WarpedEventLoss::check(const ExposureFrames& f) const {
     throw std::invalid_argument("warped-event loss: frames are " + std::to_string(f.width) + "x" +
                                 std::to_string(f.height) + " but the warped events are " + std::to_string(width_) +
                                 "x" + std::to_string(height_));
-  if (f.view >= planes_.size())
-    throw std::invalid_argument("warped-event loss: view " + std::to_string(f.view) + " has no warped events");
+  check_view(f.view);
+}
+
+void WarpedEventLoss::check_view(uint32_t view) const {
+  if (view >= planes_.size())
+    throw std::invalid_argument("warped-event loss: view " + std::to_string(view) + " has no warped events");
+}
+
+void WarpedEventLoss::set_view_planes(uint32_t view, const std::vector<float>& planes) {
+  check_view(view);
+  if (planes.size() * 4 != planes_[view].size())
+    throw std::invalid_argument("warped-event loss: view " + std::to_string(view) + " gets " +
+                                std::to_string(planes.size()) + " plane values, it has " +
+                                std::to_string(planes_[view].size() / 4));
+  planes_[view].write(planes);
+}
+
+std::pair<std::vector<float>, std::vector<float>> WarpedEventLoss::compared(gpu::Commands& cmd, uint32_t view,
+                                                                            uint32_t interval,
+                                                                            const gpu::Buffer& frame) {
+  check_view(view);
+  if (interval >= intervals_)
+    throw std::invalid_argument("warped-event loss: interval " + std::to_string(interval) + " of " +
+                                std::to_string(intervals_));
+  record_forward(cmd, view, interval, frame, 0.0f);
+  cmd.submit();
+  const uint32_t pool = options_.pool, cw = (width_ + pool - 1) / pool;
+  const uint64_t cells = event_pool_cells(width_, height_, pool), hw = uint64_t(width_) * height_;
+  const std::vector<float> both = scratch_.read<float>(2 * cells);
+  std::pair<std::vector<float>, std::vector<float>> out{std::vector<float>(hw), std::vector<float>(hw)};
+  for (uint32_t y = 0; y < height_; ++y)  // each pixel shows its pooling cell's value
+    for (uint32_t x = 0; x < width_; ++x) {
+      const uint64_t c = uint64_t(y / pool) * cw + x / pool;
+      out.first[uint64_t(y) * width_ + x] = both[c];
+      out.second[uint64_t(y) * width_ + x] = both[cells + c];
+    }
+  return out;
+}
+
+void WarpedEventLoss::record_forward(gpu::Commands& cmd, uint32_t view, uint32_t interval, const gpu::Buffer& frame,
+                                     float weight) {
+  const uint32_t groups =
+      gpu::Commands::div_up(event_pool_cells(width_, height_, options_.pool), shaderio::kLossGroupSize);
+  cmd.dispatch("loss/warped_event",
+               {{shaderio::kWarpedEventBindPlanes, planes_[view]},
+                {shaderio::kWarpedEventBindFrame, frame},
+                {shaderio::kWarpedEventBindScratch, scratch_},
+                {shaderio::kWarpedEventBindPartials, partials_}},
+               warped_pc(width_, height_, interval, intervals_, value_offset(), options_, weight),
+               cmd.linear_groups(groups));
 }
 
 void WarpedEventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
@@ -61,26 +130,11 @@ void WarpedEventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float 
   const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
   const uint32_t cell_groups =
       gpu::Commands::div_up(event_pool_cells(width_, height_, options_.pool), shaderio::kLossGroupSize);
-  const gpu::Groups g = cmd.linear_groups(groups), gc = cmd.linear_groups(cell_groups);
+  const gpu::Groups g = cmd.linear_groups(groups);
   const gpu::Buffer& planes = planes_[f.view];
   for (uint32_t i = 0; i < intervals_; ++i) {
-    shaderio::WarpedEventPC pc{};
-    pc.width = width_;
-    pc.height = height_;
-    pc.interval = i;
-    pc.value_index = value_offset();
-    pc.eps = options_.eps;
-    pc.norm_floor2 = float(double(options_.norm_floor_rms) * options_.norm_floor_rms * double(hw));
-    pc.grad_scale = weight / float(intervals_);
-    pc.value_scale = 1.0f / float(intervals_);
-    pc.value_accumulate = i > 0 ? 1u : 0u;
-    pc.pool = options_.pool;
-    cmd.dispatch("loss/warped_event",
-                 {{shaderio::kWarpedEventBindPlanes, planes},
-                  {shaderio::kWarpedEventBindFrame, *f.rgb[i + 1]},
-                  {shaderio::kWarpedEventBindScratch, scratch_},
-                  {shaderio::kWarpedEventBindPartials, partials_}},
-                 pc, gc);
+    const shaderio::WarpedEventPC pc = warped_pc(width_, height_, i, intervals_, value_offset(), options_, weight);
+    record_forward(cmd, f.view, i, *f.rgb[i + 1], weight);
     shaderio::ReducePC r{};
     r.coeff0 = glm::vec4(1, 0, 0, 0);
     r.coeff1 = glm::vec4(0, 1, 0, 0);

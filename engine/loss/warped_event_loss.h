@@ -15,6 +15,7 @@
 // never the flow.
 #pragma once
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "loss/event_pooling.h"
@@ -38,9 +39,19 @@ class WarpedEventLoss : public ExposureLossTerm {
   void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) override;
   uint32_t intervals() const { return intervals_; }
   const WarpedEventOptions& options() const { return options_; }
+  // Replaces view v's planes (the same size; its flow changed: flow=model).
+  void set_view_planes(uint32_t view, const std::vector<float>& planes);
+  // What the loss compares for interval i of view v, given frame j = i + 1 (planar linear RGB):
+  // the measured warped events M and the predicted change P, H * W each (0 off the interior).
+  // Runs the forward kernel alone and waits; no value or gradient is touched.
+  std::pair<std::vector<float>, std::vector<float>> compared(gpu::Commands& cmd, uint32_t view, uint32_t interval,
+                                                             const gpu::Buffer& frame);
 
  private:
   void check(const ExposureFrames& f) const;
+  void check_view(uint32_t view) const;
+  // Records interval i's forward kernel (M, P into scratch_, workgroup sums into partials_).
+  void record_forward(gpu::Commands& cmd, uint32_t view, uint32_t interval, const gpu::Buffer& frame, float weight);
 
   uint32_t width_, height_, intervals_ = 0;
   WarpedEventOptions options_;

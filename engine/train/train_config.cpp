@@ -87,7 +87,8 @@ struct Codec<LossSpace> : EnumCodec<LossSpace, loss_space_name, LossSpace::Linea
 template <>
 struct Codec<TrainMode> : EnumCodec<TrainMode, mode_name, TrainMode::Plain, TrainMode::Blur> {};
 template <>
-struct Codec<FlowSource> : EnumCodec<FlowSource, flow_source_name, FlowSource::Events, FlowSource::Gt> {};
+struct Codec<FlowSource>
+    : EnumCodec<FlowSource, flow_source_name, FlowSource::Events, FlowSource::Gt, FlowSource::Model> {};
 template <>
 struct Codec<TrainTarget>
     : EnumCodec<TrainTarget, target_name, TrainTarget::Blurry, TrainTarget::Sharp, TrainTarget::Edi> {};
@@ -250,9 +251,19 @@ std::vector<Setting> event_settings() {
             "0: off; > 0 needs `mode=blur` and events with times. Shares `event_from`, `event_norm_floor` and "
             "the thresholds with the event loss"),
       field("flow", &TrainConfig::flow,
-            "the optical flow of `warp_weight`: `events` (contrast maximisation on each view's events, "
-            "[flow.md](flow.md); cached under DATA/.evflow-cache/flow/) or `gt` (the simulator's ground truth, "
-            "for ablations; refused on data without it)"),
+            "the optical flow of `warp_weight` and `blur_upsample`: `events` (contrast maximisation on each view's "
+            "events, [flow.md](flow.md); cached under DATA/.evflow-cache/flow/), `gt` (the simulator's ground "
+            "truth, for ablations; refused on data without it) or `model` (from the current splats: their depth "
+            "at t_i lifted with the trajectory's pose at t_i and projected with the pose at t_{i+1}; pixels with "
+            "accumulated opacity below 0.5 get none; refreshed every `flow_refresh` steps)"),
+      field("flow_refresh", &TrainConfig::flow_refresh,
+            "steps between two computations of the model's flow (`flow=model` or `flow_model_from`), all views "
+            "at once; it is computed only while a term uses it (the warped-event loss from `event_from`, the "
+            "upsampled blur always); >= 1"),
+      field("flow_model_from", &TrainConfig::flow_model_from,
+            "mixed flow: fraction of the run from which the model's flow replaces `flow=events` or `gt` "
+            "(refreshed every `flow_refresh` steps); 0: never (with `flow=model`: the model's flow from the "
+            "start, and this must stay 0); in [0, 1]"),
   };
 }
 
@@ -349,7 +360,9 @@ std::string display_text(const nlohmann::json& v) {
 const char* loss_space_name(LossSpace s) { return s == LossSpace::Linear ? "linear" : "srgb"; }
 const char* init_name(InitSource s) { return s == InitSource::Random ? "random" : "points"; }
 const char* mode_name(TrainMode m) { return m == TrainMode::Plain ? "plain" : "blur"; }
-const char* flow_source_name(FlowSource f) { return f == FlowSource::Events ? "events" : "gt"; }
+const char* flow_source_name(FlowSource f) {
+  return f == FlowSource::Events ? "events" : f == FlowSource::Gt ? "gt" : "model";
+}
 const char* target_name(TrainTarget t) {
   switch (t) {
     case TrainTarget::Blurry:

@@ -18,7 +18,7 @@ enum class TrainMode { Plain, Blur };
 const char* mode_name(TrainMode m);
 enum class TrainTarget { Blurry, Sharp, Edi };
 const char* target_name(TrainTarget t);
-enum class FlowSource { Events, Gt };
+enum class FlowSource { Events, Gt, Model };
 const char* flow_source_name(FlowSource f);
 enum class InitSource { Random, Points };
 const char* init_name(InitSource s);
@@ -57,6 +57,8 @@ struct TrainConfig {
   double event_from = 0.3;
   double warp_weight = 0.0;
   FlowSource flow = FlowSource::Events;
+  uint32_t flow_refresh = 100;
+  double flow_model_from = 0.0;
   bool pose_refine = false;
   double lr_pose_init = 1e-3, lr_pose_final = 1e-5;
   TrainTarget target = TrainTarget::Blurry;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <tuple>
 
 #include "loss/event_loss.h"
 #include "loss/image_losses.h"
@@ -123,7 +124,8 @@ void Trainer::add_event_term() {
 }
 
 // The training views' interval flows, when the warped-event loss or the upsampled blur needs
-// them: estimated from the events (cached) or the simulator's ground truth (cfg.flow).
+// them: estimated from the events (cached), the simulator's ground truth or, with flow=model,
+// none yet (the model's flow is computed at the first step that uses it).
 void Trainer::setup_flows() {
   const bool warp = cfg_.warp_weight > 0, upsample = cfg_.blur_upsample > 1;
   if (!warp && !upsample) return;
@@ -132,26 +134,84 @@ void Trainer::setup_flows() {
   if (warp && data_.events.size() == 0)
     throw std::invalid_argument("warp_weight > 0 needs an event stream with times, and the dataset in '" + data_.root +
                                 "' has none");
-  const auto flows = training_flows(ctx_, data_, cfg_.flow, cameras_->frame_times());
-  if (upsample)
-    for (const auto& view : flows) {
-      std::vector<float> planes;
-      for (const auto& d : view) append_displacement_planes(d, planes);
-      ctx_.check_binding_size(planes.size() * 4, "upsampled blur flow");
-      flow_planes_.emplace_back(ctx_, planes.size() * 4, "flow_planes");
-      flow_planes_.back().write(planes);
+  if (cfg_.flow_refresh < 1) throw std::invalid_argument("flow_refresh must be >= 1");
+  if (!(cfg_.flow_model_from >= 0 && cfg_.flow_model_from <= 1))
+    throw std::invalid_argument("flow_model_from must be in [0, 1]");
+  const bool model = cfg_.flow == FlowSource::Model;
+  if (model && cfg_.flow_model_from > 0)
+    throw std::invalid_argument(
+        "flow_model_from switches flow=events or gt to the model's flow; with flow=model it "
+        "must be 0");
+  const std::vector<double>& times = cameras_->frame_times();
+  const size_t hw = size_t(data_.train[0].camera.width) * data_.train[0].camera.height;
+  if (model)
+    flows_.assign(data_.train.size(),
+                  std::vector<std::vector<float>>(times.size() - 1, std::vector<float>(hw * 2, NAN)));
+  else
+    flows_ = training_flows(ctx_, data_, cfg_.flow, times);
+  if (model || cfg_.flow_model_from > 0) model_flow_ = std::make_unique<ModelFlow>(ctx_);
+  if (upsample) {
+    const size_t bytes = (times.size() - 1) * hw * 2 * 4;
+    ctx_.check_binding_size(bytes, "upsampled blur flow");
+    for (uint32_t v = 0; v < data_.train.size(); ++v) {
+      flow_planes_.emplace_back(ctx_, bytes, "flow_planes");
+      upload_view_flow(v);
     }
-  if (warp) add_warp_term(flows);
+  }
+  if (warp) add_warp_term();
 }
 
 // The warped-event loss L_ev^w: each view's events warped along its intervals' flows.
-void Trainer::add_warp_term(const std::vector<std::vector<std::vector<float>>>& flows) {
-  const auto planes = warped_event_planes(data_, cfg_, cameras_->frame_times(), flows);
+void Trainer::add_warp_term() {
+  const auto planes = warped_event_planes(data_, cfg_, cameras_->frame_times(), flows_);
   WarpedEventOptions o;
   o.norm_floor_rms = float(cfg_.event_norm_floor);
   o.pool = cfg_.event_pool;
-  add_loss(std::make_unique<WarpedEventLoss>(ctx_, data_.events.width, data_.events.height, planes,
-                                             float(cfg_.warp_weight), o));
+  auto term = std::make_unique<WarpedEventLoss>(ctx_, data_.events.width, data_.events.height, planes,
+                                                float(cfg_.warp_weight), o);
+  warp_ = term.get();
+  add_loss(std::move(term));
+}
+
+// View v's flow where the terms read it: the upsampled blur's planes and the warped events.
+void Trainer::upload_view_flow(uint32_t v) {
+  if (!flow_planes_.empty()) {
+    std::vector<float> planes;
+    for (const auto& d : flows_[v]) append_displacement_planes(d, planes);
+    flow_planes_[v].write(planes);
+  }
+  if (warp_) warp_->set_view_planes(v, view_warped_event_planes(data_, cfg_, cameras_->frame_times(), v, flows_[v]));
+}
+
+// The first step that trains with the model's flow (UINT32_MAX: never).
+uint32_t Trainer::model_flow_start() const {
+  if (!model_flow_) return UINT32_MAX;
+  if (cfg_.flow == FlowSource::Model) return 1;
+  return uint32_t(cfg_.flow_model_from * cfg_.iterations) + 1;  // as event_from counts
+}
+
+// The model's flow is recomputed when this step uses flow and the last computation is
+// flow_refresh steps old (or there was none).
+bool Trainer::model_flow_due(bool exposure_on) const {
+  if (step_ < model_flow_start()) return false;
+  const bool used = !flow_planes_.empty() || (warp_ && exposure_on);
+  return used && (model_flow_step_ == 0 || step_ - model_flow_step_ >= cfg_.flow_refresh);
+}
+
+void Trainer::refresh_model_flows() {
+  StepClock clock;
+  for (uint32_t v = 0; v < data_.train.size(); ++v) refresh_model_flow(v);
+  model_flow_step_ = step_;
+  std::fprintf(stderr, "flow: the model's flow of %zu views at step %u in %.1f s\n", data_.train.size(), step_,
+               clock.total() / 1000.0);
+}
+
+// View v's flow from the current splats and its trajectory's virtual-frame poses.
+void Trainer::refresh_model_flow(uint32_t v) {
+  std::vector<Camera> cams;
+  for (uint32_t i = 0; i < exposure_->frames(); ++i) cams.push_back(cameras_->frame_camera(v, i));
+  flows_[v] = model_flow_->intervals(raster_, *params_, cams, render_settings());
+  upload_view_flow(v);
 }
 
 RenderSettings Trainer::render_settings() const {
@@ -169,11 +229,13 @@ StepStats Trainer::step() {
   st.step = ++step_;
   st.view = view_for_step(step_, data_.train.size(), cfg_.seed);
   const bool exposure_on = terms_.has_exposure_terms() && step_ > uint32_t(cfg_.event_from * cfg_.iterations);
+  if (model_flow_due(exposure_on)) refresh_model_flows();
   render_exposure(st.view);
   st.raster_forward_ms = clock.lap();
   record_losses(st, exposure_on);
   st.loss_ms = clock.lap();
   read_losses(st, exposure_on);
+  if (st.flipped && model_flow_step_ > 0) refresh_model_flow(st.view);  // the reversed trajectory's flow
   if (!st.flipped && !st.skipped) {
     backward(st.view, exposure_on);
     st.raster_backward_ms = clock.lap();
@@ -264,7 +326,7 @@ void Trainer::backward(uint32_t view, bool exposure_on) {
   cameras_->backward_and_step(view, pose, step_);
 }
 
-ViewSnapshot Trainer::snapshot(uint32_t v) {
+ViewSnapshot Trainer::snapshot(uint32_t v, int interval) {
   render_exposure(v);
   const size_t n = size_t(data_.train.at(v).camera.width) * data_.train[v].camera.height * 3;
   ViewSnapshot out{cameras_->frame_times(), exposure_->images(), image_model_->prediction().read<float>(n),
@@ -272,7 +334,30 @@ ViewSnapshot Trainer::snapshot(uint32_t v) {
   if (cfg_.loss_space == LossSpace::Linear)
     for (auto* img : {&out.model, &out.target})
       for (float& x : *img) x = io::linear_to_srgb(x);
+  if (interval >= 0 && !flows_.empty()) {
+    out.has_flow = true;
+    out.flow = flow_snapshot(v, uint32_t(interval));
+  }
   return out;
+}
+
+// After render_exposure(v): interval i's flow and, with the warped-event loss, what it compares
+// for the frame i + 1 just rendered.
+FlowSnapshot Trainer::flow_snapshot(uint32_t v, uint32_t interval) {
+  FlowSnapshot f;
+  f.intervals = flow_intervals();
+  if (interval >= f.intervals)
+    throw std::invalid_argument("flow snapshot: interval " + std::to_string(interval) + " of " +
+                                std::to_string(f.intervals));
+  f.interval = interval;
+  f.width = data_.train[v].camera.width;
+  f.height = data_.train[v].camera.height;
+  f.flow = flows_[v][interval];
+  if (warp_) {
+    f.warped = true;
+    std::tie(f.measured, f.predicted) = warp_->compared(cmd_, v, interval, image_model_->linear_frame(interval + 1));
+  }
+  return f;
 }
 
 std::vector<float> Trainer::render(const Camera& cam) {

@@ -14,6 +14,7 @@
 
 #include "events/gpu_events.h"
 #include "io/dataset.h"
+#include "loss/warped_event_loss.h"
 #include "splat/rasterizer.h"
 #include "train/camera_model.h"
 #include "train/checkpoint.h"
@@ -22,6 +23,7 @@
 #include "train/gaussian_optimizer.h"
 #include "train/image_model.h"
 #include "train/loss_terms.h"
+#include "train/model_flow.h"
 #include "train/train_config.h"
 #include "train/training_data.h"
 
@@ -41,6 +43,18 @@ struct StepStats {
   std::vector<double> term_values;
 };
 
+// One interval's optical flow of a training view as training uses it, and what the
+// warped-event loss compares there (for viewers).
+struct FlowSnapshot {
+  uint32_t interval = 0, intervals = 0;  // interval i of the exposure's 2N
+  uint32_t width = 0, height = 0;
+  std::vector<float> flow;  // d_i: H * W * 2, u and v interleaved (NaN: no flow at that pixel)
+  bool warped = false;      // the warped-event loss is on and `measured` / `predicted` are set
+  // M_i (the interval's events warped to t_{i+1}, signed, threshold-weighted) and P_i = -(grad
+  // L_{i+1} . d_i) of the current render, H * W each, 0 off the interior (loss/warped_event_loss.h).
+  std::vector<float> measured, predicted;
+};
+
 // Training view v as the model sees it between steps (for viewers).
 struct ViewSnapshot {
   std::vector<double> times;  // the frames' exposure times u
@@ -48,6 +62,8 @@ struct ViewSnapshot {
       frames;                 // their renders, planar sRGB on the GPU (valid until the next step or snapshot)
   std::vector<float> model;   // the image model's prediction (blur: the frames' mean), planar sRGB
   std::vector<float> target;  // the training target, planar sRGB
+  bool has_flow = false;      // snapshot(v, interval) of a run that uses flow: `flow` is set
+  FlowSnapshot flow;
 };
 
 // The training view of a step: a seeded shuffle of the views per epoch (steps count from 1).
@@ -83,15 +99,26 @@ class Trainer {
   GaussianCloud last_gradients() const { return grads_->download(); }
   const std::vector<double>& last_camera_gradient() const { return cameras_->last_gradient(); }
   uint32_t trajectory_flips() const { return flips_; }
-  // Renders view v's exposure as the next step would (its render settings) without training.
-  ViewSnapshot snapshot(uint32_t v);
+  // Renders view v's exposure as the next step would (its render settings) without training;
+  // with interval >= 0 and a run that uses flow, also that interval's flow and warped events.
+  ViewSnapshot snapshot(uint32_t v, int interval = -1);
+  // The flow's intervals per exposure (2N) when the run uses flow (warp_weight, blur_upsample), else 0.
+  uint32_t flow_intervals() const { return flows_.empty() ? 0 : uint32_t(flows_[0].size()); }
+  // The step at which the model's flow was last computed (flow=model, flow_model_from); 0: never.
+  uint32_t model_flow_step() const { return model_flow_step_; }
 
  private:
   void setup(const GaussianCloud& start);
   void upload_targets();
   void add_event_term();
   void setup_flows();
-  void add_warp_term(const std::vector<std::vector<std::vector<float>>>& flows);
+  void add_warp_term();
+  uint32_t model_flow_start() const;
+  bool model_flow_due(bool exposure_on) const;
+  void refresh_model_flows();
+  void refresh_model_flow(uint32_t v);
+  void upload_view_flow(uint32_t v);
+  FlowSnapshot flow_snapshot(uint32_t v, uint32_t interval);
   RenderSettings render_settings() const;
   // The stages of a step.
   void render_exposure(uint32_t view);
@@ -117,6 +144,11 @@ class Trainer {
   std::unique_ptr<DirectionCheck> direction_;
   std::vector<gpu::Buffer> frame_grad_;   // per virtual frame, linear light (exposure terms only)
   std::vector<gpu::Buffer> flow_planes_;  // per view, the upsampled blur's displacement planes
+  // Per view, per interval: the flow in use, H * W * 2 (NaN: none); empty when no term uses flow.
+  std::vector<std::vector<std::vector<float>>> flows_;
+  WarpedEventLoss* warp_ = nullptr;        // the warped-event term, when on
+  std::unique_ptr<ModelFlow> model_flow_;  // flow=model or flow_model_from
+  uint32_t model_flow_step_ = 0;
   std::unique_ptr<GaussianOptimizer> optimizer_;
   RenderState preview_;  // render()
   uint32_t step_ = 0;

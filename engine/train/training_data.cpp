@@ -85,24 +85,29 @@ io::Image training_target(const io::Dataset& data, size_t view, const TrainConfi
   return out;
 }
 
+std::vector<float> view_warped_event_planes(const io::Dataset& data, const TrainConfig& cfg,
+                                            const std::vector<double>& frame_u, size_t v,
+                                            const std::vector<std::vector<float>>& flows) {
+  const auto [pos, neg] = event_thresholds(data, cfg);
+  const io::View& view = data.train.at(v);
+  const double t0 = view.exposure_start, span = view.exposure_end - view.exposure_start;
+  std::vector<float> planes;
+  for (size_t i = 0; i + 1 < frame_u.size(); ++i) {
+    const std::vector<float>& d = flows.at(i);
+    const std::vector<float> m =
+        warp_events_to_end(data.events, t0 + frame_u[i] * span, t0 + frame_u[i + 1] * span, d, pos, neg);
+    planes.insert(planes.end(), m.begin(), m.end());
+    append_displacement_planes(d, planes);
+  }
+  return planes;
+}
+
 std::vector<std::vector<float>> warped_event_planes(const io::Dataset& data, const TrainConfig& cfg,
                                                     const std::vector<double>& frame_u,
                                                     const std::vector<std::vector<std::vector<float>>>& flows) {
-  const auto [pos, neg] = event_thresholds(data, cfg);
   std::vector<std::vector<float>> out;
-  for (size_t v = 0; v < data.train.size(); ++v) {
-    const io::View& view = data.train[v];
-    const double t0 = view.exposure_start, span = view.exposure_end - view.exposure_start;
-    std::vector<float> planes;
-    for (size_t i = 0; i + 1 < frame_u.size(); ++i) {
-      const std::vector<float>& d = flows.at(v).at(i);
-      const std::vector<float> m =
-          warp_events_to_end(data.events, t0 + frame_u[i] * span, t0 + frame_u[i + 1] * span, d, pos, neg);
-      planes.insert(planes.end(), m.begin(), m.end());
-      append_displacement_planes(d, planes);
-    }
-    out.push_back(std::move(planes));
-  }
+  for (size_t v = 0; v < data.train.size(); ++v)
+    out.push_back(view_warped_event_planes(data, cfg, frame_u, v, flows.at(v)));
   return out;
 }
 

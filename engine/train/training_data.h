@@ -33,6 +33,10 @@ std::unique_ptr<IntervalEvents> training_events(gpu::Context& ctx, const io::Dat
 std::vector<std::vector<float>> warped_event_planes(const io::Dataset& data, const TrainConfig& cfg,
                                                     const std::vector<double>& frame_u,
                                                     const std::vector<std::vector<std::vector<float>>>& flows);
+// The same for training view v alone, from its intervals' flows.
+std::vector<float> view_warped_event_planes(const io::Dataset& data, const TrainConfig& cfg,
+                                            const std::vector<double>& frame_u, size_t v,
+                                            const std::vector<std::vector<float>>& flows);
 
 // Random Gaussians inside the training views' frustums between the near and far bounds, coloured
 // from the pixel they were seeded on; with init=points, one Gaussian per sparse point of the
