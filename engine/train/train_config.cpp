@@ -243,8 +243,10 @@ std::vector<Setting> event_settings() {
             "towards a quantised target ([losses.md](losses.md))"),
       field("event_weight_end", &TrainConfig::event_weight_end,
             "the event terms' weights (L_ev^gs, L_ev^w) at the last step, as a fraction of `event_weight` and "
-            "`warp_weight`: they fall linearly to it from the end of the direction check (`event_flip_until`); "
-            "1: constant"),
+            "`warp_weight`: they fall linearly to it from the end of the direction check (`event_flip_until`), "
+            "once the trajectories' direction and order are settled, so that the blur loss finishes the model; "
+            "1: constant. 0 chosen on the objects scene and checked on the default scene "
+            "([experiments.md](experiments.md#what-the-event-term-costs))"),
       field("warp_weight", &TrainConfig::warp_weight,
             "λ of the warped-event loss L_ev^w (paper Eq. 6-7: each interval's events moved along its optical "
             "flow to the interval's end, against the frame's edges moved by the flow; [losses.md](losses.md)); "

@@ -52,7 +52,7 @@ struct TrainConfig {
   double event_theta_pos = 0.0, event_theta_neg = 0.0;
   double event_norm_floor = 1e-3;
   uint32_t event_pool = 1;
-  double event_weight_end = 1.0;
+  double event_weight_end = 0.0;
   double event_flip_until = 0.8, event_flip_margin = 0.05;
   double event_from = 0.3;
   double warp_weight = 0.0;
