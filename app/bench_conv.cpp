@@ -1,0 +1,120 @@
+#include "bench_conv.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "gpu/commands.h"
+#include "nn/conv_stack.h"
+
+namespace evflow::app {
+
+namespace {
+
+std::vector<uint32_t> parse_widths(const std::string& s) {
+  std::vector<uint32_t> w;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const long v = std::strtol(item.c_str(), nullptr, 10);
+    if (v <= 0 || v > 4096) throw std::invalid_argument("bench conv: --widths: '" + item + "' is not a width");
+    w.push_back(uint32_t(v));
+  }
+  if (w.size() < 2) throw std::invalid_argument("bench conv: --widths needs the input width and at least one layer");
+  return w;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
+struct LayerTimes {
+  std::vector<double> fwd, bwd;
+};
+
+// Per layer: 2 MACs / time forward; backward does the weight gradient, and the input gradient
+// for every layer but the first (the stack's input needs none): 2 or 1 times the MACs.
+void print_table(const std::vector<uint64_t>& macs, const std::vector<LayerTimes>& t, const std::string& head) {
+  std::printf("%s\n  layer   GMAC   fwd ms  fwd GFLOP/s   bwd ms  bwd GFLOP/s\n", head.c_str());
+  double f_ms = 0, b_ms = 0, f_flop = 0, b_flop = 0;
+  for (size_t i = 0; i < t.size(); ++i) {
+    const double f = median(t[i].fwd), b = median(t[i].bwd), fl = 2.0 * macs[i], bl = fl * (i ? 2 : 1);
+    std::printf("  %5zu %6.2f %8.1f %12.2f %8.1f %12.2f\n", i, macs[i] * 1e-9, f, fl / f * 1e-6, b, bl / b * 1e-6);
+    f_ms += f, b_ms += b, f_flop += fl, b_flop += bl;
+  }
+  std::printf("  total  %6.2f %7.1f %12.2f %8.1f %12.2f\n", f_flop * 0.5e-9, f_ms, f_flop / f_ms * 1e-6, b_ms,
+              b_flop / b_ms * 1e-6);
+}
+
+void print_json(const std::vector<uint64_t>& macs, const std::vector<LayerTimes>& t, const std::string& head) {
+  std::printf("%s, \"layers\": [", head.c_str());
+  double f_ms = 0, b_ms = 0, f_flop = 0, b_flop = 0;
+  for (size_t i = 0; i < t.size(); ++i) {
+    const double f = median(t[i].fwd), b = median(t[i].bwd), fl = 2.0 * macs[i], bl = fl * (i ? 2 : 1);
+    std::printf(
+        "%s{\"macs\": %llu, \"forward_ms\": %.3f, \"forward_gflops\": %.3f, \"backward_ms\": %.3f, "
+        "\"backward_gflops\": %.3f}",
+        i ? ", " : "", (unsigned long long)macs[i], f, fl / f * 1e-6, b, bl / b * 1e-6);
+    f_ms += f, b_ms += b, f_flop += fl, b_flop += bl;
+  }
+  std::printf(
+      "], \"forward_ms\": %.3f, \"forward_gflops\": %.3f, \"backward_ms\": %.3f, \"backward_gflops\": %.3f, "
+      "\"gflops\": %.3f}\n",
+      f_ms, f_flop / f_ms * 1e-6, b_ms, b_flop / b_ms * 1e-6, (f_flop + b_flop) / (f_ms + b_ms) * 1e-6);
+}
+
+}  // namespace
+
+int bench_conv(ArgParser& p) {
+  const uint32_t W = uint32_t(p.integer("--width", 346)), H = uint32_t(p.integer("--height", 260));
+  const std::vector<uint32_t> widths = parse_widths(p.value("--widths", "32,64,128,64,16,1"));
+  const int repeats = int(p.integer("--repeats", 5)), warmup = int(p.integer("--warmup", 1));
+  const bool json = p.flag("--json");
+  gpu::ContextOptions o = context_options(p);
+  p.reject_unknown();
+  if (W == 0 || H == 0 || repeats < 1) throw std::invalid_argument("bench conv: size and repeats must be positive");
+  gpu::Context ctx(o);
+  nn::ConvStack stack(ctx, widths, H, W, "bench");
+  stack.init_he(1);
+  std::vector<float> v(stack.input().count());
+  for (size_t i = 0; i < v.size(); ++i) v[i] = float((i * 2654435761u) % 1000) / 1000.0f;
+  stack.input().upload(v);
+  stack.output_grad().upload(std::vector<float>(stack.output().count(), 1e-3f));
+  gpu::Commands cmd(ctx);
+  std::vector<LayerTimes> times(stack.layers());
+  for (int it = 0; it < warmup + repeats; ++it) {
+    stack.forward(cmd, "forward");
+    stack.backward(cmd, false, false, "backward");
+    cmd.submit();
+    if (it < warmup) continue;
+    for (auto& [name, ms] : cmd.stage_ms()) {
+      const size_t layer = std::stoul(name.substr(name.find(' ') + 1));
+      (name[0] == 'f' ? times[layer].fwd : times[layer].bwd).push_back(ms);
+    }
+  }
+  std::vector<uint64_t> macs;
+  for (size_t i = 0; i < stack.layers(); ++i) macs.push_back(stack.layer(i).macs({widths[i], H, W}));
+  std::string list;
+  for (uint32_t w : widths) {
+    if (!list.empty()) list += ',';
+    list += std::to_string(w);
+  }
+  char head[512];
+  if (json) {
+    std::snprintf(head, sizeof head,
+                  "{\"bench\": \"conv\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"widths\": [%s], "
+                  "\"repeats\": %d",
+                  ctx.caps().name.c_str(), W, H, list.c_str(), repeats);
+    print_json(macs, times, head);
+  } else {
+    std::snprintf(head, sizeof head, "conv bench on %s: %ux%u, 3x3 widths %s, median of %d", ctx.caps().name.c_str(), W,
+                  H, list.c_str(), repeats);
+    print_table(macs, times, head);
+  }
+  return 0;
+}
+
+}  // namespace evflow::app
