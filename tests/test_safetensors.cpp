@@ -90,6 +90,7 @@ TEST_CASE("safetensors: truncated and damaged files are refused with the file an
   };
   refuses(good.substr(0, 5), "shorter than the 8-byte header length");
   refuses(good.substr(0, 8 + h.size() / 2), "truncated");
+  refuses(good.substr(0, 8 + h.size() - 4), "truncated");
   refuses(good.substr(0, good.size() - 4), "truncated");
   refuses(good + "xxxx", "cover 80 bytes of data, the file holds 84");
   refuses(with_header(good, "{\"a\": [1, 2"), "not valid JSON");
