@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <ctime>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -34,10 +35,37 @@ double median(std::vector<double> v) {
 struct LayerTimes {
   std::vector<double> fwd, bwd;
 };
+struct Timing {
+  std::vector<LayerTimes> layers;
+  double cpu_s = 0;  // the process's CPU seconds per repeat (all of lavapipe's threads)
+};
+
+// Forward and backward, timed per layer by GPU timestamps; the CPU time of the timed repeats
+// too, which another job on the machine does not inflate as it does the wall time.
+Timing run_repeats(gpu::Context& ctx, nn::ConvStack& stack, int warmup, int repeats) {
+  gpu::Commands cmd(ctx);
+  Timing t;
+  t.layers.resize(stack.layers());
+  std::clock_t start = 0;
+  for (int it = 0; it < warmup + repeats; ++it) {
+    if (it == warmup) start = std::clock();
+    stack.forward(cmd, "forward");
+    stack.backward(cmd, false, false, "backward");
+    cmd.submit();
+    if (it < warmup) continue;
+    for (auto& [name, ms] : cmd.stage_ms()) {
+      const size_t layer = std::stoul(name.substr(name.find(' ') + 1));
+      (name[0] == 'f' ? t.layers[layer].fwd : t.layers[layer].bwd).push_back(ms);
+    }
+  }
+  t.cpu_s = double(std::clock() - start) / CLOCKS_PER_SEC / repeats;
+  return t;
+}
 
 // Per layer: 2 MACs / time forward; backward does the weight gradient, and the input gradient
 // for every layer but the first (the stack's input needs none): 2 or 1 times the MACs.
-void print_table(const std::vector<uint64_t>& macs, const std::vector<LayerTimes>& t, const std::string& head) {
+void print_table(const std::vector<uint64_t>& macs, const Timing& timing, const std::string& head) {
+  const std::vector<LayerTimes>& t = timing.layers;
   std::printf("%s\n  layer   GMAC   fwd ms  fwd GFLOP/s   bwd ms  bwd GFLOP/s\n", head.c_str());
   double f_ms = 0, b_ms = 0, f_flop = 0, b_flop = 0;
   for (size_t i = 0; i < t.size(); ++i) {
@@ -47,9 +75,12 @@ void print_table(const std::vector<uint64_t>& macs, const std::vector<LayerTimes
   }
   std::printf("  total  %6.2f %7.1f %12.2f %8.1f %12.2f\n", f_flop * 0.5e-9, f_ms, f_flop / f_ms * 1e-6, b_ms,
               b_flop / b_ms * 1e-6);
+  std::printf("  forward + backward: %.2f GFLOP/s; %.2f s of CPU per repeat, %.2f GFLOP per CPU second\n",
+              (f_flop + b_flop) / (f_ms + b_ms) * 1e-6, timing.cpu_s, (f_flop + b_flop) / timing.cpu_s * 1e-9);
 }
 
-void print_json(const std::vector<uint64_t>& macs, const std::vector<LayerTimes>& t, const std::string& head) {
+void print_json(const std::vector<uint64_t>& macs, const Timing& timing, const std::string& head) {
+  const std::vector<LayerTimes>& t = timing.layers;
   std::printf("%s, \"layers\": [", head.c_str());
   double f_ms = 0, b_ms = 0, f_flop = 0, b_flop = 0;
   for (size_t i = 0; i < t.size(); ++i) {
@@ -62,8 +93,9 @@ void print_json(const std::vector<uint64_t>& macs, const std::vector<LayerTimes>
   }
   std::printf(
       "], \"forward_ms\": %.3f, \"forward_gflops\": %.3f, \"backward_ms\": %.3f, \"backward_gflops\": %.3f, "
-      "\"gflops\": %.3f}\n",
-      f_ms, f_flop / f_ms * 1e-6, b_ms, b_flop / b_ms * 1e-6, (f_flop + b_flop) / (f_ms + b_ms) * 1e-6);
+      "\"gflops\": %.3f, \"cpu_seconds\": %.3f, \"gflop_per_cpu_second\": %.3f}\n",
+      f_ms, f_flop / f_ms * 1e-6, b_ms, b_flop / b_ms * 1e-6, (f_flop + b_flop) / (f_ms + b_ms) * 1e-6, timing.cpu_s,
+      (f_flop + b_flop) / timing.cpu_s * 1e-9);
 }
 
 }  // namespace
@@ -83,18 +115,7 @@ int bench_conv(ArgParser& p) {
   for (size_t i = 0; i < v.size(); ++i) v[i] = float((i * 2654435761u) % 1000) / 1000.0f;
   stack.input().upload(v);
   stack.output_grad().upload(std::vector<float>(stack.output().count(), 1e-3f));
-  gpu::Commands cmd(ctx);
-  std::vector<LayerTimes> times(stack.layers());
-  for (int it = 0; it < warmup + repeats; ++it) {
-    stack.forward(cmd, "forward");
-    stack.backward(cmd, false, false, "backward");
-    cmd.submit();
-    if (it < warmup) continue;
-    for (auto& [name, ms] : cmd.stage_ms()) {
-      const size_t layer = std::stoul(name.substr(name.find(' ') + 1));
-      (name[0] == 'f' ? times[layer].fwd : times[layer].bwd).push_back(ms);
-    }
-  }
+  const Timing t = run_repeats(ctx, stack, warmup, repeats);
   std::vector<uint64_t> macs;
   for (size_t i = 0; i < stack.layers(); ++i) macs.push_back(stack.layer(i).macs({widths[i], H, W}));
   std::string list;
@@ -108,11 +129,11 @@ int bench_conv(ArgParser& p) {
                   "{\"bench\": \"conv\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"widths\": [%s], "
                   "\"repeats\": %d",
                   ctx.caps().name.c_str(), W, H, list.c_str(), repeats);
-    print_json(macs, times, head);
+    print_json(macs, t, head);
   } else {
     std::snprintf(head, sizeof head, "conv bench on %s: %ux%u, 3x3 widths %s, median of %d", ctx.caps().name.c_str(), W,
                   H, list.c_str(), repeats);
-    print_table(macs, times, head);
+    print_table(macs, t, head);
   }
   return 0;
 }

@@ -19,16 +19,16 @@ EVF_NAMESPACE_BEGIN
 //                                      order (no float atomics: the sums are deterministic).
 // A workgroup computes a kGemmTileM x kGemmTileN tile of C, each invocation kGemmThreadM x
 // kGemmThreadN of it, through shared-memory tiles of kGemmTileK values of k. The narrow
-// variants (file names ending in _narrow) have a tile of kGemmNarrowTileM rows, for layers with
-// few output channels.
+// variants (kernel names ending in _narrow) have a tile of kGemmNarrowTileM rows, each invocation
+// kGemmNarrowThreadM of them, for layers with few output channels.
 EVF_CONST(uint, kGemmThreadM, 8u)
 EVF_CONST(uint, kGemmThreadN, 8u)
 EVF_CONST(uint, kGemmTileM, 64u)
 EVF_CONST(uint, kGemmTileN, 64u)
 EVF_CONST(uint, kGemmTileK, 8u)
 EVF_CONST(uint, kGemmNarrowThreadM, 4u)
-EVF_CONST(uint, kGemmNarrowTileM, 4u)
-EVF_CONST(uint, kGemmNarrowTileN, 512u)
+EVF_CONST(uint, kGemmNarrowTileM, 16u)
+EVF_CONST(uint, kGemmNarrowTileN, 128u)
 struct ConvPC {
   uint in_c, in_h, in_w;
   uint out_c, out_h, out_w;
