@@ -41,6 +41,10 @@ Conv2d::Conv2d(gpu::Context& ctx, ConvSpec spec, std::string name) : ctx_(ctx), 
   if (spec.ksize != 1 && spec.ksize != 3) throw std::invalid_argument("conv " + name_ + ": ksize must be 1 or 3");
   if (spec.stride != 1 && spec.stride != 2) throw std::invalid_argument("conv " + name_ + ": stride must be 1 or 2");
   if (spec.in_c == 0 || spec.out_c == 0) throw std::invalid_argument("conv " + name_ + ": no channels");
+  const uint32_t shared = std::max(kGemmSharedBytes, kGemmNarrowSharedBytes);
+  if (ctx.caps().max_shared_memory < shared)
+    throw gpu::Error("conv " + name_ + ": the GEMM tiles need " + std::to_string(shared) + " bytes of shared memory, " +
+                     ctx.caps().name + " has " + std::to_string(ctx.caps().max_shared_memory));
   ctx.check_binding_size(weight_count() * 4, "conv " + name_ + " weights");
   weight_ = gpu::Buffer(ctx, weight_count() * 4, name_ + ".weight");
   bias_ = gpu::Buffer(ctx, spec.out_c * 4, name_ + ".bias");

@@ -22,13 +22,16 @@ EVF_NAMESPACE_BEGIN
 // variants (kernel names ending in _narrow) have a tile of kGemmNarrowTileM rows, each invocation
 // kGemmNarrowThreadM of them, for layers with few output channels.
 EVF_CONST(uint, kGemmThreadM, 8u)
-EVF_CONST(uint, kGemmThreadN, 8u)
+EVF_CONST(uint, kGemmThreadN, 16u)
 EVF_CONST(uint, kGemmTileM, 64u)
-EVF_CONST(uint, kGemmTileN, 64u)
-EVF_CONST(uint, kGemmTileK, 8u)
+EVF_CONST(uint, kGemmTileN, 128u)
+EVF_CONST(uint, kGemmTileK, 32u)
 EVF_CONST(uint, kGemmNarrowThreadM, 4u)
 EVF_CONST(uint, kGemmNarrowTileM, 16u)
 EVF_CONST(uint, kGemmNarrowTileN, 128u)
+// Shared memory of a GEMM workgroup: the A and B tiles, kGemmTileK rows each.
+EVF_CONST(uint, kGemmSharedBytes, kGemmTileK * (kGemmTileM + kGemmTileN) * 4u)
+EVF_CONST(uint, kGemmNarrowSharedBytes, kGemmTileK * (kGemmNarrowTileM + kGemmNarrowTileN) * 4u)
 struct ConvPC {
   uint in_c, in_h, in_w;
   uint out_c, out_h, out_w;
