@@ -193,7 +193,7 @@ TEST_CASE("nn: ReLU, sigmoid and x2 up-sampling, forward and input gradient", "[
   check_pointwise("upsample", x, 18, 26, [](const NnTensor& t) { return ref::nn_upsample(t, 18, 26); });
 }
 
-TEST_CASE("nn: sigmoid stays finite at large inputs; up-sampling refuses other sizes", "[gpu][nn]") {
+TEST_CASE("nn: sigmoid stays finite at large inputs, and up-sampling refuses other sizes", "[gpu][nn]") {
   auto& ctx = test::gpu_context();
   nn::Tensor x(ctx, {1, 1, 4}, "x"), y(ctx, {1, 1, 4}, "y"), big(ctx, {1, 3, 9}, "big");
   x.upload({-200.0f, -90.0f, 90.0f, 200.0f});
