@@ -62,40 +62,55 @@ Timing run_repeats(gpu::Context& ctx, nn::ConvStack& stack, int warmup, int repe
   return t;
 }
 
-// Per layer: 2 MACs / time forward; backward does the weight gradient, and the input gradient
-// for every layer but the first (the stack's input needs none): 2 or 1 times the MACs.
-void print_table(const std::vector<uint64_t>& macs, const Timing& timing, const std::string& head) {
-  const std::vector<LayerTimes>& t = timing.layers;
-  std::printf("%s\n  layer   GMAC   fwd ms  fwd GFLOP/s   bwd ms  bwd GFLOP/s\n", head.c_str());
-  double f_ms = 0, b_ms = 0, f_flop = 0, b_flop = 0;
-  for (size_t i = 0; i < t.size(); ++i) {
-    const double f = median(t[i].fwd), b = median(t[i].bwd), fl = 2.0 * macs[i], bl = fl * (i ? 2 : 1);
-    std::printf("  %5zu %6.2f %8.1f %12.2f %8.1f %12.2f\n", i, macs[i] * 1e-9, f, fl / f * 1e-6, b, bl / b * 1e-6);
-    f_ms += f, b_ms += b, f_flop += fl, b_flop += bl;
+// One row per layer and the totals: milliseconds and FLOP (2 per MAC). The backward does the
+// weight gradient, and the input gradient for every layer but the first (the stack's input needs
+// none): 2 or 1 times the forward's work.
+struct Figures {
+  double fwd_ms = 0, bwd_ms = 0, fwd_flop = 0, bwd_flop = 0;
+  double fwd_gflops() const { return fwd_flop / fwd_ms * 1e-6; }
+  double bwd_gflops() const { return bwd_flop / bwd_ms * 1e-6; }
+  double gflops() const { return (fwd_flop + bwd_flop) / (fwd_ms + bwd_ms) * 1e-6; }
+};
+
+std::vector<Figures> layer_figures(const std::vector<uint64_t>& macs, const Timing& timing, Figures& total) {
+  std::vector<Figures> rows;
+  for (size_t i = 0; i < timing.layers.size(); ++i) {
+    const double flop = 2.0 * macs[i];
+    rows.push_back({median(timing.layers[i].fwd), median(timing.layers[i].bwd), flop, flop * (i ? 2 : 1)});
+    total.fwd_ms += rows.back().fwd_ms, total.bwd_ms += rows.back().bwd_ms;
+    total.fwd_flop += rows.back().fwd_flop, total.bwd_flop += rows.back().bwd_flop;
   }
-  std::printf("  total  %6.2f %7.1f %12.2f %8.1f %12.2f\n", f_flop * 0.5e-9, f_ms, f_flop / f_ms * 1e-6, b_ms,
-              b_flop / b_ms * 1e-6);
-  std::printf("  forward + backward: %.2f GFLOP/s; %.2f s of CPU per repeat, %.2f GFLOP per CPU second\n",
-              (f_flop + b_flop) / (f_ms + b_ms) * 1e-6, timing.cpu_s, (f_flop + b_flop) / timing.cpu_s * 1e-9);
+  return rows;
+}
+
+void print_table(const std::vector<uint64_t>& macs, const Timing& timing, const std::string& head) {
+  std::printf("%s\n  layer   GMAC   fwd ms  fwd GFLOP/s   bwd ms  bwd GFLOP/s\n", head.c_str());
+  Figures t;
+  const std::vector<Figures> rows = layer_figures(macs, timing, t);
+  for (size_t i = 0; i < rows.size(); ++i)
+    std::printf("  %5zu %6.2f %8.1f %12.2f %8.1f %12.2f\n", i, macs[i] * 1e-9, rows[i].fwd_ms, rows[i].fwd_gflops(),
+                rows[i].bwd_ms, rows[i].bwd_gflops());
+  std::printf("  total  %6.2f %7.1f %12.2f %8.1f %12.2f\n", t.fwd_flop * 0.5e-9, t.fwd_ms, t.fwd_gflops(), t.bwd_ms,
+              t.bwd_gflops());
+  std::printf("  forward + backward: %.2f GFLOP/s; %.2f s of CPU per repeat, %.2f GFLOP per CPU second\n", t.gflops(),
+              timing.cpu_s, (t.fwd_flop + t.bwd_flop) / timing.cpu_s * 1e-9);
 }
 
 void print_json(const std::vector<uint64_t>& macs, const Timing& timing, const std::string& head) {
-  const std::vector<LayerTimes>& t = timing.layers;
   std::printf("%s, \"layers\": [", head.c_str());
-  double f_ms = 0, b_ms = 0, f_flop = 0, b_flop = 0;
-  for (size_t i = 0; i < t.size(); ++i) {
-    const double f = median(t[i].fwd), b = median(t[i].bwd), fl = 2.0 * macs[i], bl = fl * (i ? 2 : 1);
+  Figures t;
+  const std::vector<Figures> rows = layer_figures(macs, timing, t);
+  for (size_t i = 0; i < rows.size(); ++i)
     std::printf(
         "%s{\"macs\": %llu, \"forward_ms\": %.3f, \"forward_gflops\": %.3f, \"backward_ms\": %.3f, "
         "\"backward_gflops\": %.3f}",
-        i ? ", " : "", (unsigned long long)macs[i], f, fl / f * 1e-6, b, bl / b * 1e-6);
-    f_ms += f, b_ms += b, f_flop += fl, b_flop += bl;
-  }
+        i ? ", " : "", (unsigned long long)macs[i], rows[i].fwd_ms, rows[i].fwd_gflops(), rows[i].bwd_ms,
+        rows[i].bwd_gflops());
   std::printf(
       "], \"forward_ms\": %.3f, \"forward_gflops\": %.3f, \"backward_ms\": %.3f, \"backward_gflops\": %.3f, "
       "\"gflops\": %.3f, \"cpu_seconds\": %.3f, \"gflop_per_cpu_second\": %.3f}\n",
-      f_ms, f_flop / f_ms * 1e-6, b_ms, b_flop / b_ms * 1e-6, (f_flop + b_flop) / (f_ms + b_ms) * 1e-6, timing.cpu_s,
-      (f_flop + b_flop) / timing.cpu_s * 1e-9);
+      t.fwd_ms, t.fwd_gflops(), t.bwd_ms, t.bwd_gflops(), t.gflops(), timing.cpu_s,
+      (t.fwd_flop + t.bwd_flop) / timing.cpu_s * 1e-9);
 }
 
 }  // namespace
