@@ -5,6 +5,7 @@
 #include <map>
 #include <vector>
 
+#include "bench_conv.h"
 #include "cli.h"
 #include "flow/flow_estimator.h"
 #include "gpu/commands.h"
@@ -244,16 +245,21 @@ static int run_bench(const Args& a) {
         "  the steps train that dataset with the method (blur modes: 2N+1 renders per step).\n"
         "       evflow bench flow --data DIR [--views N] [--json]\n"
         "  Optical flow from events of the first N (default all) training views: seconds in all and\n"
-        "  the GPU stages summed over every evaluation of the contrast.\n");
+        "  the GPU stages summed over every evaluation of the contrast.\n"
+        "       evflow bench conv [--width 346] [--height 260] [--widths 32,64,128,64,16,1] [--repeats 5] "
+        "[--json]\n"
+        "  Forward and backward of a stack of 3x3 convolutions with ReLU between (the LDI network's\n"
+        "  layers; --widths: input channels, then each layer's): ms and GFLOP/s per layer.\n");
     return pos.empty() ? 2 : 0;
   }
   p.args.erase(std::find(p.args.begin(), p.args.end(), pos[0]));
   if (pos[0] == "raster") return bench_raster(p);
   if (pos[0] == "train") return bench_train(p);
   if (pos[0] == "flow") return bench_flow(p);
-  throw std::invalid_argument("unknown benchmark '" + pos[0] + "' (available: raster, train, flow)");
+  if (pos[0] == "conv") return bench_conv(p);
+  throw std::invalid_argument("unknown benchmark '" + pos[0] + "' (available: raster, train, flow, conv)");
 }
 
-static Command reg("bench", "time the stages of a pipeline (raster, train, flow), as a table or JSON", run_bench);
+static Command reg("bench", "time the stages of a pipeline (raster, train, flow, conv), as a table or JSON", run_bench);
 
 }  // namespace evflow::app

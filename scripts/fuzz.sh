@@ -14,7 +14,7 @@
 # executions, seconds, executions per second, corpus size.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-HARNESSES=(ply gltf_splats gltf_scene npy h5_events txt_events dataset checkpoint)
+HARNESSES=(ply gltf_splats gltf_scene npy h5_events txt_events dataset checkpoint safetensors)
 if [ "${1:-}" = "--list" ]; then printf '%s\n' "${HARNESSES[@]}"; exit 0; fi
 if [ "${1:-}" != "--seeds" ] && [ $# -ne 2 ]; then
   echo "usage: scripts/fuzz.sh NAME|all SECONDS | --check RUNS | --seeds | --list" >&2

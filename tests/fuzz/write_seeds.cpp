@@ -13,6 +13,7 @@
 #include "io/llff.h"
 #include "io/npy.h"
 #include "io/ply_splats.h"
+#include "nn/safetensors.h"
 #include "sim/gltf_scene.h"
 #include "train/checkpoint.h"
 
@@ -105,6 +106,20 @@ void write_dataset_and_checkpoint(const fs::path& out, const fs::path& tmp) {
   seed(out / "checkpoint", "blur_pose.ckpt", tmp / "c.ckpt");
 }
 
+// Weights as a conv stack saves them (two layers and metadata), and a file with no tensors.
+void write_safetensors(const fs::path& out, const fs::path& tmp) {
+  nn::SafetensorsFile f;
+  f.metadata["format"] = "evflow";
+  f.tensors.push_back({"ldi.0.weight", {2, 1, 3, 3}, std::vector<float>(18, 0.125f)});
+  f.tensors.push_back({"ldi.0.bias", {2}, {0.5f, -1.0f}});
+  f.tensors.push_back({"ldi.1.weight", {1, 2, 1, 1}, {1.0f, -2.0f}});
+  f.tensors.push_back({"ldi.1.bias", {1}, {0.0f}});
+  nn::save_safetensors(tmp / "w.safetensors", f);
+  seed(out / "safetensors", "ldi.safetensors", tmp / "w.safetensors");
+  nn::save_safetensors(tmp / "e.safetensors", nn::SafetensorsFile{});
+  seed(out / "safetensors", "empty.safetensors", tmp / "e.safetensors");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -116,6 +131,7 @@ int main(int argc, char** argv) {
   try {
     write_all(out, tmp);
     write_dataset_and_checkpoint(out, tmp);
+    write_safetensors(out, tmp);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "write_seeds: %s\n", e.what());
     return 1;

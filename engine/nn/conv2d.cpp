@@ -1,0 +1,142 @@
+#include "nn/conv2d.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "nn/he_init.h"
+#include "nn/nn_layout.h"
+
+namespace evflow::nn {
+
+using namespace shaderio;
+
+namespace {
+
+// Output pixels per split of the weight gradient's reduction over pixels.
+constexpr uint32_t kPixelsPerSplit = 2048;
+
+bool narrow(uint32_t m) { return m <= 16; }
+
+// The GEMM's push constants for a convolution of x (in) to y (out), with m, n, k and the tiling.
+ConvPC conv_pc(const ConvSpec& s, const Shape& in, const Shape& out, uint32_t m, uint32_t n, uint32_t k) {
+  ConvPC pc{};
+  pc.in_c = in.c, pc.in_h = in.h, pc.in_w = in.w;
+  pc.out_c = out.c, pc.out_h = out.h, pc.out_w = out.w;
+  pc.ksize = s.ksize, pc.stride = s.stride, pc.pad = s.ksize / 2;
+  pc.gemm_m = m, pc.gemm_n = n, pc.gemm_k = k;
+  pc.tiles_n = gpu::Commands::div_up(n, narrow(m) ? kGemmNarrowTileN : kGemmTileN);
+  return pc;
+}
+
+gpu::Groups tile_groups(gpu::Commands& cmd, const ConvPC& pc) {
+  const uint32_t tile_m = narrow(pc.gemm_m) ? kGemmNarrowTileM : kGemmTileM;
+  return cmd.linear_groups(uint64_t(gpu::Commands::div_up(pc.gemm_m, tile_m)) * pc.tiles_n);
+}
+
+std::string kernel(const char* base, uint32_t m) { return std::string("nn/") + base + (narrow(m) ? "_narrow" : ""); }
+
+}  // namespace
+
+Conv2d::Conv2d(gpu::Context& ctx, ConvSpec spec, std::string name) : ctx_(ctx), spec_(spec), name_(std::move(name)) {
+  if (spec.ksize != 1 && spec.ksize != 3) throw std::invalid_argument("conv " + name_ + ": ksize must be 1 or 3");
+  if (spec.stride != 1 && spec.stride != 2) throw std::invalid_argument("conv " + name_ + ": stride must be 1 or 2");
+  if (spec.in_c == 0 || spec.out_c == 0) throw std::invalid_argument("conv " + name_ + ": no channels");
+  const uint32_t shared = std::max(kGemmSharedBytes, kGemmNarrowSharedBytes);
+  if (ctx.caps().max_shared_memory < shared)
+    throw gpu::Error("conv " + name_ + ": the GEMM tiles need " + std::to_string(shared) + " bytes of shared memory, " +
+                     ctx.caps().name + " has " + std::to_string(ctx.caps().max_shared_memory));
+  ctx.check_binding_size(weight_count() * 4, "conv " + name_ + " weights");
+  weight_ = gpu::Buffer(ctx, weight_count() * 4, name_ + ".weight");
+  bias_ = gpu::Buffer(ctx, spec.out_c * 4, name_ + ".bias");
+  weight_grad_ = gpu::Buffer(ctx, weight_count() * 4, name_ + ".weight_grad");
+  bias_grad_ = gpu::Buffer(ctx, spec.out_c * 4, name_ + ".bias_grad");
+  partial_ = gpu::Buffer(ctx, 16, name_ + ".partial_sums");
+  init_he(0);
+}
+
+Shape Conv2d::output_shape(const Shape& in) const {
+  if (in.c != spec_.in_c)
+    throw std::invalid_argument("conv " + name_ + ": input has " + std::to_string(in.c) + " channels, expected " +
+                                std::to_string(spec_.in_c));
+  return {spec_.out_c, (in.h + spec_.stride - 1) / spec_.stride, (in.w + spec_.stride - 1) / spec_.stride};
+}
+
+uint64_t Conv2d::macs(const Shape& in) const { return output_shape(in).pixels() * weight_count(); }
+
+void Conv2d::init_he(uint64_t seed) {
+  set_parameters(he_normal(weight_count(), spec_.in_c * spec_.ksize * spec_.ksize, seed),
+                 std::vector<float>(spec_.out_c, 0.0f));
+}
+
+void Conv2d::set_parameters(const std::vector<float>& weight, const std::vector<float>& bias) {
+  if (weight.size() != weight_count() || bias.size() != spec_.out_c)
+    throw std::invalid_argument("conv " + name_ + ": " + std::to_string(weight.size()) + " weights and " +
+                                std::to_string(bias.size()) + " biases given, expected " +
+                                std::to_string(weight_count()) + " and " + std::to_string(spec_.out_c));
+  weight_.write(weight);
+  bias_.write(bias);
+}
+
+void Conv2d::forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y) const {
+  const Shape out = output_shape(x.shape());
+  require_shape(y, out, "conv " + name_ + " output");
+  const uint32_t taps = spec_.ksize * spec_.ksize;
+  const ConvPC pc = conv_pc(spec_, x.shape(), out, spec_.out_c, uint32_t(out.pixels()), spec_.in_c * taps);
+  cmd.dispatch(
+      kernel("conv_fwd", pc.gemm_m),
+      {{kConvFwdBindX, x.buffer()}, {kConvFwdBindW, weight_}, {kConvFwdBindBias, bias_}, {kConvFwdBindY, y.buffer()}},
+      pc, tile_groups(cmd, pc));
+}
+
+void Conv2d::backward(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, const Tensor* dx, bool accumulate_input,
+                      bool accumulate_params) {
+  const Shape out = output_shape(x.shape());
+  require_shape(dy, out, "conv " + name_ + " output gradient");
+  if (dx) {
+    require_shape(*dx, x.shape(), "conv " + name_ + " input gradient");
+    const uint32_t taps = spec_.ksize * spec_.ksize;
+    ConvPC pc = conv_pc(spec_, x.shape(), out, spec_.in_c, uint32_t(x.shape().pixels()), spec_.out_c * taps);
+    pc.accumulate = accumulate_input ? 1u : 0u;
+    cmd.dispatch(
+        kernel("conv_bwd_input", pc.gemm_m),
+        {{kConvBwdInputBindDy, dy.buffer()}, {kConvBwdInputBindW, weight_}, {kConvBwdInputBindDx, dx->buffer()}}, pc,
+        tile_groups(cmd, pc));
+  }
+  backward_weights(cmd, x, dy, accumulate_params);
+}
+
+// Partial sums per chunk of output pixels (m = out_c, n = weights per output channel + the bias
+// column, k = output pixels), then their sums in split order.
+void Conv2d::backward_weights(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, bool accumulate) {
+  const Shape out = dy.shape();
+  const uint32_t n = spec_.in_c * spec_.ksize * spec_.ksize + 1, pixels = uint32_t(out.pixels());
+  ConvPC pc = conv_pc(spec_, x.shape(), out, spec_.out_c, n, pixels);
+  const uint64_t per_split = uint64_t(pc.gemm_m) * n * 4;
+  uint32_t pps = kPixelsPerSplit;
+  while (per_split * gpu::Commands::div_up(pixels, pps) > ctx_.caps().max_storage_buffer_range) pps *= 2;
+  pc.pixels_per_split = pps;
+  pc.splits = gpu::Commands::div_up(pixels, pps);
+  if (pc.splits > ctx_.caps().max_workgroup_count[2])
+    throw gpu::Error("conv " + name_ + ": " + std::to_string(pc.splits) + " pixel splits exceed the device grid");
+  partial_.ensure(per_split * pc.splits);
+  gpu::Groups g = tile_groups(cmd, pc);
+  g.z = pc.splits;
+  cmd.dispatch(kernel("conv_bwd_weight", pc.gemm_m),
+               {{kConvBwdWeightBindX, x.buffer()},
+                {kConvBwdWeightBindDy, dy.buffer()},
+                {kConvBwdWeightBindPartial, gpu::BufferRef(partial_, 0, per_split * pc.splits)}},
+               pc, g);
+  pc.accumulate = accumulate ? 1u : 0u;
+  cmd.dispatch("nn/conv_reduce",
+               {{kConvReduceBindPartial, gpu::BufferRef(partial_, 0, per_split * pc.splits)},
+                {kConvReduceBindDw, weight_grad_},
+                {kConvReduceBindDb, bias_grad_}},
+               pc, cmd.linear_groups(gpu::Commands::div_up(uint64_t(pc.gemm_m) * n, kReduceGroupSize)));
+}
+
+void Conv2d::add_to(Adam& adam, float lr) const {
+  adam.add_group({name_ + ".weight", &weight_, &weight_grad_, uint32_t(weight_count()), lr, 1});
+  adam.add_group({name_ + ".bias", &bias_, &bias_grad_, spec_.out_c, lr, 1});
+}
+
+}  // namespace evflow::nn

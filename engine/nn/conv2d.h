@@ -1,0 +1,66 @@
+// A 2-D convolution layer (3x3 or 1x1, padding ksize / 2, stride 1 or 2) with its weights, bias
+// and their gradients on the device; forward and backward are recorded into a command batch as
+// tiled implicit-GEMM kernels (shaders/nn/nn_layout.h). Weights are W[out_c][in_c][ky][kx].
+//
+// The weight gradient is deterministic: partial sums per chunk of output pixels, then a second
+// pass adds them in a fixed order (no float atomics).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gpu/commands.h"
+#include "nn/tensor.h"
+#include "optim/adam.h"
+
+namespace evflow::nn {
+
+struct ConvSpec {
+  uint32_t in_c = 1, out_c = 1;
+  uint32_t ksize = 3;   // 1 or 3
+  uint32_t stride = 1;  // 1 or 2
+};
+
+class Conv2d {
+ public:
+  Conv2d(gpu::Context& ctx, ConvSpec spec, std::string name);
+
+  const ConvSpec& spec() const { return spec_; }
+  const std::string& name() const { return name_; }
+  uint64_t weight_count() const { return uint64_t(spec_.out_c) * spec_.in_c * spec_.ksize * spec_.ksize; }
+  // The output's shape for an input of `in` (throws when in.c differs from in_c).
+  Shape output_shape(const Shape& in) const;
+  // Multiply-adds of one forward pass over an input of `in` (the backward costs twice this).
+  uint64_t macs(const Shape& in) const;
+
+  // He initialisation of the weights (fan_in = in_c ksize^2), zero bias.
+  void init_he(uint64_t seed);
+  void set_parameters(const std::vector<float>& weight, const std::vector<float>& bias);
+  std::vector<float> weight_values() const { return weight_.read<float>(weight_count()); }
+  std::vector<float> bias_values() const { return bias_.read<float>(spec_.out_c); }
+
+  // y = conv(x) + bias.
+  void forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y) const;
+  // From dy (the gradient at y): dx (skipped when null; added into with accumulate_input), and
+  // the weight and bias gradients (added into with accumulate_params, e.g. for weights shared
+  // by two calls). The partial sums' buffer grows to the largest input seen: record a backward
+  // over a larger input than before only after the batch that used the smaller one was submitted.
+  void backward(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, const Tensor* dx, bool accumulate_input = false,
+                bool accumulate_params = false);
+
+  const gpu::Buffer& weight() const { return weight_; }
+  const gpu::Buffer& bias() const { return bias_; }
+  const gpu::Buffer& weight_grad() const { return weight_grad_; }
+  const gpu::Buffer& bias_grad() const { return bias_grad_; }
+  // Adds two groups, "<name>.weight" and "<name>.bias", with learning rate lr.
+  void add_to(Adam& adam, float lr) const;
+
+ private:
+  void backward_weights(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, bool accumulate);
+  gpu::Context& ctx_;
+  ConvSpec spec_;
+  std::string name_;
+  gpu::Buffer weight_, bias_, weight_grad_, bias_grad_, partial_;
+};
+
+}  // namespace evflow::nn

@@ -1,0 +1,91 @@
+// Neural layers: push constants, tile sizes and bindings shared by engine/nn (C++) and
+// shaders/nn (GLSL). Tensors are NCHW float32 with N = 1: element (c, y, x) at (c * H + y) * W + x.
+#ifndef EVF_NN_LAYOUT_H
+#define EVF_NN_LAYOUT_H
+#include "common/shared_prelude.h"
+EVF_NAMESPACE_BEGIN
+
+// Convolutions as one implicit GEMM, C[m][n] = sum_k A(m, k) B(k, n) (nn/gemm.glsl), in three
+// forms over a KxK kernel (K = 1 or 3), padding K / 2, stride 1 or 2, weights W[co][ci][ky][kx]:
+//   forward      (nn/conv_fwd):        m = co, n = output pixel, k = (ci, ky, kx);
+//                                      A = W, B = input at the tap (0 outside), C + bias[co] -> y
+//   input grad   (nn/conv_bwd_input):  m = ci, n = input pixel, k = (co, ky, kx);
+//                                      A = W transposed, B = dy at the output pixel whose tap lands
+//                                      on n (0 where none does) -> dx (written or added)
+//   weight grad  (nn/conv_bwd_weight): m = co, n = (ci, ky, kx) and one more column for the bias
+//                                      (B = 1), k = output pixel, split into chunks of
+//                                      pixels_per_split; each chunk writes its partial sums
+//                                      partial[split][m][n], which nn/conv_reduce adds in split
+//                                      order (no float atomics: the sums are deterministic).
+// A workgroup computes a kGemmTileM x kGemmTileN tile of C, each invocation kGemmThreadM x
+// kGemmThreadN of it, through shared-memory tiles of kGemmTileK values of k. The narrow
+// variants (kernel names ending in _narrow) have a tile of kGemmNarrowTileM rows, each invocation
+// kGemmNarrowThreadM of them, for layers with few output channels.
+EVF_CONST(uint, kGemmThreadM, 8u)
+EVF_CONST(uint, kGemmThreadN, 16u)
+EVF_CONST(uint, kGemmTileM, 64u)
+EVF_CONST(uint, kGemmTileN, 128u)
+EVF_CONST(uint, kGemmTileK, 32u)
+EVF_CONST(uint, kGemmNarrowThreadM, 4u)
+EVF_CONST(uint, kGemmNarrowTileM, 16u)
+EVF_CONST(uint, kGemmNarrowTileN, 128u)
+// Shared memory of a GEMM workgroup: the A and B tiles, kGemmTileK rows each.
+EVF_CONST(uint, kGemmSharedBytes, kGemmTileK * (kGemmTileM + kGemmTileN) * 4u)
+EVF_CONST(uint, kGemmNarrowSharedBytes, kGemmTileK * (kGemmNarrowTileM + kGemmNarrowTileN) * 4u)
+struct ConvPC {
+  uint in_c, in_h, in_w;
+  uint out_c, out_h, out_w;
+  uint ksize;   // 1 or 3
+  uint stride;  // 1 or 2
+  uint pad;     // ksize / 2
+  uint gemm_m, gemm_n, gemm_k;
+  uint tiles_n;           // workgroups along n (the linear group index is tile_m * tiles_n + tile_n)
+  uint pixels_per_split;  // weight grad: values of k per split, a multiple of kGemmTileK
+  uint accumulate;        // input grad: 1 adds into dx; reduce: 1 adds into dw and db
+  uint splits;            // reduce: partial sums to add
+};
+
+// Element-wise layers, one invocation per value: ReLU, sigmoid (forward from x, backward from
+// the forward's output y and dy), and x2 nearest up-sampling to out_h x out_w (at most 2 h x 2 w:
+// out(c, y, x) = in(c, y / 2, x / 2); its backward adds the up to four outputs of each input).
+EVF_CONST(uint, kNnGroupSize, 256u)
+struct PointwisePC {
+  uint count;        // values (channels * h * w of the output)
+  uint channels;     // up-sampling: channels; others unused
+  uint in_h, in_w;   // up-sampling: the low-resolution size
+  uint out_h, out_w; // up-sampling: the high-resolution size
+  uint accumulate;   // backward: 1 adds into the gradient instead of writing it
+  uint pad0;
+};
+// conv_reduce: one invocation per weight (and bias) value.
+EVF_CONST(uint, kReduceGroupSize, 256u)
+
+// Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
+// nn/conv_fwd, nn/conv_fwd_narrow
+EVF_BIND(kConvFwdBindX, 0u, X)
+EVF_BIND(kConvFwdBindW, 1u, Weight)
+EVF_BIND(kConvFwdBindBias, 2u, Bias)
+EVF_BIND(kConvFwdBindY, 3u, Y)
+// nn/conv_bwd_input, nn/conv_bwd_input_narrow
+EVF_BIND(kConvBwdInputBindDy, 0u, Dy)
+EVF_BIND(kConvBwdInputBindW, 1u, Weight)
+EVF_BIND(kConvBwdInputBindDx, 2u, Dx)
+// nn/conv_bwd_weight, nn/conv_bwd_weight_narrow
+EVF_BIND(kConvBwdWeightBindX, 0u, X)
+EVF_BIND(kConvBwdWeightBindDy, 1u, Dy)
+EVF_BIND(kConvBwdWeightBindPartial, 2u, Partial)
+// nn/conv_reduce
+EVF_BIND(kConvReduceBindPartial, 0u, Partial)
+EVF_BIND(kConvReduceBindDw, 1u, Dw)
+EVF_BIND(kConvReduceBindDb, 2u, Db)
+// nn/relu, nn/sigmoid, nn/upsample
+EVF_BIND(kActFwdBindX, 0u, X)
+EVF_BIND(kActFwdBindY, 1u, Y)
+// nn/relu_bwd, nn/sigmoid_bwd, nn/upsample_bwd (relu_bwd and sigmoid_bwd read the forward's
+// output y, upsample_bwd does not bind it)
+EVF_BIND(kActBwdBindY, 0u, Y)
+EVF_BIND(kActBwdBindDy, 1u, Dy)
+EVF_BIND(kActBwdBindDx, 2u, Dx)
+
+EVF_NAMESPACE_END
+#endif
