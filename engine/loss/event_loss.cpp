@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "loss/event_sums.h"
 #include "loss/loss_layout.h"
 
 namespace evflow {
@@ -102,15 +103,7 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
                   {shaderio::kEventPairBindScratch, scratch_},
                   {shaderio::kEventPairBindPartials, partials_}},
                  pc, gc);
-    shaderio::ReducePC r{};
-    r.coeff0 = glm::vec4(1, 0, 0, 0);
-    r.coeff1 = glm::vec4(0, 1, 0, 0);
-    r.coeff2 = glm::vec4(0, 0, 1, 0);
-    r.n_partials = cell_groups;
-    r.dst = 4 * q;
-    r.n_out = 3;
-    cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}}, r,
-                 gpu::Groups{1, 1, 1});
+    record_event_sums(cmd, partials_, sums_, cell_groups, 4 * q);
     if (gradients)
       cmd.dispatch("loss/event_pair_bwd",
                    {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},

@@ -3,6 +3,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "loss/event_sums.h"
 #include "loss/loss_layout.h"
 
 namespace evflow {
@@ -56,9 +57,9 @@ WarpedEventLoss::WarpedEventLoss(gpu::Context& ctx, uint32_t width, uint32_t hei
     planes_.back().write(planes[v]);
   }
   const uint64_t cells = event_pool_cells(width, height, options.pool);
+  cell_groups_ = gpu::Commands::div_up(cells, shaderio::kLossGroupSize);
   scratch_ = gpu::Buffer(ctx, 2 * cells * 4, "warped_scratch");
-  partials_ =
-      gpu::Buffer(ctx, uint64_t(gpu::Commands::div_up(cells, shaderio::kLossGroupSize)) * 16, "warped_partials");
+  partials_ = gpu::Buffer(ctx, uint64_t(cell_groups_) * 16, "warped_partials");
   sums_ = gpu::Buffer(ctx, uint64_t(intervals_) * 16, "warped_sums");
 }
 
@@ -113,37 +114,25 @@ std::pair<std::vector<float>, std::vector<float>> WarpedEventLoss::compared(gpu:
 
 void WarpedEventLoss::record_forward(gpu::Commands& cmd, uint32_t view, uint32_t interval, const gpu::Buffer& frame,
                                      float weight) {
-  const uint32_t groups =
-      gpu::Commands::div_up(event_pool_cells(width_, height_, options_.pool), shaderio::kLossGroupSize);
   cmd.dispatch("loss/warped_event",
                {{shaderio::kWarpedEventBindPlanes, planes_[view]},
                 {shaderio::kWarpedEventBindFrame, frame},
                 {shaderio::kWarpedEventBindScratch, scratch_},
                 {shaderio::kWarpedEventBindPartials, partials_}},
                warped_pc(width_, height_, interval, intervals_, value_offset(), options_, weight),
-               cmd.linear_groups(groups));
+               cmd.linear_groups(cell_groups_));
 }
 
 void WarpedEventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
   check(f);
   const uint64_t hw = uint64_t(width_) * height_;
   const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
-  const uint32_t cell_groups =
-      gpu::Commands::div_up(event_pool_cells(width_, height_, options_.pool), shaderio::kLossGroupSize);
   const gpu::Groups g = cmd.linear_groups(groups);
   const gpu::Buffer& planes = planes_[f.view];
   for (uint32_t i = 0; i < intervals_; ++i) {
     const shaderio::WarpedEventPC pc = warped_pc(width_, height_, i, intervals_, value_offset(), options_, weight);
     record_forward(cmd, f.view, i, *f.rgb[i + 1], weight);
-    shaderio::ReducePC r{};
-    r.coeff0 = glm::vec4(1, 0, 0, 0);
-    r.coeff1 = glm::vec4(0, 1, 0, 0);
-    r.coeff2 = glm::vec4(0, 0, 1, 0);
-    r.n_partials = cell_groups;
-    r.dst = 4 * i;
-    r.n_out = 3;
-    cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}}, r,
-                 gpu::Groups{1, 1, 1});
+    record_event_sums(cmd, partials_, sums_, cell_groups_, 4 * i);
     cmd.dispatch("loss/warped_event_bwd",
                  {{shaderio::kWarpedEventBwdBindPlanes, planes},
                   {shaderio::kWarpedEventBwdBindFrame, *f.rgb[i + 1]},

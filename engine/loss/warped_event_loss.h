@@ -55,6 +55,7 @@ class WarpedEventLoss : public ExposureLossTerm {
 
   uint32_t width_, height_, intervals_ = 0;
   WarpedEventOptions options_;
+  uint32_t cell_groups_ = 0;  // workgroups of the forward pass: one invocation per pooling cell
   std::vector<gpu::Buffer> planes_;
   gpu::Buffer scratch_, partials_, sums_;
 };
