@@ -477,7 +477,8 @@ struct SplatPrimitive {
   GaussianCloud cloud;
 };
 
-SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& where) {
+// The primitive's KHR_gaussian_splatting object, checked for what EvFlow can render.
+void check_extension(const json& prim, const std::string& where) {
   const json& ext = member(member(prim, "extensions", where), kExt, where + ".extensions");
   const std::string ext_where = where + ".extensions." + kExt;
   const json& kernel = member(ext, "kernel", ext_where);
@@ -494,28 +495,31 @@ SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& 
   const uint64_t mode = uint_or(prim, "mode", 4, where);
   if (mode != 0)
     throw GltfError(where + " has mode " + std::to_string(mode) + "; KHR_gaussian_splatting requires POINTS (0)");
-  const json& attrs = member(prim, "attributes", where);
-  if (!attrs.is_object()) throw GltfError(where + ".attributes is not an object");
+}
 
-  // SH attributes present: degree l, coefficient n.
+// Marks SH attribute "<prefix><l>_COEF_<n>" present; anything else with the prefix is malformed.
+void mark_sh_attribute(const std::string& key, const std::string& where,
+                       bool (&present)[kMaxShDegree + 1][2 * kMaxShDegree + 1]) {
+  int l = -1, n = -1;
+  const std::string_view rest = std::string_view(key).substr(std::strlen(kShPrefix));
+  const size_t sep = rest.find("_COEF_");
+  const auto parse = [](std::string_view t, int& v) {
+    const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    return ec == std::errc() && ptr == t.data() + t.size() && !t.empty() && t.size() <= 3;
+  };
+  if (sep == std::string_view::npos || !parse(rest.substr(0, sep), l) || !parse(rest.substr(sep + 6), n) || l < 0 ||
+      n < 0 || n > 2 * l || key != sh_name(l, n))
+    throw GltfError(where + ".attributes has malformed SH attribute '" + key + "'");
+  if (l > kMaxShDegree)
+    throw GltfError(where + ".attributes has SH degree " + std::to_string(l) + "; EvFlow supports up to 3");
+  present[l][n] = true;
+}
+
+// The SH degree the attributes define completely (every degree up to it, none above).
+int sh_degree(const json& attrs, const std::string& where) {
   bool present[kMaxShDegree + 1][2 * kMaxShDegree + 1] = {};
-  for (const auto& [key, value] : attrs.items()) {
-    if (key.rfind(kShPrefix, 0) != 0) continue;
-    // "<l>_COEF_<n>", both small decimal integers; anything else is malformed.
-    int l = -1, n = -1;
-    const std::string_view rest = std::string_view(key).substr(std::strlen(kShPrefix));
-    const size_t sep = rest.find("_COEF_");
-    const auto parse = [](std::string_view t, int& v) {
-      const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
-      return ec == std::errc() && ptr == t.data() + t.size() && !t.empty() && t.size() <= 3;
-    };
-    if (sep == std::string_view::npos || !parse(rest.substr(0, sep), l) || !parse(rest.substr(sep + 6), n) || l < 0 ||
-        n < 0 || n > 2 * l || key != sh_name(l, n))
-      throw GltfError(where + ".attributes has malformed SH attribute '" + key + "'");
-    if (l > kMaxShDegree)
-      throw GltfError(where + ".attributes has SH degree " + std::to_string(l) + "; EvFlow supports up to 3");
-    present[l][n] = true;
-  }
+  for (const auto& [key, value] : attrs.items())
+    if (key.rfind(kShPrefix, 0) == 0) mark_sh_attribute(key, where, present);
   int degree = -1;
   for (int l = 0; l <= kMaxShDegree; ++l) {
     int have = 0;
@@ -532,90 +536,106 @@ SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& 
       if (present[l][n])
         throw GltfError(where + ": SH degree " + std::to_string(l) + " is present but degree " +
                         std::to_string(degree + 1) + " is not");
+  return degree;
+}
 
-  auto index_of = [&](const std::string& semantic) -> uint64_t {
+// Rotation (xyzw), scale and opacity of splat g, activated values checked and inverted.
+void store_geometry(GaussianCloud& cloud, uint64_t g, const std::vector<float>& rot, const std::vector<float>& scale,
+                    const std::vector<float>& opacity) {
+  cloud.quats[g * 4 + 0] = rot[g * 4 + 3];  // xyzw -> wxyz
+  for (int a = 0; a < 3; ++a) cloud.quats[g * 4 + 1 + a] = rot[g * 4 + a];
+  for (int a = 0; a < 3; ++a) {
+    const float s = scale[g * 3 + a];
+    if (s < 0)
+      throw GltfError(std::string(kScale) + " of splat " + std::to_string(g) + " is negative (" + std::to_string(s) +
+                      ")");
+    cloud.log_scales[g * 3 + a] = static_cast<float>(std::log(std::max<double>(s, kMinScale)));
+  }
+  const double o = opacity[g];
+  if (o < 0 || o > 1)
+    throw GltfError(std::string(kOpacity) + " of splat " + std::to_string(g) + " is outside [0, 1] (" +
+                    std::to_string(o) + ")");
+  const double oc = std::clamp(o, kOpacityEps, 1.0 - kOpacityEps);
+  cloud.opacity_logits[g] = static_cast<float>(std::log(oc / (1.0 - oc)));
+}
+
+// Reads a primitive's attribute accessors, each checked to have as many elements as POSITION.
+struct AttributeReader {
+  Document& d;
+  const json& attrs;
+  const std::string& where;
+  uint64_t n = 0;  // POSITION's count
+
+  std::vector<float> read(const std::string& semantic, const char* type, const std::vector<Allowed>& formats) {
     const auto it = attrs.find(semantic);
     if (it == attrs.end()) throw GltfError(where + " lacks the required attribute " + semantic);
-    return as_uint(*it, where + ".attributes." + semantic);
-  };
-  uint64_t n = 0, c = 0;
-  const std::vector<float> pos = read_accessor(d, index_of("POSITION"), "POSITION", "VEC3", {{kFloat, false}}, n);
-  auto same_count = [&](const char* semantic) {
-    if (c != n)
+    uint64_t c = 0;
+    std::vector<float> v =
+        read_accessor(d, as_uint(*it, where + ".attributes." + semantic), semantic, type, formats, c);
+    if (semantic == "POSITION")
+      n = c;
+    else if (c != n)
       throw GltfError(where + ": attribute " + semantic + " has " + std::to_string(c) + " elements but POSITION has " +
                       std::to_string(n));
-  };
-  const std::vector<float> rot =
-      read_accessor(d, index_of(kRotation), kRotation, "VEC4", {{kFloat, false}, {kByte, true}, {kShort, true}}, c);
-  same_count(kRotation);
-  const std::vector<float> scale =
-      read_accessor(d, index_of(kScale), kScale, "VEC3",
-                    {{kFloat, false}, {kUByte, false}, {kUByte, true}, {kUShort, false}, {kUShort, true}}, c);
-  same_count(kScale);
-  const std::vector<float> opacity =
-      read_accessor(d, index_of(kOpacity), kOpacity, "SCALAR", {{kFloat, false}, {kUByte, true}, {kUShort, true}}, c);
-  same_count(kOpacity);
+    return v;
+  }
+};
 
+SplatPrimitive read_primitive(Document& d, const json& prim, const std::string& where) {
+  check_extension(prim, where);
+  const json& attrs = member(prim, "attributes", where);
+  if (!attrs.is_object()) throw GltfError(where + ".attributes is not an object");
+  const int degree = sh_degree(attrs, where);
+  AttributeReader in{d, attrs, where};
+  const std::vector<float> pos = in.read("POSITION", "VEC3", {{kFloat, false}});
+  const std::vector<float> rot = in.read(kRotation, "VEC4", {{kFloat, false}, {kByte, true}, {kShort, true}});
+  const std::vector<float> scale =
+      in.read(kScale, "VEC3", {{kFloat, false}, {kUByte, false}, {kUByte, true}, {kUShort, false}, {kUShort, true}});
+  const std::vector<float> opacity = in.read(kOpacity, "SCALAR", {{kFloat, false}, {kUByte, true}, {kUShort, true}});
   SplatPrimitive out;
   out.degree = degree;
   GaussianCloud& cloud = out.cloud;
-  cloud.resize(static_cast<size_t>(n), degree);
+  cloud.resize(static_cast<size_t>(in.n), degree);
   const int K = cloud.coeffs();
   cloud.means = pos;
-  for (uint64_t g = 0; g < n; ++g) {
-    cloud.quats[g * 4 + 0] = rot[g * 4 + 3];  // xyzw -> wxyz
-    for (int a = 0; a < 3; ++a) cloud.quats[g * 4 + 1 + a] = rot[g * 4 + a];
-    for (int a = 0; a < 3; ++a) {
-      const float s = scale[g * 3 + a];
-      if (s < 0)
-        throw GltfError(std::string(kScale) + " of splat " + std::to_string(g) + " is negative (" + std::to_string(s) +
-                        ")");
-      cloud.log_scales[g * 3 + a] = static_cast<float>(std::log(std::max<double>(s, kMinScale)));
-    }
-    const double o = opacity[g];
-    if (o < 0 || o > 1)
-      throw GltfError(std::string(kOpacity) + " of splat " + std::to_string(g) + " is outside [0, 1] (" +
-                      std::to_string(o) + ")");
-    const double oc = std::clamp(o, kOpacityEps, 1.0 - kOpacityEps);
-    cloud.opacity_logits[g] = static_cast<float>(std::log(oc / (1.0 - oc)));
-  }
+  for (uint64_t g = 0; g < in.n; ++g) store_geometry(cloud, g, rot, scale, opacity);
   for (int l = 0; l <= degree; ++l)
     for (int m = 0; m <= 2 * l; ++m) {
-      const std::string semantic = sh_name(l, m);
-      const std::vector<float> coef = read_accessor(d, index_of(semantic), semantic, "VEC3", {{kFloat, false}}, c);
-      same_count(semantic.c_str());
+      const std::vector<float> coef = in.read(sh_name(l, m), "VEC3", {{kFloat, false}});
       const int k = l * l + m;
-      for (uint64_t g = 0; g < n; ++g)
+      for (uint64_t g = 0; g < in.n; ++g)
         for (int ch = 0; ch < 3; ++ch) cloud.sh[(g * K + k) * 3 + ch] = coef[g * 3 + ch];
     }
   return out;
 }
 
-GaussianCloud parse_gltf(const fs::path& path, const std::vector<uint8_t>& bytes, GltfColorSpace* color_space) {
-  Document d;
-  d.path = path;
+// A GLB container: its JSON chunk and, when there is one, its BIN chunk.
+void read_glb(Document& d, const std::vector<uint8_t>& bytes) {
+  if (bytes.size() < 20) throw GltfError("GLB shorter than its 12-byte header and first chunk header (truncated)");
+  const uint32_t version = get_u32(bytes, 4), length = get_u32(bytes, 8);
+  if (version != 2) throw GltfError("GLB version " + std::to_string(version) + ", expected 2");
+  if (length > bytes.size())
+    throw GltfError("GLB header declares " + std::to_string(length) + " bytes but the file has " +
+                    std::to_string(bytes.size()) + " (truncated)");
+  const uint32_t json_len = get_u32(bytes, 12), json_type = get_u32(bytes, 16);
+  if (json_type != kChunkJson) throw GltfError("the first GLB chunk is not JSON");
+  if (json_len > length - 20) throw GltfError("the GLB JSON chunk runs past the end of the file (truncated)");
+  d.doc = json::parse(bytes.begin() + 20, bytes.begin() + 20 + json_len, nullptr, false);
+  if (d.doc.is_discarded()) throw GltfError("the GLB JSON chunk is not valid JSON");
+  size_t at = 20 + size_t(json_len);
+  at = (at + 3) & ~size_t(3);
+  if (at + 8 > length) return;
+  const uint32_t bin_len = get_u32(bytes, at), bin_type = get_u32(bytes, at + 4);
+  if (bin_type != kChunkBin) return;
+  if (bin_len > length - at - 8) throw GltfError("the GLB BIN chunk runs past the end of the file (truncated)");
+  d.glb_bin.assign(bytes.begin() + at + 8, bytes.begin() + at + 8 + bin_len);
+  d.has_glb_bin = true;
+}
+
+// The document of a GLB or a .gltf JSON file, its asset version and required extensions checked.
+void read_document(Document& d, const std::vector<uint8_t>& bytes) {
   if (bytes.size() >= 4 && get_u32(bytes, 0) == kGlbMagic) {
-    if (bytes.size() < 20) throw GltfError("GLB shorter than its 12-byte header and first chunk header (truncated)");
-    const uint32_t version = get_u32(bytes, 4), length = get_u32(bytes, 8);
-    if (version != 2) throw GltfError("GLB version " + std::to_string(version) + ", expected 2");
-    if (length > bytes.size())
-      throw GltfError("GLB header declares " + std::to_string(length) + " bytes but the file has " +
-                      std::to_string(bytes.size()) + " (truncated)");
-    const uint32_t json_len = get_u32(bytes, 12), json_type = get_u32(bytes, 16);
-    if (json_type != kChunkJson) throw GltfError("the first GLB chunk is not JSON");
-    if (json_len > length - 20) throw GltfError("the GLB JSON chunk runs past the end of the file (truncated)");
-    d.doc = json::parse(bytes.begin() + 20, bytes.begin() + 20 + json_len, nullptr, false);
-    if (d.doc.is_discarded()) throw GltfError("the GLB JSON chunk is not valid JSON");
-    size_t at = 20 + size_t(json_len);
-    at = (at + 3) & ~size_t(3);
-    if (at + 8 <= length) {
-      const uint32_t bin_len = get_u32(bytes, at), bin_type = get_u32(bytes, at + 4);
-      if (bin_type == kChunkBin) {
-        if (bin_len > length - at - 8) throw GltfError("the GLB BIN chunk runs past the end of the file (truncated)");
-        d.glb_bin.assign(bytes.begin() + at + 8, bytes.begin() + at + 8 + bin_len);
-        d.has_glb_bin = true;
-      }
-    }
+    read_glb(d, bytes);
   } else {
     size_t start = 0;
     if (bytes.size() >= 3 && bytes[0] == 0xEF && bytes[1] == 0xBB && bytes[2] == 0xBF) start = 3;  // UTF-8 BOM
@@ -628,45 +648,42 @@ GaussianCloud parse_gltf(const fs::path& path, const std::vector<uint8_t>& bytes
   const json& version = member(asset, "version", "asset");
   if (!version.is_string() || version.get<std::string>().rfind("2.", 0) != 0)
     throw GltfError("asset.version is " + version.dump().substr(0, 20) + ", expected \"2.x\"");
-  if (doc.contains("extensionsRequired")) {
-    const json& req = doc["extensionsRequired"];
-    if (!req.is_array()) throw GltfError("extensionsRequired is not an array");
-    for (const auto& e : req)
-      if (e != kExt)
-        throw GltfError("the file requires extension " + e.dump().substr(0, 60) + ", which EvFlow cannot read");
-  }
+  if (!doc.contains("extensionsRequired")) return;
+  const json& req = doc["extensionsRequired"];
+  if (!req.is_array()) throw GltfError("extensionsRequired is not an array");
+  for (const auto& e : req)
+    if (e != kExt)
+      throw GltfError("the file requires extension " + e.dump().substr(0, 60) + ", which EvFlow cannot read");
+}
 
+// Every mesh primitive that carries the extension; they must agree on the colour space.
+std::vector<SplatPrimitive> read_primitives(Document& d, std::string& color_space) {
   std::vector<SplatPrimitive> prims;
-  std::string first_color_space;
-  if (doc.contains("meshes")) {
-    const json& meshes = doc["meshes"];
-    if (!meshes.is_array()) throw GltfError("meshes is not an array");
-    for (size_t mi = 0; mi < meshes.size(); ++mi) {
-      const std::string mw = "meshes[" + std::to_string(mi) + "]";
-      const json& primitives = member(meshes[mi], "primitives", mw);
-      if (!primitives.is_array()) throw GltfError(mw + ".primitives is not an array");
-      for (size_t pi = 0; pi < primitives.size(); ++pi) {
-        const json& prim = primitives[pi];
-        if (!prim.is_object() || !prim.contains("extensions") || !prim["extensions"].is_object() ||
-            !prim["extensions"].contains(kExt))
-          continue;
-        prims.push_back(read_primitive(d, prim, mw + ".primitives[" + std::to_string(pi) + "]"));
-        const std::string cs = prim["extensions"][kExt]["colorSpace"].get<std::string>();
-        if (first_color_space.empty())
-          first_color_space = cs;
-        else if (cs != first_color_space)
-          throw GltfError("splat primitives disagree on colorSpace (" + first_color_space + " vs " + cs + ")");
-      }
+  if (!d.doc.contains("meshes")) return prims;
+  const json& meshes = d.doc["meshes"];
+  if (!meshes.is_array()) throw GltfError("meshes is not an array");
+  for (size_t mi = 0; mi < meshes.size(); ++mi) {
+    const std::string mw = "meshes[" + std::to_string(mi) + "]";
+    const json& primitives = member(meshes[mi], "primitives", mw);
+    if (!primitives.is_array()) throw GltfError(mw + ".primitives is not an array");
+    for (size_t pi = 0; pi < primitives.size(); ++pi) {
+      const json& prim = primitives[pi];
+      if (!prim.is_object() || !prim.contains("extensions") || !prim["extensions"].is_object() ||
+          !prim["extensions"].contains(kExt))
+        continue;
+      prims.push_back(read_primitive(d, prim, mw + ".primitives[" + std::to_string(pi) + "]"));
+      const std::string cs = prim["extensions"][kExt]["colorSpace"].get<std::string>();
+      if (color_space.empty())
+        color_space = cs;
+      else if (cs != color_space)
+        throw GltfError("splat primitives disagree on colorSpace (" + color_space + " vs " + cs + ")");
     }
   }
-  if (prims.empty()) throw GltfError("no mesh primitive carries KHR_gaussian_splatting: not a Gaussian-splat glTF");
-  if (prims.size() == 1) {
-    if (color_space)
-      *color_space = first_color_space == "lin_rec709_display" ? GltfColorSpace::lin_rec709_display
-                                                               : GltfColorSpace::srgb_rec709_display;
-    return std::move(prims[0].cloud);
-  }
-  // Several primitives: concatenate at the highest SH degree, missing coefficients zero.
+  return prims;
+}
+
+// Several primitives concatenated at the highest SH degree, missing coefficients zero.
+GaussianCloud concatenate(const std::vector<SplatPrimitive>& prims) {
   int degree = 0;
   size_t total = 0;
   for (const auto& p : prims) {
@@ -690,10 +707,21 @@ GaussianCloud parse_gltf(const fs::path& path, const std::vector<uint8_t>& bytes
         for (int ch = 0; ch < 3; ++ch) cloud.sh[((at + g) * K + k) * 3 + ch] = c.sh[(g * Kc + k) * 3 + ch];
     at += n;
   }
+  return cloud;
+}
+
+GaussianCloud parse_gltf(const fs::path& path, const std::vector<uint8_t>& bytes, GltfColorSpace* color_space) {
+  Document d;
+  d.path = path;
+  read_document(d, bytes);
+  std::string first_color_space;
+  std::vector<SplatPrimitive> prims = read_primitives(d, first_color_space);
+  if (prims.empty()) throw GltfError("no mesh primitive carries KHR_gaussian_splatting: not a Gaussian-splat glTF");
   if (color_space)
     *color_space = first_color_space == "lin_rec709_display" ? GltfColorSpace::lin_rec709_display
                                                              : GltfColorSpace::srgb_rec709_display;
-  return cloud;
+  if (prims.size() == 1) return std::move(prims[0].cloud);
+  return concatenate(prims);
 }
 
 }  // namespace

@@ -354,61 +354,64 @@ void read_element_item(DataReader& r, const Element& e) {
   }
 }
 
-GaussianCloud parse_ply(const std::vector<uint8_t>& bytes) {
-  const Header h = parse_header(bytes);
-  DataReader r(bytes.data() + h.data_offset, bytes.size() - h.data_offset, h.format);
+const char* const kFixedNames[kRest] = {"x",       "y",       "z",       "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
+                                        "scale_0", "scale_1", "scale_2", "rot_0",  "rot_1",  "rot_2",  "rot_3"};
 
-  size_t vi = h.elements.size();
+size_t vertex_element(const Header& h) {
   for (size_t i = 0; i < h.elements.size(); ++i)
-    if (h.elements[i].name == "vertex") {
-      vi = i;
-      break;
-    }
-  if (vi == h.elements.size()) throw PlyError("no 'vertex' element in the header");
-  const Element& ve = h.elements[vi];
+    if (h.elements[i].name == "vertex") return i;
+  throw PlyError("no 'vertex' element in the header");
+}
 
-  // Map the vertex properties onto slots.
-  std::vector<int> slot_of(ve.props.size(), -1);
+// The slot of f_rest_<k>, checked to be one of rest_count coefficients.
+int rest_slot(const std::string& name, int rest_count) {
+  const std::string_view idx = std::string_view(name).substr(7);
+  int k = -1;
+  const auto [ptr, ec] = std::from_chars(idx.data(), idx.data() + idx.size(), k);
+  if (ec != std::errc() || ptr != idx.data() + idx.size() || k < 0 || k >= rest_count ||
+      (idx.size() > 1 && idx[0] == '0'))
+    throw PlyError("property '" + name + "' does not fit f_rest_0..f_rest_" + std::to_string(rest_count - 1));
+  return kRest + k;
+}
+
+// The vertex properties mapped onto slots (-1: ignored, e.g. nx or red).
+struct VertexSlots {
+  std::vector<int> slot_of;
   int rest_count = 0;
-  std::vector<bool> rest_seen;
+};
+
+VertexSlots map_slots(const Element& ve) {
+  VertexSlots m;
+  m.slot_of.assign(ve.props.size(), -1);
   for (const auto& p : ve.props)
-    if (p.name.rfind("f_rest_", 0) == 0) ++rest_count;
-  rest_seen.assign(rest_count, false);
-  if (rest_count != 0 && rest_count != 9 && rest_count != 24 && rest_count != 45)
-    throw PlyError("found " + std::to_string(rest_count) +
+    if (p.name.rfind("f_rest_", 0) == 0) ++m.rest_count;
+  if (m.rest_count != 0 && m.rest_count != 9 && m.rest_count != 24 && m.rest_count != 45)
+    throw PlyError("found " + std::to_string(m.rest_count) +
                    " f_rest_* properties; expected 0, 9, 24 or 45 (SH degree 0..3)");
-  const char* fixed_names[kRest] = {"x",       "y",       "z",       "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
-                                    "scale_0", "scale_1", "scale_2", "rot_0",  "rot_1",  "rot_2",  "rot_3"};
   bool fixed_seen[kRest] = {};
   for (size_t i = 0; i < ve.props.size(); ++i) {
     const Property& p = ve.props[i];
     int slot = -1;
     for (int s = 0; s < kRest; ++s)
-      if (p.name == fixed_names[s]) slot = s;
-    if (slot < 0 && p.name.rfind("f_rest_", 0) == 0) {
-      const std::string_view idx = std::string_view(p.name).substr(7);
-      int k = -1;
-      const auto [ptr, ec] = std::from_chars(idx.data(), idx.data() + idx.size(), k);
-      if (ec != std::errc() || ptr != idx.data() + idx.size() || k < 0 || k >= rest_count ||
-          (idx.size() > 1 && idx[0] == '0'))
-        throw PlyError("property '" + p.name + "' does not fit f_rest_0..f_rest_" + std::to_string(rest_count - 1));
-      rest_seen[k] = true;
-      slot = kRest + k;
-    }
-    if (slot < 0) continue;  // nx, red, ...: ignored
+      if (p.name == kFixedNames[s]) slot = s;
+    if (slot < 0 && p.name.rfind("f_rest_", 0) == 0) slot = rest_slot(p.name, m.rest_count);
+    if (slot < 0) continue;
     if (slot < kRest) fixed_seen[slot] = true;
     if (p.is_list) throw PlyError("property '" + p.name + "' is a list; expected a float or double scalar");
     if (p.type != PType::f32 && p.type != PType::f64)
       throw PlyError("property '" + p.name + "' has type " + type_name(p.type) + "; expected float or double");
-    slot_of[i] = slot;
+    m.slot_of[i] = slot;
   }
   std::string missing;
   for (int s = 0; s < kRest; ++s)
-    if (!fixed_seen[s]) missing += std::string(missing.empty() ? "" : ", ") + fixed_names[s];
+    if (!fixed_seen[s]) missing += std::string(missing.empty() ? "" : ", ") + kFixedNames[s];
   if (!missing.empty()) throw PlyError("vertex element lacks the required properties: " + missing);
-  // (rest_seen is complete: rest_count distinct indices in [0, rest_count) were found.)
+  // (the rest slots are complete: rest_count distinct indices in [0, rest_count) were found.)
+  return m;
+}
 
-  // Skip the elements before the vertex element.
+// Skips the data of the elements before element `vi`.
+void skip_elements(DataReader& r, const Header& h, size_t vi) {
   for (size_t i = 0; i < vi; ++i) {
     const Element& e = h.elements[i];
     if (e.props.empty()) continue;
@@ -427,46 +430,65 @@ GaussianCloud parse_ply(const std::vector<uint8_t>& bytes) {
       for (uint64_t j = 0; j < e.count; ++j) read_element_item(r, e);
     }
   }
+}
 
-  // Bound the vertex count by the data left before allocating anything.
-  const uint64_t n = ve.count;
+// Bounds the vertex count by the data left, before anything is allocated.
+void check_vertex_bytes(const DataReader& r, const Header& h, const Element& ve) {
   uint64_t min_bytes_per_vertex = 0;
   for (const auto& p : ve.props)
     min_bytes_per_vertex += h.format == Format::ascii ? 1 : type_size(p.is_list ? p.count_type : p.type);
-  if (min_bytes_per_vertex == 0 || n > r.remaining() / min_bytes_per_vertex)
-    throw PlyError("truncated data: the header declares " + std::to_string(n) + " vertices of " +
+  if (min_bytes_per_vertex == 0 || ve.count > r.remaining() / min_bytes_per_vertex)
+    throw PlyError("truncated data: the header declares " + std::to_string(ve.count) + " vertices of " +
                    std::to_string(ve.props.size()) + " properties but only " + std::to_string(r.remaining()) +
                    " bytes of data follow");
+}
 
-  const int degree = rest_count == 0 ? 0 : rest_count == 9 ? 1 : rest_count == 24 ? 2 : 3;
+// Vertex g's kept values, by slot.
+void read_vertex(DataReader& r, const Element& ve, const VertexSlots& m, uint64_t g, std::vector<double>& v) {
+  for (size_t i = 0; i < ve.props.size(); ++i) {
+    const Property& p = ve.props[i];
+    if (p.is_list) {
+      const double cnt = r.read(p.count_type);
+      if (!(cnt >= 0) || cnt > 1e9) throw PlyError("bad list length in vertex " + std::to_string(g));
+      for (uint64_t j = 0; j < static_cast<uint64_t>(cnt); ++j) r.read(p.type);
+      continue;
+    }
+    const double x = r.read(p.type);
+    if (m.slot_of[i] < 0) continue;
+    if (!std::isfinite(x) || std::fabs(x) > std::numeric_limits<float>::max())
+      throw PlyError("vertex " + std::to_string(g) + ": property '" + p.name + "' is not a finite float (" +
+                     std::to_string(x) + ")");
+    v[m.slot_of[i]] = x;
+  }
+}
+
+void store_vertex(GaussianCloud& cloud, size_t g, int K, const std::vector<double>& v) {
+  for (int a = 0; a < 3; ++a) cloud.means[g * 3 + a] = static_cast<float>(v[kX + a]);
+  float* sh = &cloud.sh[g * K * 3];
+  for (int c = 0; c < 3; ++c) sh[c] = static_cast<float>(v[kDc + c]);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 1; k < K; ++k) sh[k * 3 + c] = static_cast<float>(v[kRest + c * (K - 1) + (k - 1)]);
+  cloud.opacity_logits[g] = static_cast<float>(v[kOpacity]);
+  for (int a = 0; a < 3; ++a) cloud.log_scales[g * 3 + a] = static_cast<float>(v[kScale + a]);
+  for (int a = 0; a < 4; ++a) cloud.quats[g * 4 + a] = static_cast<float>(v[kRot + a]);
+}
+
+GaussianCloud parse_ply(const std::vector<uint8_t>& bytes) {
+  const Header h = parse_header(bytes);
+  DataReader r(bytes.data() + h.data_offset, bytes.size() - h.data_offset, h.format);
+  const size_t vi = vertex_element(h);
+  const Element& ve = h.elements[vi];
+  const VertexSlots m = map_slots(ve);
+  skip_elements(r, h, vi);
+  check_vertex_bytes(r, h, ve);
+  const int degree = m.rest_count == 0 ? 0 : m.rest_count == 9 ? 1 : m.rest_count == 24 ? 2 : 3;
   const int K = sh_coeff_count(degree);
   GaussianCloud cloud;
-  cloud.resize(static_cast<size_t>(n), degree);
-  std::vector<double> v(kRest + rest_count);
-  for (uint64_t g = 0; g < n; ++g) {
-    for (size_t i = 0; i < ve.props.size(); ++i) {
-      const Property& p = ve.props[i];
-      if (p.is_list) {
-        const double cnt = r.read(p.count_type);
-        if (!(cnt >= 0) || cnt > 1e9) throw PlyError("bad list length in vertex " + std::to_string(g));
-        for (uint64_t j = 0; j < static_cast<uint64_t>(cnt); ++j) r.read(p.type);
-        continue;
-      }
-      const double x = r.read(p.type);
-      if (slot_of[i] < 0) continue;
-      if (!std::isfinite(x) || std::fabs(x) > std::numeric_limits<float>::max())
-        throw PlyError("vertex " + std::to_string(g) + ": property '" + p.name + "' is not a finite float (" +
-                       std::to_string(x) + ")");
-      v[slot_of[i]] = x;
-    }
-    for (int a = 0; a < 3; ++a) cloud.means[g * 3 + a] = static_cast<float>(v[kX + a]);
-    float* sh = &cloud.sh[g * K * 3];
-    for (int c = 0; c < 3; ++c) sh[c] = static_cast<float>(v[kDc + c]);
-    for (int c = 0; c < 3; ++c)
-      for (int k = 1; k < K; ++k) sh[k * 3 + c] = static_cast<float>(v[kRest + c * (K - 1) + (k - 1)]);
-    cloud.opacity_logits[g] = static_cast<float>(v[kOpacity]);
-    for (int a = 0; a < 3; ++a) cloud.log_scales[g * 3 + a] = static_cast<float>(v[kScale + a]);
-    for (int a = 0; a < 4; ++a) cloud.quats[g * 4 + a] = static_cast<float>(v[kRot + a]);
+  cloud.resize(static_cast<size_t>(ve.count), degree);
+  std::vector<double> v(kRest + m.rest_count);
+  for (uint64_t g = 0; g < ve.count; ++g) {
+    read_vertex(r, ve, m, g, v);
+    store_vertex(cloud, static_cast<size_t>(g), K, v);
   }
   return cloud;
 }
