@@ -149,6 +149,18 @@ std::vector<std::string> Context::list_devices() {
 }
 
 Context::Context(const ContextOptions& opts) : opts_(opts) {
+  create_instance();
+  query_caps(choose_device());
+  create_device();
+  if (opts_.verbose)
+    std::fprintf(stderr, "evflow: device %s, subgroup %u, storage range %llu MiB, shared float atomics %s\n",
+                 caps_.name.c_str(), caps_.subgroup_size,
+                 static_cast<unsigned long long>(caps_.max_storage_buffer_range >> 20),
+                 caps_.shared_float_atomic_add ? "yes" : "no (CAS)");
+}
+
+// The instance (with the validation layer and its messenger when asked for).
+void Context::create_instance() {
   VkDebugUtilsMessengerCreateInfoEXT dbg{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
   dbg.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
   dbg.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
@@ -164,37 +176,39 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   std::vector<VkValidationFeatureEnableEXT> features;
   if (opts_.sync_validation) features.push_back(VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT);
   instance_ = make_instance(opts_.validation, &dbg, extra_exts, features);
-  if (opts_.validation) {
-    auto fn = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
-        vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
-    if (!fn) throw Error("vkCreateDebugUtilsMessengerEXT is unavailable");
-    EVF_VK(fn(instance_, &dbg, nullptr, &messenger_));
-  }
+  if (!opts_.validation) return;
+  auto fn = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+      vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
+  if (!fn) throw Error("vkCreateDebugUtilsMessengerEXT is unavailable");
+  EVF_VK(fn(instance_, &dbg, nullptr, &messenger_));
+}
 
+// Why a device cannot be used (Vulkan 1.2+, a compute queue, push descriptors, a swapchain for
+// presentation), or "" when it can.
+static std::string unusable(VkPhysicalDevice pd, const VkPhysicalDeviceProperties& p, bool presentation) {
+  if (p.apiVersion < VK_API_VERSION_1_2) return "Vulkan < 1.2";
+  if (compute_family(pd) < 0) return "no compute queue";
+  if (!has_extension(pd, VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME)) return "no VK_KHR_push_descriptor";
+  if (presentation && !has_extension(pd, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) return "no VK_KHR_swapchain";
+  return "";
+}
+
+// The usable device `opts_.device` names (an index or part of a name), else the most capable type.
+VkPhysicalDeviceProperties Context::choose_device() {
   uint32_t n = 0;
   vkEnumeratePhysicalDevices(instance_, &n, nullptr);
   std::vector<VkPhysicalDevice> pds(n);
   vkEnumeratePhysicalDevices(instance_, &n, pds.data());
-  // Candidates: Vulkan >= 1.2, a compute queue, push descriptors.
   std::vector<std::pair<VkPhysicalDevice, VkPhysicalDeviceProperties>> cands;
   std::string rejected;
   for (auto pd : pds) {
     VkPhysicalDeviceProperties p;
     vkGetPhysicalDeviceProperties(pd, &p);
-    std::string why;
-    if (p.apiVersion < VK_API_VERSION_1_2)
-      why = "Vulkan < 1.2";
-    else if (compute_family(pd) < 0)
-      why = "no compute queue";
-    else if (!has_extension(pd, VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME))
-      why = "no VK_KHR_push_descriptor";
-    else if (opts_.presentation && !has_extension(pd, VK_KHR_SWAPCHAIN_EXTENSION_NAME))
-      why = "no VK_KHR_swapchain";
-    if (!why.empty()) {
+    const std::string why = unusable(pd, p, opts_.presentation);
+    if (why.empty())
+      cands.emplace_back(pd, p);
+    else
       rejected += std::string(" ") + p.deviceName + " (" + why + ");";
-      continue;
-    }
-    cands.emplace_back(pd, p);
   }
   if (cands.empty()) throw Error("no usable Vulkan device (need 1.2+, compute, push descriptors):" + rejected);
   int chosen = -1;
@@ -209,19 +223,21 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
       throw Error("--device " + opts_.device + ": only " + std::to_string(cands.size()) + " usable device(s)");
     chosen = static_cast<int>(idx);
   } else {
-    for (size_t i = 0; i < cands.size(); ++i)
-      if (lower(cands[i].second.deviceName).find(lower(opts_.device)) != std::string::npos) {
+    for (size_t i = 0; i < cands.size() && chosen < 0; ++i)
+      if (lower(cands[i].second.deviceName).find(lower(opts_.device)) != std::string::npos)
         chosen = static_cast<int>(i);
-        break;
-      }
     if (chosen < 0) throw Error("--device '" + opts_.device + "' matches no usable device");
   }
   physical_ = cands[chosen].first;
-  const auto& props = cands[chosen].second;
   queue_family_ = static_cast<uint32_t>(compute_family(physical_));
+  return cands[chosen].second;
+}
 
-  // Capabilities.
+// Limits, subgroups, float atomics and memory types of the chosen device.
+void Context::query_caps(const VkPhysicalDeviceProperties& props) {
   VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+  VkPhysicalDeviceMaintenance3Properties m3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+  sub.pNext = &m3;
   VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   p2.pNext = &sub;
   vkGetPhysicalDeviceProperties2(physical_, &p2);
@@ -241,15 +257,10 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   caps_.min_storage_offset_alignment = props.limits.minStorageBufferOffsetAlignment;
   caps_.timestamps = props.limits.timestampComputeAndGraphics;
   caps_.timestamp_period_ns = props.limits.timestampPeriod;
-  VkPhysicalDeviceMaintenance3Properties m3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
-  VkPhysicalDeviceProperties2 p3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
-  p3.pNext = &m3;
-  vkGetPhysicalDeviceProperties2(physical_, &p3);
   caps_.max_allocation_size = m3.maxMemoryAllocationSize;
   if (!caps_.subgroup_arithmetic)
     throw Error(caps_.name +
                 ": subgroup basic, vote and arithmetic operations in compute shaders are required and missing");
-
   const bool has_atomic_float = has_extension(physical_, VK_EXT_SHADER_ATOMIC_FLOAT_EXTENSION_NAME);
   VkPhysicalDeviceShaderAtomicFloatFeaturesEXT af{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
   VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
@@ -257,13 +268,9 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   f2.pNext = &f12;
   if (has_atomic_float) f12.pNext = &af;
   vkGetPhysicalDeviceFeatures2(physical_, &f2);
-  caps_.shared_float_atomic_add = has_atomic_float && af.shaderSharedFloat32AtomicAdd;
-  caps_.buffer_float_atomic_add = has_atomic_float && af.shaderBufferFloat32AtomicAdd;
-  if (opts_.force_cas) {
-    caps_.shared_float_atomic_add = false;
-    caps_.buffer_float_atomic_add = false;
-  }
-
+  caps_.host_query_reset = f12.hostQueryReset;
+  caps_.shared_float_atomic_add = has_atomic_float && af.shaderSharedFloat32AtomicAdd && !opts_.force_cas;
+  caps_.buffer_float_atomic_add = has_atomic_float && af.shaderBufferFloat32AtomicAdd && !opts_.force_cas;
   vkGetPhysicalDeviceMemoryProperties(physical_, &mem_props_);
   caps_.unified_memory = true;
   for (uint32_t i = 0; i < mem_props_.memoryTypeCount; ++i) {
@@ -271,16 +278,17 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
     if ((f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT))
       caps_.unified_memory = false;
   }
+}
 
-  // Device with only the features we use.
+// The device with only the features used, its queue and command pool.
+void Context::create_device() {
   VkPhysicalDeviceShaderAtomicFloatFeaturesEXT af_on{
       VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
   af_on.shaderSharedFloat32AtomicAdd = caps_.shared_float_atomic_add;
   af_on.shaderBufferFloat32AtomicAdd = caps_.buffer_float_atomic_add;
   VkPhysicalDeviceVulkan12Features f12_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  f12_on.hostQueryReset = f12.hostQueryReset;
-  if (has_atomic_float && (af_on.shaderSharedFloat32AtomicAdd || af_on.shaderBufferFloat32AtomicAdd))
-    f12_on.pNext = &af_on;
+  f12_on.hostQueryReset = caps_.host_query_reset;
+  if (af_on.shaderSharedFloat32AtomicAdd || af_on.shaderBufferFloat32AtomicAdd) f12_on.pNext = &af_on;
   VkPhysicalDeviceFeatures2 f2_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
   f2_on.pNext = &f12_on;
   std::vector<const char*> dev_exts = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
@@ -305,11 +313,6 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pci.queueFamilyIndex = queue_family_;
   EVF_VK(vkCreateCommandPool(device_, &pci, nullptr, &pool_));
-  if (opts_.verbose)
-    std::fprintf(stderr, "evflow: device %s, subgroup %u, storage range %llu MiB, shared float atomics %s\n",
-                 caps_.name.c_str(), caps_.subgroup_size,
-                 static_cast<unsigned long long>(caps_.max_storage_buffer_range >> 20),
-                 caps_.shared_float_atomic_add ? "yes" : "no (CAS)");
 }
 
 Context::~Context() {

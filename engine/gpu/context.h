@@ -64,7 +64,8 @@ struct DeviceCaps {
   bool subgroup_arithmetic = false;
   bool timestamps = false;
   double timestamp_period_ns = 1.0;
-  bool unified_memory = false;  // every device-local heap is host-visible (lavapipe, iGPUs)
+  bool unified_memory = false;    // every device-local heap is host-visible (lavapipe, iGPUs)
+  bool host_query_reset = false;  // vkResetQueryPool from the host (Vulkan 1.2 feature)
 };
 
 class Kernel;
@@ -109,6 +110,12 @@ class Context {
   void check_binding_size(uint64_t bytes, const std::string& what) const;
 
  private:
+  // The steps of construction, in order.
+  void create_instance();
+  VkPhysicalDeviceProperties choose_device();
+  void query_caps(const VkPhysicalDeviceProperties& props);
+  void create_device();
+
   ContextOptions opts_;
   DeviceCaps caps_;
   VkInstance instance_ = VK_NULL_HANDLE;
