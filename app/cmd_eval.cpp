@@ -11,12 +11,26 @@
 #include "metrics/srgb_metrics.h"
 #include "run_files.h"
 #include "splat/rasterizer.h"
+#include "train/exposure_motion.h"
 #include "train/pose_refine.h"
 #include "train/trainer.h"
 
 namespace evflow::app {
 
 namespace fs = std::filesystem;
+
+// With the simulator's ground truth: how training view `index`'s learned exposure moves the image
+// against the true motion (train/exposure_motion.h); null without a learned trajectory or truth.
+static nlohmann::json motion_json(const RunFolder& run, const io::Dataset& data, size_t index, int& reversed) {
+  const auto& trajs = run.checkpoint.trajectories;
+  if (trajs.empty() || trajs[index].knots.size() == 6) return nullptr;
+  const io::View& v = data.train[index];
+  const auto m = exposure_motion(data.root, v.name, run.learned_camera(v, index, 0.0),
+                                 run.learned_camera(v, index, 0.5), run.learned_camera(v, index, 1.0));
+  if (!m) return nullptr;
+  reversed += m->reversed();
+  return {{"truth_px", m->truth_px}, {"error_px", m->error_px}, {"reversed", m->reversed()}};
+}
 
 static int run_eval(const Args& a) {
   ArgParser p(a);
@@ -70,7 +84,8 @@ static int run_eval(const Args& a) {
     const bool train = &views == &data.train;
     nlohmann::json per = nlohmann::json::array();
     double sp = 0, ss = 0;
-    int n = 0;
+    int n = 0, reversed = 0;
+    bool motion = false;
     for (size_t vi = 0; vi < views.size(); ++vi) {
       const io::View& v = views[vi];
       if (!v.sharp_mid) continue;
@@ -98,6 +113,8 @@ static int run_eval(const Args& a) {
       metrics::write_png(run.dir / "eval" / set / (v.name + ".png"), render8);
       const metrics::Scores val = metrics::score(render8, gt8);
       per.push_back({{"view", v.name}, {"psnr", val.psnr}, {"ssim", val.ssim}});
+      if (train) per.back()["motion"] = motion_json(run, data, vi, reversed);
+      motion = motion || !per.back().value("motion", nlohmann::json()).is_null();
       sp += val.psnr;
       ss += val.ssim;
       ++n;
@@ -108,6 +125,10 @@ static int run_eval(const Args& a) {
     std::snprintf(line, sizeof line, "| %s | %d | %.2f | %.4f |\n", set, n, sp / n, ss / n);
     md << line;
     std::printf("%-8s %3d views  PSNR %.2f dB  SSIM %.4f\n", set, n, sp / n, ss / n);
+    if (motion) {
+      out[set]["reversed_views"] = reversed;
+      std::printf("         %d of %d learned exposures run against the true motion\n", reversed, n);
+    }
   };
   score(data.train, "deblur", false);
   score(data.novel, "novel", false);
