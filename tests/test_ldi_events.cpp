@@ -106,10 +106,10 @@ TEST_CASE("LDI events: 16 bins x 2 polarities per side, the side before reversed
   cmd.submit();
   const auto c = counts.read<uint32_t>(4 * full.pixels());
   std::vector<uint32_t> want(4 * full.pixels(), 0u);
-  want[24 + 1 * 4 + 1] = 1;       // + at (1, 1)
-  want[24 + 1 * 4 + 2] = 2;       // + + at (2, 1)
-  want[36 + 0 * 4 + 1] = 1;       // - at (1, 0)
-  want[36 + 2 * 4 + 3] = 1;       // - at (3, 2)
+  want[24 + 1 * 4 + 1] = 1;  // + at (1, 1)
+  want[24 + 1 * 4 + 2] = 2;  // + + at (2, 1)
+  want[36 + 0 * 4 + 1] = 1;  // - at (1, 0)
+  want[36 + 2 * 4 + 3] = 1;  // - at (3, 2)
   CHECK(c == want);
 
   CHECK_THROWS_WITH(ldi::side_bounds(gpu_ev, 1, 0.5, ldi::Side::After), Catch::Contains("outside view 1"));

@@ -151,7 +151,7 @@ TEST_CASE("LDI: frames against the double reference, weight gradients against ce
   test::require_no_validation_messages();
 }
 
-TEST_CASE("LDI: the neutral initialisation gives E = 1 without events; bad input is refused", "[ldi][gpu]") {
+TEST_CASE("LDI: the neutral initialisation gives E = 1 without events, and bad input is refused", "[ldi][gpu]") {
   auto& ctx = test::gpu_context();
   EventStream none;
   none.width = 6, none.height = 5;

@@ -133,8 +133,8 @@ TEST_CASE("LDI branch: the joint loss's gradient reaches the LDI weights and the
                    const std::function<void(Checkpoint&, double)>& add) {
     double num = 0, den = 0;  // the least-squares slope of symmetric differences at +-h .. +-3h
     for (int k = 1; k <= 3; ++k) {
-      const double lp = loss_with([&](Checkpoint& c) { add(c, +k * h); }),
-                   lm = loss_with([&](Checkpoint& c) { add(c, -k * h); });
+      const double lp = loss_with([&](Checkpoint&c) { add(c, +k * h); }),
+                   lm = loss_with([&](Checkpoint&c) { add(c, -k * h); });
       num += k * (lp - lm);
       den += 2.0 * k * k * h;
     }
@@ -147,17 +147,15 @@ TEST_CASE("LDI branch: the joint loss's gradient reaches the LDI weights and the
   for (size_t i : largest(gs, 2))
     check("sh", i, gs[i], 1e-2, [&](Checkpoint& c, double d) { c.cloud.sh[i] += float(d); });
   // The network: its output bias and the largest first-layer weights.
-  check("ldi.1.bias", 0, gw.back(), 1e-2, [&](Checkpoint& c, double d) {
-    tensor(*c.ldi, "ldi.1.bias").values[0] += float(d);
-  });
+  check("ldi.1.bias", 0, gw.back(), 1e-2,
+        [&](Checkpoint& c, double d) { tensor(*c.ldi, "ldi.1.bias").values[0] += float(d); });
   for (size_t i : largest(std::vector<double>(gw.begin(), gw.end() - 1), 2))
-    check("ldi.0.weight", i, gw[i], 1e-2, [&](Checkpoint& c, double d) {
-      tensor(*c.ldi, "ldi.0.weight").values[i] += float(d);
-    });
+    check("ldi.0.weight", i, gw[i], 1e-2,
+          [&](Checkpoint& c, double d) { tensor(*c.ldi, "ldi.0.weight").values[i] += float(d); });
   test::require_no_validation_messages();
 }
 
-TEST_CASE("LDI branch: a short run with every term changes the network and the splats; state round-trips",
+TEST_CASE("LDI branch: a short run with every term changes the network and the splats, and its state round-trips",
           "[gpu][train][ldi]") {
   auto& ctx = test::gpu_context();
   const Camera cam0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});

@@ -25,8 +25,8 @@ void record_crop(gpu::Commands& cmd, const gpu::Buffer& full, uint32_t width, ui
                cmd.linear_groups(gpu::Commands::div_up(channels * crop.pixels(), shaderio::kLdiGroupSize)));
 }
 
-void record_uncrop_add(gpu::Commands& cmd, const gpu::Buffer& part, uint32_t width, uint32_t height,
-                       uint32_t channels, const Crop& crop, const gpu::Buffer& full) {
+void record_uncrop_add(gpu::Commands& cmd, const gpu::Buffer& part, uint32_t width, uint32_t height, uint32_t channels,
+                       const Crop& crop, const gpu::Buffer& full) {
   const auto pc = crop_pc(full, part, width, height, channels, crop);
   cmd.dispatch("ldi/uncrop_add", {{shaderio::kLdiCropBindFull, full}, {shaderio::kLdiCropBindOut, part}}, pc,
                cmd.linear_groups(gpu::Commands::div_up(channels * crop.pixels(), shaderio::kLdiGroupSize)));

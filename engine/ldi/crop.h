@@ -13,7 +13,7 @@ namespace evflow::ldi {
 void record_crop(gpu::Commands& cmd, const gpu::Buffer& full, uint32_t width, uint32_t height, uint32_t channels,
                  const Crop& crop, const gpu::Buffer& out);
 // The adjoint: full[c][crop.y + y][crop.x + x] += part[c][y][x].
-void record_uncrop_add(gpu::Commands& cmd, const gpu::Buffer& part, uint32_t width, uint32_t height,
-                       uint32_t channels, const Crop& crop, const gpu::Buffer& full);
+void record_uncrop_add(gpu::Commands& cmd, const gpu::Buffer& part, uint32_t width, uint32_t height, uint32_t channels,
+                       const Crop& crop, const gpu::Buffer& full);
 
 }  // namespace evflow::ldi

@@ -28,8 +28,9 @@ void record_bins(gpu::Commands& cmd, const GpuEvents& events, const uint32_t* bo
   pc.reversed = reversed ? 1u : 0u;
   pc.channel_base = channel_base;
   pc.crop_x = crop.x, pc.crop_y = crop.y, pc.crop_w = crop.w, pc.crop_h = crop.h;
-  cmd.dispatch("ldi/bin_events", {{shaderio::kLdiBinBindPacked, events.packed()}, {shaderio::kLdiBinBindCounts, counts}},
-               pc, cmd.linear_groups(gpu::Commands::div_up(n, shaderio::kLdiGroupSize)));
+  cmd.dispatch("ldi/bin_events",
+               {{shaderio::kLdiBinBindPacked, events.packed()}, {shaderio::kLdiBinBindCounts, counts}}, pc,
+               cmd.linear_groups(gpu::Commands::div_up(n, shaderio::kLdiGroupSize)));
 }
 
 }  // namespace

@@ -8,7 +8,9 @@
 namespace evflow::ldi {
 
 JointLoss::JointLoss(gpu::Context& ctx, ImageShape shape, float ssim_lambda, float weight)
-    : LossTerm(ctx, "joint", weight, 1), blend_(ctx, shape, ssim_lambda, 1.0f), frame_values_(ctx, 16, "joint_values") {}
+    : LossTerm(ctx, "joint", weight, 1),
+      blend_(ctx, shape, ssim_lambda, 1.0f),
+      frame_values_(ctx, 16, "joint_values") {}
 
 void JointLoss::record(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& a,
                        const std::vector<const gpu::Buffer*>& b, const std::vector<const gpu::Buffer*>& grad_a,
@@ -27,8 +29,9 @@ void JointLoss::record(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>
     blend_.record(cmd, *b[i], *a[i], *grad_b[i], w, accumulate);
   }
   shaderio::LdiMeanPC pc{uint32_t(F), 3, 0, value_offset(), 1.0f / float(F), 0, 0, 0};
-  cmd.dispatch("ldi/mean_values", {{shaderio::kLdiMeanBindSrc, frame_values_}, {shaderio::kLdiMeanBindValues, value_buffer()}},
-               pc, gpu::Groups{1, 1, 1});
+  cmd.dispatch("ldi/mean_values",
+               {{shaderio::kLdiMeanBindSrc, frame_values_}, {shaderio::kLdiMeanBindValues, value_buffer()}}, pc,
+               gpu::Groups{1, 1, 1});
 }
 
 }  // namespace evflow::ldi

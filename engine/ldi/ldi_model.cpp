@@ -104,12 +104,11 @@ void LdiModel::combine_bwd(gpu::Commands& cmd, uint32_t i, uint32_t mode, const 
                 {shaderio::kLdiCombineBwdBindBlurry, *blurry_},
                 {shaderio::kLdiCombineBwdBindGrads, grads},
                 {shaderio::kLdiCombineBwdBindSideGrads, side_grads_}},
-               combine_pc(i, mode, scale),
-               cmd.linear_groups(gpu::Commands::div_up(pixels(), shaderio::kLdiGroupSize)));
+               combine_pc(i, mode, scale), cmd.linear_groups(gpu::Commands::div_up(pixels(), shaderio::kLdiGroupSize)));
 }
 
 void LdiModel::backward_from_frames(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads,
-                                   float scale) {
+                                    float scale) {
   if (!blurry_) throw std::logic_error("LDI: backward before forward");
   if (frame_grads.size() != frames())
     throw std::invalid_argument("LDI: " + std::to_string(frame_grads.size()) + " frame gradients for " +

@@ -60,8 +60,7 @@ class LdiModel {
   // d(loss)/d(frame i) (3 x crop each, scaled by `scale`), or, with `target`, of the regression
   // scale * sum (log E(t_i) - log D_i)^2 to D (F x crop). Record after the forward, before the
   // next forward.
-  void backward_from_frames(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads,
-                            float scale = 1.0f);
+  void backward_from_frames(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads, float scale = 1.0f);
   void backward_from_target(gpu::Commands& cmd, const gpu::Buffer& target, float scale);
 
   void add_to(Adam& adam, float lr) { net_.add_to(adam, lr); }

@@ -11,7 +11,7 @@ namespace {
 
 // EDI's double integral of every view, for the regression's targets.
 std::vector<std::unique_ptr<events::EdiIntegrator>> edi_per_view(const EventStream& stream, const GpuEvents& events,
-                                                                  const events::EdiThresholds& th) {
+                                                                 const events::EdiThresholds& th) {
   std::vector<std::unique_ptr<events::EdiIntegrator>> out;
   for (size_t v = 0; v < events.window_count(); ++v)
     out.push_back(std::make_unique<events::EdiIntegrator>(stream, events.window(v).t0, events.window(v).t1, th));

@@ -33,8 +33,7 @@ void accumulate(gpu::Commands& cmd, const gpu::Buffer& x, const gpu::Buffer& y, 
 }  // namespace
 
 LdiBranch::LdiBranch(gpu::Context& ctx, const io::Dataset& data, const TrainConfig& cfg,
-                     const std::vector<double>& frame_u, const nn::SafetensorsFile* state,
-                     const std::string& source)
+                     const std::vector<double>& frame_u, const nn::SafetensorsFile* state, const std::string& source)
     : ctx_(ctx), data_(data), cfg_(cfg), frame_u_(frame_u), srgb_(cfg.loss_space == LossSpace::Srgb) {
   if (cfg.mode != TrainMode::Blur)
     throw std::invalid_argument("ldi=on needs mode=blur (its frames pair with the virtual frames)");
@@ -91,7 +90,8 @@ void LdiBranch::initialise() {
   o.seed = cfg_.seed;
   o.thresholds = events::EdiThresholds{pos, neg, {}, {}};
   const ldi::PrefitReport r = ldi::prefit_to_edi(ctx_, *model_, data_.events, *events_, o);
-  std::fprintf(stderr, "ldi: initialised to EDI (thresholds %.3g / %.3g): %u steps, log-E regression %.4g -> %.4g in %.1f s\n",
+  std::fprintf(stderr,
+               "ldi: initialised to EDI (thresholds %.3g / %.3g): %u steps, log-E regression %.4g -> %.4g in %.1f s\n",
                pos, neg, r.steps, r.first_loss, r.last_loss,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
@@ -130,8 +130,8 @@ void LdiBranch::record(gpu::Commands& cmd, uint32_t view, uint32_t step, const s
   ldi::record_crop(cmd, target_[view], W, H, 3, crop_, target_crop_);
   std::vector<double> times;  // inside the exposure, whatever the rounding of t_0 + u T
   for (double u : frame_u_)
-    times.push_back(std::clamp(v.exposure_start + u * (v.exposure_end - v.exposure_start), v.exposure_start,
-                               v.exposure_end));
+    times.push_back(
+        std::clamp(v.exposure_start + u * (v.exposure_end - v.exposure_start), v.exposure_start, v.exposure_end));
   model_->forward(cmd, view, times, crop_, blurry_crop_);
   record_blur(cmd);
   record_joint(cmd, renders, image_model);
@@ -150,8 +150,7 @@ void LdiBranch::record_blur(gpu::Commands& cmd) {
 
 // L_joint in loss_space: the LDI frame's gradient goes back to linear light and adds to the
 // frame's; the render's (the crop of an sRGB render) waits for backward().
-void LdiBranch::record_joint(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders,
-                             const ImageModel& im) {
+void LdiBranch::record_joint(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const ImageModel& im) {
   const uint32_t F = model_->frames();
   const uint32_t W = data_.train[view_].camera.width, H = data_.train[view_].camera.height;
   std::vector<const gpu::Buffer*> a, b, ga, gb;
