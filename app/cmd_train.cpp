@@ -11,6 +11,7 @@
 
 #include "cli.h"
 #include "io/atomic_file.h"
+#include "nn/safetensors.h"
 #include "resume_files.h"
 #include "train/checkpoint.h"
 #include "train/trainer.h"
@@ -181,7 +182,8 @@ static int run_train(const Args& a) {
         "usage: evflow train DATA --out RUN [--config FILE.json] [--preset fast|paper] [--resume] [--device N|name] "
         "[key=value ...]\n"
         "  DATA: a dataset folder (our layout, E3NeRF Real-World-Challenge or EBAD-NeRF; docs/datasets.md).\n"
-        "  RUN: output folder: config.json, train.log, curve.csv, curve.png, checkpoint.ckpt.\n"
+        "  RUN: output folder: config.json, train.log, curve.csv, curve.png, checkpoint.ckpt (and ldi.safetensors\n"
+        "    with ldi=on).\n"
         "  keys with their defaults (--keys: the tables of docs/training.md, each key's meaning):\n");
     print_keys_brief();
     std::printf(
@@ -250,12 +252,20 @@ static int run_train(const Args& a) {
     own_ctx = std::make_unique<gpu::Context>(o);
   gpu::Context& ctx = display ? display->context() : *own_ctx;
 
-  const fs::path ckpt_path = fs::path(out) / "checkpoint.ckpt";
+  const fs::path ckpt_path = fs::path(out) / "checkpoint.ckpt", ldi_path = fs::path(out) / "ldi.safetensors";
   std::unique_ptr<Trainer> trainer;
-  // Left by a run that was killed while saving (the checkpoint, then the curve's figure).
-  for (const char* name : {"checkpoint.ckpt", "curve.png"}) io::remove_stale_temporaries(fs::path(out) / name);
+  // Left by a run that was killed while saving (the LDI's weights, the checkpoint, then the curve's figure).
+  for (const char* name : {"ldi.safetensors", "checkpoint.ckpt", "curve.png"})
+    io::remove_stale_temporaries(fs::path(out) / name);
   if (resume) {
-    trainer = std::make_unique<Trainer>(ctx, data, cfg, read_checkpoint(ckpt_path));
+    Checkpoint start = read_checkpoint(ckpt_path);
+    if (cfg.ldi) {
+      if (!fs::exists(ldi_path))
+        throw std::runtime_error(ldi_path.string() + ": missing; an ldi=on run keeps the LDI's state there");
+      start.ldi = nn::load_safetensors(ldi_path);
+      start.ldi_source = ldi_path.string();
+    }
+    trainer = std::make_unique<Trainer>(ctx, data, cfg, start);
     trim_curve(fs::path(out) / "curve.csv", trainer->current_step());
   } else {
     trainer = std::make_unique<Trainer>(ctx, data, cfg);
@@ -274,7 +284,9 @@ static int run_train(const Args& a) {
   auto save = [&] {
     curve.flush();
     log.flush();
-    write_checkpoint(ckpt_path, trainer->checkpoint());
+    const Checkpoint ckpt = trainer->checkpoint();
+    if (ckpt.ldi) nn::save_safetensors(ldi_path, *ckpt.ldi);
+    write_checkpoint(ckpt_path, ckpt);
     curve.plot();
   };
   double ema_ms = 0, ema_loss = 0;

@@ -24,6 +24,9 @@ class IntervalEvents {
   // first, a zero fill being 0 in both number types).
   virtual void accumulate(gpu::Commands& cmd, size_t w, double t0, double t1, const gpu::Buffer& counts,
                           uint32_t plane) const = 0;
+  // Changes whenever accumulate() would record other amounts for the same arguments (a source
+  // over a crop that moved): a cache of counts keyed by view and times compares it too.
+  virtual uint64_t generation() const { return 0; }
 };
 
 }  // namespace evflow

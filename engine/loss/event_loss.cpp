@@ -68,11 +68,12 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
   // Every interval's events once, into its own plane (unless counts_ holds them already).
   std::vector<double> times(F);
   for (uint32_t i = 0; i < F; ++i) times[i] = f.time_at(i);
-  if (f.view != counted_view_ || times != counted_times_) {
+  if (f.view != counted_view_ || times != counted_times_ || events_.generation() != counted_generation_) {
     cmd.fill(counts_, 0u);
     for (uint32_t k = 0; k < intervals; ++k) events_.accumulate(cmd, f.view, times[k], times[k + 1], counts_, k);
     counted_view_ = f.view;
     counted_times_ = times;
+    counted_generation_ = events_.generation();
     ++count_passes_;
   }
 

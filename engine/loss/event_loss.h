@@ -63,10 +63,12 @@ class EventLoss : public ExposureLossTerm {
   EventLossOptions options_;
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
   gpu::Buffer counts_, scratch_, partials_, sums_;
-  // What counts_ holds: the view and frame times of the last counting pass (empty: nothing).
+  // What counts_ holds: the view, frame times and events' generation of the last counting pass
+  // (empty: nothing).
   // It assumes each record's commands are submitted (a discarded batch would leave it stale).
   uint32_t counted_view_ = 0;
   std::vector<double> counted_times_;
+  uint64_t counted_generation_ = 0;
   uint64_t count_passes_ = 0;
 };
 

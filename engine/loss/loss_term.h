@@ -11,6 +11,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gpu/buffer.h"
@@ -28,6 +29,8 @@ class LossTerm {
   LossTerm& operator=(const LossTerm&) = delete;
 
   const std::string& name() const { return name_; }
+  // A second instance of a term under its own name (a branch's copy of the image loss).
+  void set_name(std::string name) { name_ = std::move(name); }
   float weight() const { return weight_; }
   void set_weight(float w) { weight_ = w; }
 

@@ -5,9 +5,11 @@
 #pragma once
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "nn/safetensors.h"
 #include "splat/gaussians.h"
 
 namespace evflow {
@@ -31,6 +33,10 @@ struct Checkpoint {
   std::vector<OptimizerGroupState> optimizer;  // empty: fresh optimizer state
   std::vector<TrajectoryState>
       trajectories;  // one per training view (blur mode, or plain mode with pose_refine); else empty
+  // The LDI branch's weights and Adam state (ldi=on). Not part of the .ckpt file: `evflow train`
+  // keeps it as RUN/ldi.safetensors beside it.
+  std::optional<nn::SafetensorsFile> ldi;
+  std::string ldi_source;  // the file it came from, for errors
 };
 
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& ckpt);

@@ -6,14 +6,19 @@ namespace evflow {
 
 void LossTerms::add(std::unique_ptr<ImageLossTerm> term) {
   all_.push_back(term.get());
-  is_exposure_.push_back(false);
+  kind_.push_back(Kind::Image);
   image_.push_back(std::move(term));
 }
 
 void LossTerms::add(std::unique_ptr<ExposureLossTerm> term) {
   all_.push_back(term.get());
-  is_exposure_.push_back(true);
+  kind_.push_back(Kind::Exposure);
   exposure_.push_back(std::move(term));
+}
+
+void LossTerms::add_branch_term(LossTerm* term, bool scheduled) {
+  all_.push_back(term);
+  kind_.push_back(scheduled ? Kind::ScheduledBranch : Kind::Branch);
 }
 
 void LossTerms::record_image_terms(gpu::Commands& cmd, const ImageModel& m, const gpu::Buffer& target) const {
@@ -31,13 +36,14 @@ void LossTerms::record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& 
 LossValues LossTerms::read(bool exposure_recorded, double exposure_scale) const {
   LossValues out;
   for (size_t i = 0; i < all_.size(); ++i) {
-    if (is_exposure_[i] && !exposure_recorded) {
+    if (kind_[i] == Kind::Exposure && !exposure_recorded) {
       out.terms.push_back(0.0);
       continue;
     }
     const double v = all_[i]->value();
     out.terms.push_back(v);
-    out.total += all_[i]->weight() * (is_exposure_[i] ? exposure_scale : 1.0) * v;
+    const bool scheduled = kind_[i] == Kind::Exposure || kind_[i] == Kind::ScheduledBranch;
+    out.total += all_[i]->weight() * (scheduled ? exposure_scale : 1.0) * v;
     if (!std::isfinite(v) && !out.first_bad) out.first_bad = all_[i];
   }
   return out;

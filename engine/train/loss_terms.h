@@ -1,7 +1,8 @@
 // The training loss as a list of terms, kept by kind as they are added:
 //   image terms     compare the image model's prediction with the view's target;
-//   exposure terms  see every virtual frame of the exposure (the event loss; flow, LDI and
-//                   residual terms plug in here).
+//   exposure terms  see every virtual frame of the exposure (the event loss; flow and
+//                   residual terms plug in here);
+//   branch terms    recorded by a branch with its own parameters (LdiBranch), only read here.
 // Values are read back in the order the terms were added (the order of curve.csv's columns).
 #pragma once
 #include <cstdint>
@@ -23,6 +24,9 @@ class LossTerms {
  public:
   void add(std::unique_ptr<ImageLossTerm> term);
   void add(std::unique_ptr<ExposureLossTerm> term);
+  // A term its branch records every step (writing 0 when it is off that step); with `scheduled`
+  // it counts in the total with the event terms' schedule, as the exposure terms.
+  void add_branch_term(LossTerm* term, bool scheduled);
   const std::vector<LossTerm*>& all() const { return all_; }
   bool has_exposure_terms() const { return !exposure_.empty(); }
 
@@ -40,7 +44,8 @@ class LossTerms {
   std::vector<std::unique_ptr<ImageLossTerm>> image_;
   std::vector<std::unique_ptr<ExposureLossTerm>> exposure_;
   std::vector<LossTerm*> all_;
-  std::vector<bool> is_exposure_;  // per entry of all_
+  enum class Kind { Image, Exposure, Branch, ScheduledBranch };
+  std::vector<Kind> kind_;  // per entry of all_
 };
 
 }  // namespace evflow

@@ -32,9 +32,31 @@ uint64_t to_uint(const std::string& k, const std::string& v) {
   }
 }
 bool to_bool(const std::string& k, const std::string& v) {
-  if (v == "1" || v == "true" || v == "yes") return true;
-  if (v == "0" || v == "false" || v == "no") return false;
+  if (v == "1" || v == "true" || v == "yes" || v == "on") return true;
+  if (v == "0" || v == "false" || v == "no" || v == "off") return false;
   throw std::invalid_argument("config key '" + k + "' expects true/false, got '" + v + "'");
+}
+// "32,64,1": comma-separated positive integers.
+std::vector<uint32_t> to_uint_list(const std::string& k, const std::string& v) {
+  std::vector<uint32_t> out;
+  size_t pos = 0;
+  while (pos <= v.size()) {
+    const size_t end = std::min(v.find(',', pos), v.size());
+    const uint64_t x = to_uint(k, v.substr(pos, end - pos));
+    if (x == 0 || x > 4096)
+      throw std::invalid_argument("config key '" + k + "' expects widths in 1..4096, got '" + v + "'");
+    out.push_back(uint32_t(x));
+    pos = end + 1;
+  }
+  return out;
+}
+std::string uint_list_text(const std::vector<uint32_t>& v) {
+  std::string s;
+  for (uint32_t x : v) {
+    if (!s.empty()) s += ',';
+    s += std::to_string(x);
+  }
+  return s;
 }
 
 // The value of `values` whose name is v; the error lists the names.
@@ -300,6 +322,42 @@ std::vector<Setting> density_settings() {
   };
 }
 
+std::vector<Setting> ldi_settings() {
+  return {
+      field("ldi", &TrainConfig::ldi,
+            "the learnable double integral branch (paper Sec. 4.5, [ldi.md](ldi.md)): a small network turns each "
+            "view's events into sharp frames C_ldi(t_i) = B / E(t_i) at the virtual frames' times, trained by "
+            "L_ldi = L_blur^ldi + λ L_ev^ldi and tied to the renders by L_joint; `on`/`off`; needs `mode=blur` and "
+            "events with times"),
+      {"ldi_widths",
+       [](TrainConfig& c, const std::string& v) {
+         const auto w = to_uint_list("ldi_widths", v);
+         if (w.size() < 2 || w.front() != 32 || w.back() != 1)
+           throw std::invalid_argument("config key 'ldi_widths' must start with 32 and end with 1, got '" + v + "'");
+         c.ldi_widths = w;
+       },
+       [](const TrainConfig& c) { return nlohmann::json(uint_list_text(c.ldi_widths)); },
+       "the LDI network's channels: 32 (16 time bins × 2 polarities), each 3×3 layer's output, 1; the paper's "
+       "32,64,128,64,16,1 costs 25× the default's multiply-adds per pixel ([ldi.md](ldi.md#speed))"},
+      field("ldi_crop", &TrainConfig::ldi_crop,
+            "side of the random square crop of the view the LDI branch trains on each step (0: the whole image)"),
+      field("ldi_blur_weight", &TrainConfig::ldi_blur_weight,
+            "weight of L_blur^ldi: the LDI frames' mean (linear light) against the blurry input, the image loss of "
+            "the blur term (`ssim_lambda`, `loss_space`)"),
+      field("ldi_event_weight", &TrainConfig::ldi_event_weight,
+            "λ of L_ev^ldi, the event loss on the LDI frames (thresholds, `event_pool`, `event_norm_floor` as "
+            "L_ev^gs); on from `event_from` and faded by `event_weight_end` as the splats' event term; 0: off"),
+      field("joint_weight", &TrainConfig::joint_weight,
+            "weight of L_joint (paper Eq. 10): the image loss between each LDI frame and the render at its time, "
+            "gradients into both; 0: off"),
+      field("ldi_lr", &TrainConfig::ldi_lr, "the LDI network's Adam learning rate (eps 1e-8), as EVDI"),
+      field("ldi_init_steps", &TrainConfig::ldi_init_steps,
+            "steps of the initialisation to EDI before training: the network regressed to EDI's double integral "
+            "with the dataset's thresholds on random crops (0: He initialisation only)"),
+      field("ldi_init_lr", &TrainConfig::ldi_init_lr, "the initialisation's Adam learning rate"),
+  };
+}
+
 const std::vector<Group>& settings_groups() {
   static const std::vector<Group> groups = {
       {"Run", run_settings()},
@@ -308,6 +366,7 @@ const std::vector<Group>& settings_groups() {
       {"Event loss", event_settings()},
       {"Pose refinement (plain mode)", pose_settings()},
       {"Density control", density_settings()},
+      {"Learnable double integral", ldi_settings()},
   };
   return groups;
 }
@@ -390,6 +449,8 @@ TrainConfig TrainConfig::preset_named(const std::string& name) {
     c.checkpoint_every = 5000;
     c.lr_trajectory_init = 1e-3;
     c.lr_trajectory_final = 1e-5;
+    c.ldi_widths = {32, 64, 128, 64, 16, 1};
+    c.ldi_crop = 0;
   } else {
     throw std::invalid_argument("unknown preset '" + name + "' (fast, paper)");
   }

@@ -73,6 +73,13 @@ struct TrainConfig {
   double prune_screen_px = 0, prune_world_scale = 0;
   uint32_t opacity_reset_every = 3000;
   uint32_t max_gaussians = 30000;
+  bool ldi = false;
+  std::vector<uint32_t> ldi_widths{32, 16, 16, 1};
+  uint32_t ldi_crop = 48;
+  double ldi_blur_weight = 1.0, ldi_event_weight = 0.1, joint_weight = 1.0;
+  double ldi_lr = 1e-3;
+  uint32_t ldi_init_steps = 300;
+  double ldi_init_lr = 3e-3;
 
   static TrainConfig preset_named(const std::string& name);  // "fast" (CPU) or "paper" (GPU)
   // The paper's configurations and baselines (key "method"): plain (3DGS on the blurry images),

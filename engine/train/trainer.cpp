@@ -55,13 +55,15 @@ Trainer::Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, co
       v_alpha_(ctx, 16, "v_alpha"),
       preview_(ctx),
       step_(start.step) {
-  setup(start.cloud);
+  setup(start);
   optimizer_->load(start.optimizer);
   cameras_->load(start.trajectories, cfg_);
 }
 
 Checkpoint Trainer::checkpoint() const {
-  return Checkpoint{step_, params_->download(), optimizer_->state(), cameras_->state()};
+  Checkpoint c{step_, params_->download(), optimizer_->state(), cameras_->state(), std::nullopt, {}};
+  if (ldi_) c.ldi = ldi_->state();
+  return c;
 }
 
 void Trainer::add_loss(std::unique_ptr<ExposureLossTerm> term) {
@@ -70,7 +72,8 @@ void Trainer::add_loss(std::unique_ptr<ExposureLossTerm> term) {
   terms_.add(std::move(term));
 }
 
-void Trainer::setup(const GaussianCloud& start) {
+void Trainer::setup(const Checkpoint& checkpoint) {
+  const GaussianCloud& start = checkpoint.cloud;
   if (data_.train.empty()) throw std::invalid_argument("dataset has no training views");
   const Camera& c0 = data_.train[0].camera;
   for (auto& v : data_.train)
@@ -92,7 +95,18 @@ void Trainer::setup(const GaussianCloud& start) {
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
   if (cfg_.event_weight > 0) add_event_term();
   setup_flows();
+  if (cfg_.ldi) add_ldi_branch(checkpoint);
   optimizer_ = std::make_unique<GaussianOptimizer>(ctx_, cmd_, *params_, *grads_, cfg_, scene_extent(data_));
+}
+
+// The LDI branch from the checkpoint's LDI state, or initialised (at step 0); its terms join the list.
+void Trainer::add_ldi_branch(const Checkpoint& start) {
+  if (start.step > 0 && !start.ldi)
+    throw std::invalid_argument("continuing an ldi=on run at step " + std::to_string(start.step) +
+                                " needs the LDI's state (RUN/ldi.safetensors)");
+  const std::vector<double>& u = cameras_->frame_times();
+  ldi_ = std::make_unique<LdiBranch>(ctx_, data_, cfg_, u, start.ldi ? &*start.ldi : nullptr, start.ldi_source);
+  for (auto [term, scheduled] : ldi_->terms()) terms_.add_branch_term(term, scheduled);
 }
 
 // Per view, its training target in loss_space.
@@ -259,6 +273,10 @@ void Trainer::render_exposure(uint32_t view) {
 void Trainer::record_losses(StepStats& st, bool exposure_on) {
   terms_.record_image_terms(cmd_, *image_model_, targets_[st.view]);
   if (exposure_on) record_exposure_terms(st);
+  if (ldi_)
+    ldi_->record(cmd_, st.view, step_, exposure_->images(), *image_model_,
+                 step_ > uint32_t(cfg_.event_from * cfg_.iterations), event_schedule(),
+                 cfg_.seed * 0x100000001B3ull + step_);
   cmd_.submit();
 }
 
@@ -320,7 +338,8 @@ void Trainer::backward(uint32_t view, bool exposure_on) {
   if (exposure_on)
     for (auto& g : frame_grad_) frame_grads.push_back(&g);
   image_model_->render_grads(cmd_, frame_grads);
-  cmd_.submit();  // the rasterizer's backward passes run on its own command buffer
+  if (ldi_) ldi_->backward(cmd_, *image_model_);  // the joint loss's share of the renders' gradients
+  cmd_.submit();                                  // the rasterizer's backward passes run on its own command buffer
   for (uint32_t i = 0; i < exposure_->frames(); ++i) v_rgb.push_back(&image_model_->render_grad(i));
   const std::vector<lie::Vec6> pose = exposure_->backward(raster_, *params_, v_rgb, v_alpha_, *grads_);
   cameras_->backward_and_step(view, pose, step_);

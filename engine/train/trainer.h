@@ -22,6 +22,7 @@
 #include "train/exposure_render.h"
 #include "train/gaussian_optimizer.h"
 #include "train/image_model.h"
+#include "train/ldi_branch.h"
 #include "train/loss_terms.h"
 #include "train/model_flow.h"
 #include "train/train_config.h"
@@ -72,7 +73,8 @@ uint32_t view_for_step(uint32_t step, size_t views, uint64_t seed);
 class Trainer {
  public:
   Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg);
-  // Continues from a checkpoint (Gaussians, step and optimizer state: bit-identical on the same device).
+  // Continues from a checkpoint (Gaussians, step and optimizer state: bit-identical on the same
+  // device; with ldi=on the checkpoint's `ldi` state is required once past step 0).
   Trainer(gpu::Context& ctx, const io::Dataset& data, TrainConfig cfg, const Checkpoint& start);
 
   StepStats step();
@@ -106,9 +108,12 @@ class Trainer {
   uint32_t flow_intervals() const { return flows_.empty() ? 0 : uint32_t(flows_[0].size()); }
   // The step at which the model's flow was last computed (flow=model, flow_model_from); 0: never.
   uint32_t model_flow_step() const { return model_flow_step_; }
+  // The learnable double integral branch (ldi=on), else null.
+  LdiBranch* ldi() { return ldi_.get(); }
 
  private:
-  void setup(const GaussianCloud& start);
+  void setup(const Checkpoint& start);
+  void add_ldi_branch(const Checkpoint& start);
   void upload_targets();
   void add_event_term();
   void setup_flows();
@@ -150,7 +155,8 @@ class Trainer {
   std::unique_ptr<ModelFlow> model_flow_;  // flow=model or flow_model_from
   uint32_t model_flow_step_ = 0;
   std::unique_ptr<GaussianOptimizer> optimizer_;
-  RenderState preview_;  // render()
+  std::unique_ptr<LdiBranch> ldi_;  // ldi=on
+  RenderState preview_;             // render()
   uint32_t step_ = 0;
   uint32_t flips_ = 0;
 };

@@ -1,0 +1,230 @@
+#include "train/ldi_branch.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <random>
+#include <stdexcept>
+
+#include "ldi/crop.h"
+#include "ldi/ldi_prefit.h"
+#include "train/train_layout.h"
+#include "train/training_data.h"
+
+namespace evflow {
+
+namespace {
+
+std::unique_ptr<GpuEvents> branch_events(gpu::Context& ctx, const io::Dataset& data) {
+  if (data.events.size() == 0)
+    throw std::invalid_argument("ldi=on needs an event stream with times, and the dataset in '" + data.root +
+                                "' has none");
+  std::unique_ptr<IntervalEvents> ev = training_events(ctx, data);
+  if (!dynamic_cast<GpuEvents*>(ev.get())) throw std::logic_error("ldi: events with times did not load as a stream");
+  return std::unique_ptr<GpuEvents>(static_cast<GpuEvents*>(ev.release()));
+}
+
+void accumulate(gpu::Commands& cmd, const gpu::Buffer& x, const gpu::Buffer& y, uint64_t n, float scale, bool add) {
+  shaderio::AccumulatePC pc{uint32_t(n), scale, add ? 1u : 0u, 0};
+  cmd.dispatch("train/accumulate", {{shaderio::kTrainAccumulateBindX, x}, {shaderio::kTrainAccumulateBindY, y}}, pc,
+               cmd.linear_groups(gpu::Commands::div_up(n, shaderio::kAccumulateGroupSize)));
+}
+
+}  // namespace
+
+LdiBranch::LdiBranch(gpu::Context& ctx, const io::Dataset& data, const TrainConfig& cfg,
+                     const std::vector<double>& frame_u, const nn::SafetensorsFile* state, const std::string& source)
+    : ctx_(ctx), data_(data), cfg_(cfg), frame_u_(frame_u), srgb_(cfg.loss_space == LossSpace::Srgb) {
+  if (cfg.mode != TrainMode::Blur)
+    throw std::invalid_argument("ldi=on needs mode=blur (its frames pair with the virtual frames)");
+  events_ = branch_events(ctx, data);
+  const uint32_t W = events_->width(), H = events_->height(), F = uint32_t(frame_u.size());
+  const uint32_t cw = cfg.ldi_crop ? std::min(cfg.ldi_crop, W) : W, ch = cfg.ldi_crop ? std::min(cfg.ldi_crop, H) : H;
+  model_ = std::make_unique<ldi::LdiModel>(ctx, *events_, cfg.ldi_widths, cw, ch, F);
+  crop_ = {0, 0, cw, ch};
+  values_ = 3ull * cw * ch;
+  const ImageShape shape{3, ch, cw};
+  blur_ = std::make_unique<BlendLoss>(ctx, shape, float(cfg.ssim_lambda), float(cfg.ldi_blur_weight));
+  blur_->set_name("ldi_blur");
+  joint_ = std::make_unique<ldi::JointLoss>(ctx, shape, float(cfg.ssim_lambda), float(cfg.joint_weight));
+  if (cfg.ldi_event_weight > 0) {
+    crop_events_ = std::make_unique<ldi::CropEvents>(*events_, cw, ch);
+    const auto [pos, neg] = event_thresholds(data, cfg);
+    EventLossOptions o;
+    o.theta_pos = float(pos), o.theta_neg = float(neg), o.norm_floor_rms = float(cfg.event_norm_floor);
+    o.pool = cfg.event_pool;
+    event_ = std::make_unique<EventLoss>(ctx, *crop_events_, float(cfg.ldi_event_weight), o);
+    event_->set_name("ldi_events");
+  }
+  for (const io::View& v : data.train) {
+    std::vector<float> planar = io::planar_rgb(v.blurry);
+    blurry_.emplace_back(ctx, planar.size() * 4, "ldi_blurry");
+    blurry_.back().write(planar);
+    if (srgb_)
+      for (float& x : planar) x = io::linear_to_srgb(x);
+    target_.emplace_back(ctx, planar.size() * 4, "ldi_target");
+    target_.back().write(planar);
+  }
+  for (auto* b : {&blurry_crop_, &target_crop_, &mean_, &mean_ls_, &v_mean_ls_, &v_mean_, &tmp_})
+    *b = gpu::Buffer(ctx, values_ * 4, "ldi_crop_image");
+  for (auto* list : {&grad_, &ldi_ls_, &gs_ls_, &g_ldi_ls_, &g_gs_ls_, &g_render_})
+    for (uint32_t i = 0; i < F; ++i) list->emplace_back(ctx, values_ * 4, "ldi_frame_image");
+  adam_ = std::make_unique<Adam>(ctx, AdamOptions{0.9, 0.999, 1e-8});
+  model_->add_to(*adam_, float(cfg.ldi_lr));
+  if (state)
+    load_state(*state, source);
+  else
+    initialise();
+}
+
+// He initialisation, then the pre-fit to EDI's double integral with the dataset's thresholds.
+void LdiBranch::initialise() {
+  model_->init(cfg_.seed * 0x9E3779B97F4A7C15ull + 0x1D1);
+  if (cfg_.ldi_init_steps == 0) return;
+  const auto start = std::chrono::steady_clock::now();
+  const auto [pos, neg] = event_thresholds(data_, cfg_);
+  ldi::PrefitOptions o;
+  o.steps = cfg_.ldi_init_steps;
+  o.frames = std::min<uint32_t>(2, model_->max_frames());
+  o.lr = float(cfg_.ldi_init_lr);
+  o.seed = cfg_.seed;
+  o.thresholds = events::EdiThresholds{pos, neg, {}, {}};
+  const ldi::PrefitReport r = ldi::prefit_to_edi(ctx_, *model_, data_.events, *events_, o);
+  std::fprintf(stderr,
+               "ldi: initialised to EDI (thresholds %.3g / %.3g): %u steps, log-E regression %.4g -> %.4g in %.1f s\n",
+               pos, neg, r.steps, r.first_loss, r.last_loss,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+}
+
+std::vector<std::pair<LossTerm*, bool>> LdiBranch::terms() {
+  std::vector<std::pair<LossTerm*, bool>> t{{blur_.get(), false}};
+  if (event_) t.emplace_back(event_.get(), true);
+  t.emplace_back(joint_.get(), false);
+  return t;
+}
+
+ldi::Crop LdiBranch::choose_crop(uint32_t step) const {
+  const uint32_t W = events_->width(), H = events_->height();
+  ldi::Crop c{0, 0, model_->crop_w(), model_->crop_h()};
+  if (c.w == W && c.h == H) return c;
+  std::mt19937_64 rng(cfg_.seed * 0x100000001B3ull + step * 0x9E3779B97F4A7C15ull + 0xC0);
+  c.x = uint32_t(rng() % (W - c.w + 1));
+  c.y = uint32_t(rng() % (H - c.h + 1));
+  return c;
+}
+
+void LdiBranch::colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g,
+                       const gpu::Buffer& y) {
+  shaderio::ColourPC pc{uint32_t(values_), op, 0, 0};
+  cmd.dispatch("train/colour", {{shaderio::kColourBindX, x}, {shaderio::kColourBindG, g}, {shaderio::kColourBindY, y}},
+               pc, cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kColourGroupSize)));
+}
+
+void LdiBranch::record(gpu::Commands& cmd, uint32_t view, uint32_t step, const std::vector<const gpu::Buffer*>& renders,
+                       const ImageModel& image_model, bool events_on, double event_scale, uint64_t seed) {
+  const io::View& v = data_.train.at(view);
+  const uint32_t W = v.camera.width, H = v.camera.height;
+  view_ = view;
+  crop_ = choose_crop(step);
+  ldi::record_crop(cmd, blurry_[view], W, H, 3, crop_, blurry_crop_);
+  ldi::record_crop(cmd, target_[view], W, H, 3, crop_, target_crop_);
+  std::vector<double> times;  // inside the exposure, whatever the rounding of t_0 + u T
+  for (double u : frame_u_)
+    times.push_back(
+        std::clamp(v.exposure_start + u * (v.exposure_end - v.exposure_start), v.exposure_start, v.exposure_end));
+  model_->forward(cmd, view, times, crop_, blurry_crop_);
+  record_blur(cmd);
+  record_joint(cmd, renders, image_model);
+  record_events(cmd, view, events_on, event_scale, seed);
+}
+
+// L_blur^ldi: each frame's gradient starts as its share of the mean's.
+void LdiBranch::record_blur(gpu::Commands& cmd) {
+  const uint32_t F = model_->frames();
+  for (uint32_t i = 0; i < F; ++i) accumulate(cmd, model_->frame(i), mean_, values_, 1.0f / float(F), i > 0);
+  if (srgb_) colour(cmd, shaderio::kColourEncode, mean_, mean_, mean_ls_);
+  blur_->record(cmd, srgb_ ? mean_ls_ : mean_, target_crop_, v_mean_ls_, blur_->weight() / float(F), false);
+  if (srgb_) colour(cmd, shaderio::kColourEncodeBwd, mean_, v_mean_ls_, v_mean_);
+  for (uint32_t i = 0; i < F; ++i) cmd.copy(srgb_ ? v_mean_ : v_mean_ls_, grad_[i], values_ * 4);
+}
+
+// L_joint in loss_space: the LDI frame's gradient goes back to linear light and adds to the
+// frame's; the render's (the crop of an sRGB render) waits for backward().
+void LdiBranch::record_joint(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const ImageModel& im) {
+  const uint32_t F = model_->frames();
+  const uint32_t W = data_.train[view_].camera.width, H = data_.train[view_].camera.height;
+  std::vector<const gpu::Buffer*> a, b, ga, gb;
+  for (uint32_t i = 0; i < F; ++i) {
+    if (srgb_) colour(cmd, shaderio::kColourEncode, model_->frame(i), model_->frame(i), ldi_ls_[i]);
+    ldi::record_crop(cmd, srgb_ ? *renders[i] : im.linear_frame(i), W, H, 3, crop_, gs_ls_[i]);
+    a.push_back(srgb_ ? &ldi_ls_[i] : &model_->frame(i));
+    b.push_back(&gs_ls_[i]);
+    ga.push_back(&g_ldi_ls_[i]);
+    gb.push_back(srgb_ ? &g_render_[i] : &g_gs_ls_[i]);
+  }
+  joint_->record(cmd, a, b, ga, gb, joint_->weight(), false);
+  for (uint32_t i = 0; i < F; ++i) {
+    if (srgb_) colour(cmd, shaderio::kColourEncodeBwd, model_->frame(i), g_ldi_ls_[i], tmp_);
+    accumulate(cmd, srgb_ ? tmp_ : g_ldi_ls_[i], grad_[i], values_, 1.0f, true);
+    if (srgb_) continue;
+    ldi::record_crop(cmd, *renders[i], W, H, 3, crop_, tmp_);
+    colour(cmd, shaderio::kColourDecodeBwd, tmp_, g_gs_ls_[i], g_render_[i]);
+  }
+}
+
+// L_ev^ldi on the LDI frames over the crop; its value reads 0 on steps it is off.
+void LdiBranch::record_events(gpu::Commands& cmd, uint32_t view, bool on, double scale, uint64_t seed) {
+  if (!event_) return;
+  if (!on) {
+    cmd.fill(event_->value_buffer(), 0u, uint64_t(event_->value_offset()) * 4, 4);
+    return;
+  }
+  crop_events_->set_crop(crop_);
+  const io::View& v = data_.train[view];
+  ExposureFrames ef{view, crop_.w, crop_.h, v.exposure_start, v.exposure_end, frame_u_, {}, {}, seed};
+  for (uint32_t i = 0; i < model_->frames(); ++i) {
+    ef.rgb.push_back(&model_->frame(i));
+    ef.grad.push_back(&grad_[i]);
+  }
+  event_->record(cmd, ef, float(event_->weight() * scale));
+}
+
+void LdiBranch::backward(gpu::Commands& cmd, const ImageModel& image_model) {
+  const uint32_t W = data_.train[view_].camera.width, H = data_.train[view_].camera.height;
+  std::vector<const gpu::Buffer*> grads;
+  for (uint32_t i = 0; i < model_->frames(); ++i) {
+    ldi::record_uncrop_add(cmd, g_render_[i], W, H, 3, crop_, image_model.render_grad(i));
+    grads.push_back(&grad_[i]);
+  }
+  model_->backward_from_frames(cmd, grads);
+  adam_->step(cmd);
+}
+
+nn::SafetensorsFile LdiBranch::state() const {
+  nn::SafetensorsFile f;
+  model_->save(f);
+  for (size_t i = 0; i < adam_->group_count(); ++i) {
+    const AdamGroup& g = adam_->group(i);
+    f.tensors.push_back({"adam." + g.name + ".exp_avg", {g.count}, adam_->exp_avg(i).read<float>(g.count)});
+    f.tensors.push_back({"adam." + g.name + ".exp_avg_sq", {g.count}, adam_->exp_avg_sq(i).read<float>(g.count)});
+  }
+  f.metadata["adam_step"] = std::to_string(adam_->group_count() ? adam_->step_count(0) : 0);
+  return f;
+}
+
+// Weights, and the Adam state when the file has it (a file of weights alone starts Adam afresh).
+void LdiBranch::load_state(const nn::SafetensorsFile& f, const std::string& source) {
+  model_->load(f, source);
+  const auto step = f.metadata.find("adam_step");
+  if (step == f.metadata.end()) return;
+  for (size_t i = 0; i < adam_->group_count(); ++i) {
+    const AdamGroup& g = adam_->group(i);
+    const nn::NamedTensor* m = f.find("adam." + g.name + ".exp_avg");
+    const nn::NamedTensor* v = f.find("adam." + g.name + ".exp_avg_sq");
+    if (!m || !v || m->values.size() != g.count || v->values.size() != g.count)
+      throw std::runtime_error(source + ": no Adam state of the right size for " + g.name);
+    adam_->load_state(i, m->values, v->values, std::stoull(step->second));
+  }
+}
+
+}  // namespace evflow

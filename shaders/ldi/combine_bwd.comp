@@ -1,0 +1,29 @@
+#version 450
+// The backward of ldi/combine for frame i (ldi_layout.h, LdiCombinePC): the gradients of the
+// two sides' network outputs, from the frame's gradient (kLdiFromFrames) or from the regression
+// of log E to a target integral (kLdiFromTarget), one invocation per pixel.
+#extension GL_GOOGLE_include_directive : require
+#include "ldi/ldi_layout.h"
+#include "common/dispatch.glsl"
+layout(local_size_x = kLdiGroupSize) in;
+layout(std430, binding = kLdiCombineBwdBindSides) readonly buffer Sides { float sides[]; };
+layout(std430, binding = kLdiCombineBwdBindBlurry) readonly buffer Blurry { float blurry[]; };
+layout(std430, binding = kLdiCombineBwdBindGrads) readonly buffer Grads { float grads[]; };
+layout(std430, binding = kLdiCombineBwdBindSideGrads) writeonly buffer SideGrads { float side_grads[]; };
+layout(push_constant) uniform PC { LdiCombinePC pc; };
+#include "ldi/ldi_math.glsl"
+
+void main() {
+  uint p = evf_linear_invocation(kLdiGroupSize), n = pc.pixels;
+  if (p >= n) return;
+  float a = sides[2u * pc.frame * n + p], b = sides[(2u * pc.frame + 1u) * n + p];
+  float e = ldi_integral(a, b), g_e = 0.0;
+  if (pc.mode == kLdiFromTarget) {
+    g_e = ldi_regression_bwd(e, grads[pc.frame * n + p]);
+  } else {
+    for (uint c = 0u; c < 3u; ++c) g_e += ldi_frame_bwd(blurry[c * n + p], e, grads[c * n + p]);
+  }
+  float g_x = pc.scale * ldi_integral_bwd(a, b, g_e);
+  side_grads[2u * pc.frame * n + p] = pc.w1 * g_x;
+  side_grads[(2u * pc.frame + 1u) * n + p] = pc.w2 * g_x;
+}

@@ -1,0 +1,175 @@
+// The learnable double integral (engine/ldi/ldi_model.h): the frames and double integrals
+// against the double-precision reference (tests/reference/ldi_reference.h), the network's weight
+// gradients of both backward modes against central differences of that reference, the neutral
+// initialisation, and the checks on bad input.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "events/gpu_events.h"
+#include "gpu/commands.h"
+#include "gpu_fixture.h"
+#include "ldi/ldi_model.h"
+#include "reference/ldi_reference.h"
+
+using namespace evflow;
+
+namespace {
+
+std::vector<double> uniform(size_t n, std::mt19937& rng, double lo, double hi) {
+  std::uniform_real_distribution<double> u(lo, hi);
+  std::vector<double> v(n);
+  for (double& x : v) x = double(float(u(rng)));  // exactly what the GPU sees
+  return v;
+}
+
+std::vector<float> to_float(const std::vector<double>& v) { return std::vector<float>(v.begin(), v.end()); }
+
+void require_close(const std::vector<float>& got, const std::vector<double>& want, double tol, const char* what) {
+  REQUIRE(got.size() >= want.size());
+  double scale = 1e-6;
+  for (double w : want) scale = std::max(scale, std::abs(w));
+  for (size_t i = 0; i < want.size(); ++i) {
+    INFO(what << " [" << i << "]: " << got[i] << " vs " << want[i] << " (largest " << scale << ")");
+    REQUIRE(std::abs(double(got[i]) - want[i]) <= tol * (std::abs(want[i]) + 0.05 * scale));
+  }
+}
+
+struct Case {
+  EventStream stream;
+  std::vector<ref::LdiEvent> events;
+  ref::LdiNet net;
+  ref::LdiCrop crop{2, 1, 5, 4};
+  std::vector<double> times{0.0, 0.37, 1.0};  // t_0, inside, t_2N
+  ref::NnTensor blurry{3, 4, 5};
+};
+
+Case make_case() {
+  Case c;
+  std::mt19937 rng(7);
+  c.stream.width = 8, c.stream.height = 6;
+  std::vector<double> t = uniform(400, rng, 0.0, 1.0);
+  std::sort(t.begin(), t.end());
+  for (double ti : t) {
+    const auto x = uint16_t(rng() % 8), y = uint16_t(rng() % 6);
+    const int8_t p = rng() % 3 ? 1 : -1;
+    c.stream.push(x, y, ti, p);
+    c.events.push_back({ti, x, y, p});
+  }
+  c.net.widths = {32, 4, 3, 1};
+  for (size_t i = 0; i + 1 < c.net.widths.size(); ++i) {
+    c.net.weight.push_back(uniform(size_t(c.net.widths[i]) * c.net.widths[i + 1] * 9, rng, -0.25, 0.25));
+    c.net.bias.push_back(uniform(c.net.widths[i + 1], rng, -0.2, 0.4));
+  }
+  c.blurry.v = uniform(c.blurry.v.size(), rng, 0.1, 0.9);
+  return c;
+}
+
+void set_weights(ldi::LdiModel& m, const ref::LdiNet& net) {
+  for (size_t i = 0; i + 1 < net.widths.size(); ++i)
+    m.network().layer(i).set_parameters(to_float(net.weight[i]), to_float(net.bias[i]));
+}
+
+std::vector<double> flatten(const std::vector<ref::NnTensor>& ts) {
+  std::vector<double> v;
+  for (auto& t : ts) v.insert(v.end(), t.v.begin(), t.v.end());
+  return v;
+}
+
+}  // namespace
+
+TEST_CASE("LDI: frames against the double reference, weight gradients against central differences", "[ldi][gpu]") {
+  auto& ctx = test::gpu_context();
+  Case c = make_case();
+  GpuEvents events(ctx, c.stream, {{0.0, 1.0}}, "random events");
+  ldi::LdiModel model(ctx, events, c.net.widths, c.crop.w, c.crop.h, 3);
+  set_weights(model, c.net);
+  gpu::Buffer blurry(ctx, c.blurry.v.size() * 4, "blurry_crop");
+  blurry.write(to_float(c.blurry.v));
+  gpu::Commands cmd(ctx);
+  const ldi::Crop crop{c.crop.x, c.crop.y, c.crop.w, c.crop.h};
+  model.forward(cmd, 0, c.times, crop, blurry);
+  cmd.submit();
+  const ref::LdiFrames want = ref::ldi_frames(c.net, c.events, 0.0, 1.0, c.times, c.crop, c.blurry);
+  require_close(model.integral().read<float>(3 * 20), flatten(want.integral), 1e-5, "E");
+  std::vector<float> frames;
+  for (uint32_t i = 0; i < 3; ++i) {
+    const auto f = model.frame(i).read<float>(60);
+    frames.insert(frames.end(), f.begin(), f.end());
+  }
+  require_close(frames, flatten(want.frames), 1e-5, "C");
+
+  std::mt19937 rng(11);
+  SECTION("from the frames' gradient") {
+    const std::vector<double> r = uniform(9 * 20, rng, -1.0, 1.0);
+    std::vector<gpu::Buffer> grads;
+    std::vector<const gpu::Buffer*> ptrs;
+    for (uint32_t i = 0; i < 3; ++i) {
+      grads.emplace_back(ctx, 60 * 4, "frame_grad");
+      grads.back().write(to_float(std::vector<double>(r.begin() + i * 60, r.begin() + (i + 1) * 60)));
+    }
+    for (auto& g : grads) ptrs.push_back(&g);
+    model.backward_from_frames(cmd, ptrs, 0.5f);
+    cmd.submit();
+    auto loss = [&] {
+      const auto f = flatten(ref::ldi_frames(c.net, c.events, 0.0, 1.0, c.times, c.crop, c.blurry).frames);
+      double s = 0;
+      for (size_t i = 0; i < f.size(); ++i) s += 0.5 * r[i] * f[i];
+      return s;
+    };
+    for (size_t l = 0; l + 1 < c.net.widths.size(); ++l) {
+      INFO("layer " << l);
+      nn::Conv2d& conv = model.network().layer(l);
+      require_close(conv.weight_grad().read<float>(c.net.weight[l].size()),
+                    ref::nn_central_differences(c.net.weight[l], loss, 1e-5), 2e-3, "dW");
+      require_close(conv.bias_grad().read<float>(c.net.bias[l].size()),
+                    ref::nn_central_differences(c.net.bias[l], loss, 1e-5), 2e-3, "db");
+    }
+  }
+  SECTION("from the regression of log E to a target") {
+    const std::vector<double> d = uniform(3 * 20, rng, 0.5, 2.0);
+    gpu::Buffer target(ctx, d.size() * 4, "target");
+    target.write(to_float(d));
+    model.backward_from_target(cmd, target, 0.25f);
+    cmd.submit();
+    auto loss = [&] {
+      const auto e = flatten(ref::ldi_frames(c.net, c.events, 0.0, 1.0, c.times, c.crop, c.blurry).integral);
+      double s = 0;
+      for (size_t i = 0; i < e.size(); ++i) s += 0.25 * std::pow(std::log(e[i]) - std::log(d[i]), 2);
+      return s;
+    };
+    for (size_t l = 0; l + 1 < c.net.widths.size(); ++l) {
+      INFO("layer " << l);
+      nn::Conv2d& conv = model.network().layer(l);
+      require_close(conv.weight_grad().read<float>(c.net.weight[l].size()),
+                    ref::nn_central_differences(c.net.weight[l], loss, 1e-5), 2e-3, "dW");
+      require_close(conv.bias_grad().read<float>(c.net.bias[l].size()),
+                    ref::nn_central_differences(c.net.bias[l], loss, 1e-5), 2e-3, "db");
+    }
+  }
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("LDI: the neutral initialisation gives E = 1 without events, and bad input is refused", "[ldi][gpu]") {
+  auto& ctx = test::gpu_context();
+  EventStream none;
+  none.width = 6, none.height = 5;
+  GpuEvents events(ctx, none, {{0.0, 1.0}}, "no events");
+  ldi::LdiModel model(ctx, events, {32, 8, 1}, 6, 5, 2);
+  model.init(3);
+  gpu::Buffer blurry(ctx, 90 * 4, "blurry_crop");
+  blurry.write(std::vector<float>(90, 0.25f));
+  gpu::Commands cmd(ctx);
+  model.forward(cmd, 0, {0.2, 0.9}, {0, 0, 6, 5}, blurry);
+  cmd.submit();
+  for (float e : model.integral().read<float>(60)) CHECK(e == Approx(1.0f).epsilon(1e-6));
+  for (uint32_t i = 0; i < 2; ++i)
+    for (float v : model.frame(i).read<float>(90)) CHECK(v == Approx(0.25f).epsilon(1e-6));
+
+  CHECK_THROWS_WITH(ldi::LdiModel(ctx, events, {16, 8, 1}, 6, 5, 2), Catch::Contains("must start with 32"));
+  CHECK_THROWS_WITH(ldi::LdiModel(ctx, events, {32, 8, 1}, 7, 5, 2), Catch::Contains("leaves the 6x5 image"));
+  CHECK_THROWS_WITH(model.forward(cmd, 0, {0.2, 0.3, 0.4}, {0, 0, 6, 5}, blurry), Catch::Contains("3 frame times"));
+  CHECK_THROWS_WITH(model.forward(cmd, 0, {0.2, 1.5}, {0, 0, 6, 5}, blurry), Catch::Contains("outside view 0"));
+  test::require_no_validation_messages();
+}

@@ -1,0 +1,194 @@
+// The LDI branch in the trainer (engine/train/ldi_branch.h): the joint loss's gradient reaches
+// both the LDI's weights and the splats (the gradient a step applies against central differences
+// of the step's total loss, on a tiny case), a short run with every LDI term on changes the
+// network and the splats with finite losses, and the branch's state round-trips through a
+// checkpoint.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <numeric>
+
+#include "camera/trajectory.h"
+#include "events/event_model.h"
+#include "gpu_fixture.h"
+#include "splat/synthetic.h"
+#include "train/synthetic_dataset.h"
+#include "train/trainer.h"
+
+using namespace evflow;
+
+namespace {
+
+constexpr uint32_t W = 48, H = 32;
+constexpr float kGrey = 0.35f;
+
+// Three views of a drifting cloud: blurry images (linear mean of 17 renders) and their events.
+io::Dataset drift_dataset(gpu::Context& ctx, const GaussianCloud& truth) {
+  io::Dataset data = render_synthetic_dataset(ctx, W, H, 3, 0, truth.size());
+  GaussianBuffers gt(ctx, truth.size(), truth.sh_degree, "gt_");
+  gt.upload(truth);
+  Rasterizer r(ctx);
+  RenderState state(ctx);
+  data.events.width = W, data.events.height = H;
+  for (size_t v = 0; v < data.train.size(); ++v) {
+    ExposureTrajectory motion(data.train[v].camera, 0, 0.0);
+    for (int j = 0; j < ExposureTrajectory::kKnots; ++j) motion.data()[j * 6] = 0.12 * (j - 4) / 4.0;
+    const double t0 = 0.1 * v, T = 0.04;
+    data.train[v].exposure_start = t0, data.train[v].exposure_end = t0 + T;
+    events::EventSimulator sim(W, H, events::EventModelParams::ideal(), 3 + v);
+    std::vector<float> mean(W * H * 3, 0.f), luma(W * H);
+    const int sub = 16;
+    for (int s = 0; s <= sub; ++s) {
+      RenderSettings rs;
+      rs.background = {kGrey, kGrey, kGrey};
+      r.forward(gt, motion.camera_at(s / double(sub)), rs, state);
+      auto img = state.outputs().rgb.read<float>(mean.size());
+      for (float& x : img) x = io::srgb_to_linear(x);
+      for (size_t i = 0; i < luma.size(); ++i)
+        luma[i] = 0.2126f * img[i] + 0.7152f * img[luma.size() + i] + 0.0722f * img[2 * luma.size() + i];
+      sim.add_frame(luma.data(), t0 + T * s / sub);
+      for (size_t i = 0; i < mean.size(); ++i) mean[i] += img[i] / (sub + 1);
+    }
+    data.train[v].blurry = io::image_from_planar_rgb(mean, W, H);
+    const EventStream ev = sim.take_events();
+    for (size_t i = 0; i < ev.size(); ++i) data.events.push(ev.x[i], ev.y[i], ev.t[i], ev.p[i]);
+  }
+  data.events.validate("test events");
+  return data;
+}
+
+TrainConfig ldi_config() {
+  TrainConfig cfg;
+  cfg.apply_method("blur-only");
+  cfg.virtual_frames = 1;
+  cfg.sh_degree = 0;
+  cfg.background = {kGrey, kGrey, kGrey};
+  cfg.densify = false;
+  cfg.iterations = 20;
+  cfg.event_from = 0.0;
+  cfg.ldi = true;
+  cfg.ldi_widths = {32, 8, 1};
+  cfg.ldi_crop = 24;
+  cfg.ldi_init_steps = 0;
+  return cfg;
+}
+
+std::vector<size_t> largest(const std::vector<double>& g, size_t n) {
+  std::vector<size_t> idx(g.size());
+  std::iota(idx.begin(), idx.end(), size_t(0));
+  std::partial_sort(idx.begin(), idx.begin() + n, idx.end(),
+                    [&](size_t a, size_t b) { return std::abs(g[a]) > std::abs(g[b]); });
+  idx.resize(n);
+  return idx;
+}
+
+nn::NamedTensor& tensor(nn::SafetensorsFile& f, const std::string& name) {
+  for (auto& t : f.tensors)
+    if (t.name == name) return t;
+  FAIL("no tensor " << name);
+  return f.tensors[0];
+}
+
+}  // namespace
+
+TEST_CASE("LDI branch: the joint loss's gradient reaches the LDI weights and the splats", "[gpu][train][ldi]") {
+  auto& ctx = test::gpu_context();
+  const Camera cam0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
+  const GaussianCloud truth = synthetic_cloud(42, 200, 0, cam0);
+  const io::Dataset data = drift_dataset(ctx, truth);
+  REQUIRE(data.events.size() > 100);
+  TrainConfig cfg = ldi_config();
+  cfg.ldi_blur_weight = 0;  // the joint loss alone on the LDI
+  cfg.ldi_event_weight = 0;
+  Checkpoint start{0, truth, {}};
+  for (size_t i = 0; i < start.cloud.sh.size(); ++i) start.cloud.sh[i] += 0.3f * float((i % 7) / 6.0 - 0.5);
+  start.ldi = Trainer(ctx, data, cfg).checkpoint().ldi;  // the He-initialised network
+  start.step = 0;
+
+  Trainer t(ctx, data, cfg, start);
+  REQUIRE(t.losses().size() == 3);  // blur, ldi_blur, joint
+  const StepStats st = t.step();
+  REQUIRE_FALSE(st.skipped);
+  REQUIRE(st.term_values[2] > 0.0);
+  const GaussianCloud g = t.last_gradients();
+  std::vector<double> gw;  // the LDI's applied gradient: layer 0's weights, then layer 1's bias
+  for (size_t l = 0; l < 2; ++l) {
+    const auto w = l == 0 ? t.ldi()->model().network().layer(0).weight_grad().read<float>(32 * 8 * 9)
+                          : t.ldi()->model().network().layer(1).bias_grad().read<float>(1);
+    gw.insert(gw.end(), w.begin(), w.end());
+  }
+
+  auto loss_with = [&](const std::function<void(Checkpoint&)>& perturb) {
+    Checkpoint c = start;
+    perturb(c);
+    Trainer p(ctx, data, cfg, c);
+    const StepStats s = p.step();
+    REQUIRE(s.view == st.view);
+    return s.loss;
+  };
+  auto check = [&](const char* what, size_t index, double analytic, double h,
+                   const std::function<void(Checkpoint&, double)>& add) {
+    double num = 0, den = 0;  // the least-squares slope of symmetric differences at +-h .. +-3h
+    for (int k = 1; k <= 3; ++k) {
+      const double lp = loss_with([&](Checkpoint&c) { add(c, +k * h); }),
+                   lm = loss_with([&](Checkpoint&c) { add(c, -k * h); });
+      num += k * (lp - lm);
+      den += 2.0 * k * k * h;
+    }
+    const double fd = num / den;
+    std::printf("LDI step gradient %s[%zu]: applied %.6g, central difference %.6g\n", what, index, analytic, fd);
+    CHECK(std::abs(analytic - fd) <= 2e-2 * std::abs(fd));
+  };
+  // The splats: colours with the largest gradients (the joint loss adds to the blur term's).
+  const std::vector<double> gs(g.sh.begin(), g.sh.end());
+  for (size_t i : largest(gs, 2))
+    check("sh", i, gs[i], 1e-2, [&](Checkpoint& c, double d) { c.cloud.sh[i] += float(d); });
+  // The network: its output bias and the largest first-layer weights.
+  check("ldi.1.bias", 0, gw.back(), 1e-2,
+        [&](Checkpoint& c, double d) { tensor(*c.ldi, "ldi.1.bias").values[0] += float(d); });
+  for (size_t i : largest(std::vector<double>(gw.begin(), gw.end() - 1), 2))
+    check("ldi.0.weight", i, gw[i], 1e-2,
+          [&](Checkpoint& c, double d) { tensor(*c.ldi, "ldi.0.weight").values[i] += float(d); });
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("LDI branch: a short run with every term changes the network and the splats, and its state round-trips",
+          "[gpu][train][ldi]") {
+  auto& ctx = test::gpu_context();
+  const Camera cam0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
+  const GaussianCloud truth = synthetic_cloud(42, 200, 0, cam0);
+  const io::Dataset data = drift_dataset(ctx, truth);
+  TrainConfig cfg = ldi_config();
+  cfg.ldi_init_steps = 20;
+  Trainer t(ctx, data, cfg);
+  const std::vector<float> w0 = t.ldi()->model().network().layer(0).weight_values();
+  const GaussianCloud c0 = t.cloud();
+  REQUIRE(t.losses().size() == 4);  // blur, ldi_blur, ldi_events, joint
+  for (int s = 0; s < 6; ++s) {
+    const StepStats st = t.step();
+    REQUIRE_FALSE(st.skipped);
+    for (double v : st.term_values) REQUIRE(std::isfinite(v));
+    CHECK(st.term_values[2] > 0.0);  // the event term on the LDI frames took part
+  }
+  CHECK(t.ldi()->model().network().layer(0).weight_values() != w0);
+  CHECK(t.cloud().sh != c0.sh);
+
+  // The checkpoint's LDI state continues the run bit-identically.
+  const Checkpoint ck = t.checkpoint();
+  REQUIRE(ck.ldi);
+  Trainer resumed(ctx, data, cfg, ck);
+  const StepStats a = t.step(), b = resumed.step();
+  CHECK(a.loss == b.loss);
+  CHECK(t.ldi()->model().network().layer(0).weight_values() ==
+        resumed.ldi()->model().network().layer(0).weight_values());
+  Checkpoint missing = ck;
+  missing.ldi.reset();
+  CHECK_THROWS_WITH(Trainer(ctx, data, cfg, missing), Catch::Contains("ldi.safetensors"));
+  TrainConfig plain = cfg;
+  plain.mode = TrainMode::Plain;
+  CHECK_THROWS_WITH(Trainer(ctx, data, plain), Catch::Contains("needs mode=blur"));
+  test::require_no_validation_messages();
+}
