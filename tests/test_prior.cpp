@@ -1,6 +1,7 @@
 // The residual prior (engine/prior): the U-Net's forward against the double reference and its
 // gradients (input, every weight and bias) against central differences of that reference at odd
-// sizes; the event planes; saving and loading the weights, and the errors for bad files.
+// sizes; the event planes; saving and loading the weights, and the errors for bad files; the
+// training rooms and samples; `evflow train-prior`.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -9,11 +10,17 @@
 #include <fstream>
 #include <random>
 
+#include <unistd.h>
+
+#include "cli_helpers.h"
 #include "gpu/commands.h"
 #include "gpu_fixture.h"
 #include "prior/event_inputs.h"
 #include "prior/residual_net.h"
+#include "prior/training_rooms.h"
+#include "prior/training_samples.h"
 #include "reference/residual_net_reference.h"
+#include "sim/builtin_scenes.h"
 
 using namespace evflow;
 namespace fs = std::filesystem;
@@ -173,4 +180,65 @@ TEST_CASE("prior: weights survive safetensors, and bad files are refused with th
   fs::remove(path);
   REQUIRE_THROWS_WITH(prior::load_residual_net(ctx, path.string(), 5, 6), Catch::Contains(path.string()));
   test::require_no_validation_messages();
+}
+
+TEST_CASE("prior: training rooms are seeded and not the built-in scenes, and samples hold exact residuals",
+          "[gpu][prior]") {
+  const sim::Scene a = prior::make_training_room(1000), b = prior::make_training_room(1000),
+                   c = prior::make_training_room(1001);
+  CHECK(a.positions == b.positions);
+  CHECK(a.positions != c.positions);
+  for (const std::string& name : sim::builtin_scene_names())
+    CHECK(sim::make_builtin_scene(name).positions != a.positions);
+  prior::SampleOptions o;
+  o.width = 48, o.height = 36, o.views_per_room = 1, o.blur_min_px = o.blur_max_px = 6;
+  const auto samples = prior::simulate_samples(test::gpu_context(), {1000}, o, true);
+  REQUIRE(samples.size() == 1);
+  const prior::PriorSample& s = samples[0];
+  const size_t hw = 48 * 36;
+  REQUIRE(s.input.size() == 15 * hw);
+  REQUIRE(s.target.size() == 18 * hw);
+  REQUIRE(s.edi_residual.size() == 18 * hw);
+  double events = 0, zero = 0, edi = 0, late = 0, early = 0;
+  for (size_t i = 3 * hw; i < s.input.size(); ++i) events += std::abs(s.input[i]);
+  for (size_t i = 0; i < s.target.size(); ++i) {
+    zero += double(s.target[i]) * s.target[i];
+    edi += double(s.edi_residual[i] - s.target[i]) * (s.edi_residual[i] - s.target[i]);
+  }
+  // The frames furthest from the middle change most: R(t_0) and R(t_6) against R(t_2) and R(t_4).
+  for (size_t i = 0; i < 3 * hw; ++i) late += std::abs(s.target[i]) + std::abs(s.target[15 * hw + i]);
+  for (size_t i = 6 * hw; i < 12 * hw; ++i) early += std::abs(s.target[i]);
+  INFO("event planes " << events << ", residual energy " << zero << ", EDI error " << edi);
+  CHECK(events > 0);
+  CHECK(zero > 0);
+  CHECK(edi < zero);  // EDI's residual is informative on noise-free simulated events
+  CHECK(late > early);
+  const prior::Crop cr = prior::crop(s, 5, 3, 16);
+  CHECK(cr.input[0] == s.input[3 * 48 + 5]);
+  CHECK(cr.target[18 * 256 - 1] == s.target[17 * hw + 18 * 48 + 20]);
+  REQUIRE_THROWS_WITH(prior::crop(s, 40, 0, 16), Catch::Contains("outside"));
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("prior: evflow train-prior trains, scores against both baselines and writes its weights", "[gpu][prior]") {
+  REQUIRE(fs::exists(test::evflow_binary()));
+  const fs::path dir = fs::temp_directory_path() / ("evflow_train_prior_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string out;
+  const std::string args =
+      "train-prior --out w.safetensors --rooms 1 --held-out-rooms 1 --views 1 --width 40 --height 32 --crop 16 "
+      "--steps 4 --batch 2 --net-width 2 --log-every 2";
+  REQUIRE(test::run_evflow(dir, args, out) == 0);
+  INFO(out);
+  CHECK(out.find("step 4  loss") != std::string::npos);
+  CHECK(out.find("held-out residual MSE over") != std::string::npos);
+  const nn::SafetensorsFile f = nn::load_safetensors(dir / "w.safetensors");
+  CHECK(f.metadata.at("architecture") == "residual-unet frames=7 width=2");
+  CHECK(f.metadata.at("command") == "evflow " + args);
+  CHECK(f.metadata.at("steps") == "4");
+  CHECK(std::stod(f.metadata.at("heldout_mse_zero")) > 0);
+  CHECK(test::run_evflow(dir, "train-prior --rooms 1", out) != 0);
+  CHECK(out.find("--out FILE.safetensors is required") != std::string::npos);
+  fs::remove_all(dir);
 }
