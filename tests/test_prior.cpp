@@ -17,6 +17,7 @@
 #include "gpu_fixture.h"
 #include "prior/event_inputs.h"
 #include "prior/residual_net.h"
+#include "prior/residual_prior.h"
 #include "prior/training_rooms.h"
 #include "prior/training_samples.h"
 #include "reference/residual_net_reference.h"
@@ -241,4 +242,15 @@ TEST_CASE("prior: evflow train-prior trains, scores against both baselines and w
   CHECK(test::run_evflow(dir, "train-prior --rooms 1", out) != 0);
   CHECK(out.find("--out FILE.safetensors is required") != std::string::npos);
   fs::remove_all(dir);
+}
+
+TEST_CASE("prior: the shipped weights load as the default network and stay small", "[gpu][prior]") {
+  const std::string path = prior::resolve_weights_path("assets/residual_prior.safetensors");
+  REQUIRE(fs::exists(path));
+  CHECK(fs::file_size(path) <= 5u * 1024 * 1024);
+  auto net = prior::load_residual_net(test::gpu_context(), path, 13, 17);
+  CHECK(net->spec().str() == prior::ResidualNetSpec{}.str());
+  const nn::SafetensorsFile f = nn::load_safetensors(path);
+  CHECK(f.metadata.at("command").rfind("evflow train-prior ", 0) == 0);
+  test::require_no_validation_messages();
 }
