@@ -91,6 +91,10 @@ struct Codec<bool> {
   static bool parse(const std::string& k, const std::string& v) { return to_bool(k, v); }
 };
 template <>
+struct Codec<std::string> {
+  static std::string parse(const std::string&, const std::string& v) { return v; }
+};
+template <>
 struct Codec<std::array<float, 3>> {
   static std::array<float, 3> parse(const std::string& k, const std::string& v) {
     float r, g, b;
@@ -291,6 +295,19 @@ std::vector<Setting> event_settings() {
   };
 }
 
+std::vector<Setting> residual_settings() {
+  return {
+      field("res_weight", &TrainConfig::res_weight,
+            "λ of the event-residual loss L_res (paper Eq. 9): the virtual frames' differences from the middle "
+            "frame against the residual prior's R(t_i) = I(t_i) − I(t_N), predicted once per view from its "
+            "blurry image and events ([residual_prior.md](residual_prior.md)); 0: off (the paper: 0.1); > 0 "
+            "needs `mode=blur`, events with times and `virtual_frames` equal to the prior's N (3)"),
+      field("res_prior", &TrainConfig::res_prior,
+            "the residual prior's weights (safetensors from `evflow train-prior`); a relative path not found "
+            "from the working directory is read from the source tree"),
+  };
+}
+
 std::vector<Setting> pose_settings() {
   return {
       field("pose_refine", &TrainConfig::pose_refine,
@@ -364,6 +381,7 @@ const std::vector<Group>& settings_groups() {
       {"Gaussians and the image loss", image_settings()},
       {"Blur mode (exposure trajectories)", blur_settings()},
       {"Event loss", event_settings()},
+      {"Residual prior", residual_settings()},
       {"Pose refinement (plain mode)", pose_settings()},
       {"Density control", density_settings()},
       {"Learnable double integral", ldi_settings()},

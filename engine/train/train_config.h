@@ -56,6 +56,8 @@ struct TrainConfig {
   double event_flip_until = 0.8, event_flip_margin = 0.05;
   double event_from = 0.3;
   double warp_weight = 0.0;
+  double res_weight = 0.0;
+  std::string res_prior = "assets/residual_prior.safetensors";
   FlowSource flow = FlowSource::Events;
   uint32_t flow_refresh = 100;
   double flow_model_from = 0.0;

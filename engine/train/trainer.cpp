@@ -9,7 +9,9 @@
 
 #include "loss/event_loss.h"
 #include "loss/image_losses.h"
+#include "loss/residual_loss.h"
 #include "loss/warped_event_loss.h"
+#include "prior/residual_prior.h"
 #include "train/training_flows.h"
 
 namespace evflow {
@@ -94,6 +96,7 @@ void Trainer::setup(const Checkpoint& checkpoint) {
   image_model_ = std::make_unique<ImageModel>(ctx_, frames, c0.width, c0.height, cfg_.loss_space, cfg_.blur_upsample);
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
   if (cfg_.event_weight > 0) add_event_term();
+  if (cfg_.res_weight > 0) add_residual_term();
   setup_flows();
   if (cfg_.ldi) add_ldi_branch(checkpoint);
   optimizer_ = std::make_unique<GaussianOptimizer>(ctx_, cmd_, *params_, *grads_, cfg_, scene_extent(data_));
@@ -134,6 +137,19 @@ void Trainer::add_event_term() {
   auto term = std::make_unique<EventLoss>(ctx_, *events_, float(cfg_.event_weight), o);
   direction_ = std::make_unique<DirectionCheck>(*term, uint32_t(cfg_.event_flip_until * cfg_.iterations),
                                                 cfg_.event_flip_margin);
+  add_loss(std::move(term));
+}
+
+// The event-residual loss L_res: the residual prior's R(t_i) of every view, computed once here.
+void Trainer::add_residual_term() {
+  if (cfg_.mode != TrainMode::Blur)
+    throw std::invalid_argument("res_weight > 0 needs mode=blur (the residual loss compares virtual frames)");
+  const std::vector<double>& u = cameras_->frame_times();
+  const Camera& c0 = data_.train[0].camera;
+  auto term = std::make_unique<ResidualLoss>(ctx_, c0.width, c0.height, uint32_t(u.size()),
+                                             uint32_t(data_.train.size()), float(cfg_.res_weight));
+  const auto residuals = prior::predict_residuals(ctx_, cfg_.res_prior, data_, u);
+  for (uint32_t v = 0; v < residuals.size(); ++v) term->set_view_residuals(v, residuals[v]);
   add_loss(std::move(term));
 }
 

@@ -116,6 +116,7 @@ class Trainer {
   void add_ldi_branch(const Checkpoint& start);
   void upload_targets();
   void add_event_term();
+  void add_residual_term();
   void setup_flows();
   void add_warp_term();
   uint32_t model_flow_start() const;

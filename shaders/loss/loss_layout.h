@@ -131,6 +131,17 @@ struct WarpedEventPC {
   uint pad1, pad2;
 };
 
+
+// loss/residual (the residual loss L_res, engine/loss/residual_loss.h), one dispatch per
+// non-middle frame i: d = (F_i - F_N) - R_i per element; partials[partial_base + group].x = sum
+// of d^2 over the group; grad_i += grad_scale * 2d and grad_N -= grad_scale * 2d.
+struct ResidualPC {
+  uint count;          // C*H*W
+  uint partial_base;   // this frame's first partial
+  float grad_scale;    // weight / (frames * count)
+  uint pad0;
+};
+
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
 // loss/event_pair
 EVF_BIND(kEventPairBindCounts, 0u, Counts)
@@ -187,6 +198,13 @@ EVF_BIND(kSsimVBindB, 1u, B)
 EVF_BIND(kSsimVBindH, 2u, H)
 EVF_BIND(kSsimVBindD, 3u, D)
 EVF_BIND(kSsimVBindPartials, 4u, Partials)
+// loss/residual
+EVF_BIND(kResidualBindFrame, 0u, Frame)
+EVF_BIND(kResidualBindMid, 1u, Mid)
+EVF_BIND(kResidualBindPrior, 2u, Prior)
+EVF_BIND(kResidualBindGradFrame, 3u, GradFrame)
+EVF_BIND(kResidualBindGradMid, 4u, GradMid)
+EVF_BIND(kResidualBindPartials, 5u, Partials)
 
 EVF_NAMESPACE_END
 #endif
