@@ -14,8 +14,9 @@
 using namespace evflow;
 namespace fs = std::filesystem;
 
-TEST_CASE("exposure motion: the true trajectory scores ~0 px, run backwards it is reversed, still it errs by the motion",
-          "[sim][gpu]") {
+TEST_CASE(
+    "exposure motion: the true trajectory scores ~0 px, run backwards it is reversed, still it errs by the motion",
+    "[sim][gpu]") {
   auto& ctx = test::gpu_context();
   const sim::Scene scene = sim::make_default_scene();
   sim::SimParams p;

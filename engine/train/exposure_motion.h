@@ -13,10 +13,10 @@
 namespace evflow {
 
 struct ExposureMotion {
-  size_t pixels = 0;              // pixels with a surface in both fields
-  double truth_px = 0;            // mean length of the true displacement
-  double error_px = 0;            // mean endpoint error of the learned displacement
-  double reversed_error_px = 0;   // the same with the learned trajectory run backwards
+  size_t pixels = 0;             // pixels with a surface in both fields
+  double truth_px = 0;           // mean length of the true displacement
+  double error_px = 0;           // mean endpoint error of the learned displacement
+  double reversed_error_px = 0;  // the same with the learned trajectory run backwards
   bool reversed() const { return reversed_error_px < error_px; }
 };
 
