@@ -1,6 +1,6 @@
 // The event-residual loss L_res (engine/loss/residual_loss.h): its value and the gradient it adds
 // into every frame against central differences of the formula in double precision; in training,
-// the term's value in curve.csv and its gradients reaching the splats.
+// the term's value in curve.csv and its gradients moving the model.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -100,8 +100,7 @@ TEST_CASE("residual loss: value and per-frame gradients against central differen
   test::require_no_validation_messages();
 }
 
-TEST_CASE("residual loss in training: a finite, changing L_res whose gradients reach the splats",
-          "[train][gpu][prior]") {
+TEST_CASE("residual loss in training: a finite, changing L_res whose gradients move the model", "[train][gpu][prior]") {
   namespace fs = std::filesystem;
   REQUIRE(fs::exists(test::evflow_binary()));
   const fs::path dir = fs::temp_directory_path() / ("evflow_residual_train_" + std::to_string(::getpid()));
