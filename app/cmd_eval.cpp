@@ -32,6 +32,84 @@ static nlohmann::json motion_json(const RunFolder& run, const io::Dataset& data,
   return {{"truth_px", m->truth_px}, {"error_px", m->error_px}, {"reversed", m->reversed()}};
 }
 
+// Scores of one set of views, with everything each view's scoring needs.
+struct Scorer {
+  gpu::Context& ctx;
+  const RunFolder& run;
+  const io::Dataset& data;
+  const GaussianBuffers& params;
+  Rasterizer& r;
+  RenderState& rs;
+  RenderSettings s;
+  uint32_t refine_iters = 0;
+  nlohmann::json out;
+  std::ostringstream md;
+
+  // The scored render of view vi of `views` (the training views: at mid-exposure of its learned
+  // trajectory), written as a PNG, against the view's sharp image.
+  metrics::Scores score_view(const io::View& v, size_t vi, bool train, bool refine, const char* set) {
+    const io::Image& gt = *v.sharp_mid;
+    if (gt.width != v.camera.width || gt.height != v.camera.height)
+      throw std::runtime_error("view '" + v.name + "': ground truth is " + std::to_string(gt.width) + "x" +
+                               std::to_string(gt.height) + ", camera " + std::to_string(v.camera.width) + "x" +
+                               std::to_string(v.camera.height));
+    // Renders are sRGB (splat colours are); the ground truth is linear in memory.
+    auto planar = io::planar_rgb(gt);
+    const metrics::Image8 gt8 = metrics::encode_linear(planar, gt.width, gt.height, 3);
+    for (float& x : planar) x = io::linear_to_srgb(x);
+    gpu::Buffer target(ctx, planar.size() * 4, "gt");
+    target.write(planar);
+    Camera cam = train ? run.learned_camera(v, vi, 0.5) : v.camera;
+    if (refine) {
+      PoseRefineOptions ro;
+      ro.iterations = refine_iters;
+      ro.settings = s;
+      cam = refine_pose(ctx, r, params, cam, target, ro).camera;
+    }
+    r.forward(params, cam, s, rs);
+    const metrics::Image8 render8 =
+        metrics::quantise_srgb(rs.outputs().rgb.read<float>(planar.size()), gt.width, gt.height, 3);
+    metrics::write_png(run.dir / "eval" / set / (v.name + ".png"), render8);
+    return metrics::score(render8, gt8);
+  }
+
+  void score(const std::vector<io::View>& views, const char* set, bool refine) {
+    fs::create_directories(run.dir / "eval" / set);
+    const bool train = &views == &data.train;
+    nlohmann::json per = nlohmann::json::array();
+    double sp = 0, ss = 0;
+    int n = 0, reversed = 0;
+    bool motion = false;
+    for (size_t vi = 0; vi < views.size(); ++vi) {
+      if (!views[vi].sharp_mid) continue;
+      const metrics::Scores val = score_view(views[vi], vi, train, refine, set);
+      per.push_back({{"view", views[vi].name}, {"psnr", val.psnr}, {"ssim", val.ssim}});
+      if (train) per.back()["motion"] = motion_json(run, data, vi, reversed);
+      motion = motion || !per.back().value("motion", nlohmann::json()).is_null();
+      sp += val.psnr;
+      ss += val.ssim;
+      ++n;
+    }
+    if (!n) return;
+    out[set] = {{"views", per}, {"mean_psnr", sp / n}, {"mean_ssim", ss / n}};
+    char line[160];
+    std::snprintf(line, sizeof line, "| %s | %d | %.2f | %.4f |\n", set, n, sp / n, ss / n);
+    md << line;
+    std::printf("%-8s %3d views  PSNR %.2f dB  SSIM %.4f\n", set, n, sp / n, ss / n);
+    if (!motion) return;
+    out[set]["reversed_views"] = reversed;
+    std::printf("         %d of %d learned exposures run against the true motion\n", reversed, n);
+  }
+};
+
+static void write_text(const fs::path& path, const std::string& text) {
+  io::write_file_atomic(path, [&](const fs::path& tmp) {
+    std::ofstream f(tmp);
+    f << text;
+    io::close_or_throw(f, path);
+  });
+}
+
 static int run_eval(const Args& a) {
   ArgParser p(a);
   if (p.flag("--help")) {
@@ -59,93 +137,28 @@ static int run_eval(const Args& a) {
     c.erase("data");
     return c;
   }());
+  const auto& trajs = run.checkpoint.trajectories;
+  if (!trajs.empty() && trajs.size() != data.train.size())
+    throw std::runtime_error("checkpoint has " + std::to_string(trajs.size()) + " trajectories for " +
+                             std::to_string(data.train.size()) + " training views");
   gpu::Context ctx(o);
   GaussianBuffers params(ctx, run.checkpoint.cloud.size(), run.checkpoint.cloud.sh_degree, "p_");
   params.upload(run.checkpoint.cloud);
   Rasterizer r(ctx);
   RenderState rs(ctx);
-  RenderSettings s;
-  s.background = cfg.background;
-  s.antialiased = cfg.antialiased;
-  nlohmann::json out;
-  std::ostringstream md;
-  md << "| set | views | PSNR | SSIM |\n|---|---|---|---|\n";
-  // Blur mode: the deblurred estimate of a training view is the render at mid-exposure (u = 0.5)
-  // of its learned trajectory; otherwise the view's own camera.
-  const auto& trajs = run.checkpoint.trajectories;
-  if (!trajs.empty() && trajs.size() != data.train.size())
-    throw std::runtime_error("checkpoint has " + std::to_string(trajs.size()) + " trajectories for " +
-                             std::to_string(data.train.size()) + " training views");
-  auto eval_camera = [&](const io::View& v, size_t index, bool train) {
-    return train ? run.learned_camera(v, index, 0.5) : v.camera;
-  };
-  auto score = [&](const std::vector<io::View>& views, const char* set, bool refine) {
-    fs::create_directories(run.dir / "eval" / set);
-    const bool train = &views == &data.train;
-    nlohmann::json per = nlohmann::json::array();
-    double sp = 0, ss = 0;
-    int n = 0, reversed = 0;
-    bool motion = false;
-    for (size_t vi = 0; vi < views.size(); ++vi) {
-      const io::View& v = views[vi];
-      if (!v.sharp_mid) continue;
-      const io::Image& gt = *v.sharp_mid;
-      if (gt.width != v.camera.width || gt.height != v.camera.height)
-        throw std::runtime_error("view '" + v.name + "': ground truth is " + std::to_string(gt.width) + "x" +
-                                 std::to_string(gt.height) + ", camera " + std::to_string(v.camera.width) + "x" +
-                                 std::to_string(v.camera.height));
-      // Renders are sRGB (splat colours are); the ground truth is linear in memory.
-      auto planar = io::planar_rgb(gt);
-      const metrics::Image8 gt8 = metrics::encode_linear(planar, gt.width, gt.height, 3);
-      for (float& x : planar) x = io::linear_to_srgb(x);
-      gpu::Buffer target(ctx, planar.size() * 4, "gt");
-      target.write(planar);
-      Camera cam = eval_camera(v, vi, train);
-      if (refine) {
-        PoseRefineOptions ro;
-        ro.iterations = refine_iters;
-        ro.settings = s;
-        cam = refine_pose(ctx, r, params, cam, target, ro).camera;
-      }
-      r.forward(params, cam, s, rs);
-      const metrics::Image8 render8 =
-          metrics::quantise_srgb(rs.outputs().rgb.read<float>(planar.size()), gt.width, gt.height, 3);
-      metrics::write_png(run.dir / "eval" / set / (v.name + ".png"), render8);
-      const metrics::Scores val = metrics::score(render8, gt8);
-      per.push_back({{"view", v.name}, {"psnr", val.psnr}, {"ssim", val.ssim}});
-      if (train) per.back()["motion"] = motion_json(run, data, vi, reversed);
-      motion = motion || !per.back().value("motion", nlohmann::json()).is_null();
-      sp += val.psnr;
-      ss += val.ssim;
-      ++n;
-    }
-    if (!n) return;
-    out[set] = {{"views", per}, {"mean_psnr", sp / n}, {"mean_ssim", ss / n}};
-    char line[160];
-    std::snprintf(line, sizeof line, "| %s | %d | %.2f | %.4f |\n", set, n, sp / n, ss / n);
-    md << line;
-    std::printf("%-8s %3d views  PSNR %.2f dB  SSIM %.4f\n", set, n, sp / n, ss / n);
-    if (motion) {
-      out[set]["reversed_views"] = reversed;
-      std::printf("         %d of %d learned exposures run against the true motion\n", reversed, n);
-    }
-  };
-  score(data.train, "deblur", false);
-  score(data.novel, "novel", false);
-  if (refine_iters > 0) score(data.novel, "novel_refined", true);
-  if (out.empty()) throw std::runtime_error("the dataset has no sharp ground-truth images to evaluate against");
-  out["scored_on"] = "8-bit sRGB; SSIM: 11x11 Gaussian window, sigma 1.5, valid region, channel mean";
-  out["step"] = run.checkpoint.step;
-  out["gaussians"] = run.checkpoint.cloud.size();
-  auto write = [](const fs::path& path, const std::string& text) {
-    io::write_file_atomic(path, [&](const fs::path& tmp) {
-      std::ofstream f(tmp);
-      f << text;
-      io::close_or_throw(f, path);
-    });
-  };
-  write(run.dir / "eval.json", out.dump(2) + "\n");
-  write(run.dir / "eval.md", md.str());
+  Scorer sc{ctx, run, data, params, r, rs, {}, refine_iters, {}, {}};
+  sc.s.background = cfg.background;
+  sc.s.antialiased = cfg.antialiased;
+  sc.md << "| set | views | PSNR | SSIM |\n|---|---|---|---|\n";
+  sc.score(data.train, "deblur", false);
+  sc.score(data.novel, "novel", false);
+  if (refine_iters > 0) sc.score(data.novel, "novel_refined", true);
+  if (sc.out.empty()) throw std::runtime_error("the dataset has no sharp ground-truth images to evaluate against");
+  sc.out["scored_on"] = "8-bit sRGB; SSIM: 11x11 Gaussian window, sigma 1.5, valid region, channel mean";
+  sc.out["step"] = run.checkpoint.step;
+  sc.out["gaussians"] = run.checkpoint.cloud.size();
+  write_text(run.dir / "eval.json", sc.out.dump(2) + "\n");
+  write_text(run.dir / "eval.md", sc.md.str());
   return 0;
 }
 
