@@ -11,6 +11,7 @@
 
 #include "camera/trajectory.h"
 #include "events/event_model.h"
+#include "exposure_sim.h"
 #include "gpu_fixture.h"
 #include "splat/synthetic.h"
 #include "train/synthetic_dataset.h"
@@ -46,25 +47,7 @@ io::Dataset blur_event_dataset(gpu::Context& ctx, const GaussianCloud& truth) {
     ExposureTrajectory motion(data.train[v].camera, 0, 0.0);
     const auto k = motion_knots(1.0);
     std::copy(k.begin(), k.end(), motion.data());
-    const double t0 = 0.1 * v, T = 0.04;
-    data.train[v].exposure_start = t0, data.train[v].exposure_end = t0 + T;
-    events::EventSimulator sim(W, H, events::EventModelParams::ideal(), 11 + v);
-    std::vector<float> mean(W * H * 3, 0.f), luma(W * H);
-    const int sub = 32;
-    for (int s = 0; s <= sub; ++s) {
-      RenderSettings rs;
-      rs.background = {kGrey, kGrey, kGrey};
-      r.forward(gt, motion.camera_at(s / double(sub)), rs, state);
-      auto img = state.outputs().rgb.read<float>(mean.size());
-      for (float& x : img) x = io::srgb_to_linear(x);
-      for (size_t i = 0; i < luma.size(); ++i)
-        luma[i] = 0.2126f * img[i] + 0.7152f * img[luma.size() + i] + 0.0722f * img[2 * luma.size() + i];
-      sim.add_frame(luma.data(), t0 + T * s / sub);
-      for (size_t i = 0; i < mean.size(); ++i) mean[i] += img[i] / (sub + 1);
-    }
-    data.train[v].blurry = io::image_from_planar_rgb(mean, W, H);
-    const EventStream ev = sim.take_events();
-    for (size_t i = 0; i < ev.size(); ++i) data.events.push(ev.x[i], ev.y[i], ev.t[i], ev.p[i]);
+    test::simulate_exposure(r, state, gt, data, v, motion, 0.1 * v, 0.04, 32, 11 + v, kGrey);
   }
   data.events.validate("test events");
   return data;
