@@ -1,4 +1,5 @@
-// evflow experiment: the deblurring comparison of the paper's configurations on simulated scenes.
+// evflow experiment: the deblurring comparison of the paper's configurations on simulated scenes
+// (with --ablation: the paper's ablation rows, and their table in DIR/ablation.md).
 // For every scene: simulate (unless its dataset exists), then train and evaluate every method
 // (plain, edi, blur-only, blur+events; blur+events+warp on request) with the same preset and overrides, and write one
 // table (DIR/experiment.md, DIR/experiment.json). Each run is a separate `evflow train` / `evflow eval` process; a run
@@ -18,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "ablation_table.h"
 #include "cli.h"
 #include "experiment_plan.h"
 #include "io/atomic_file.h"
@@ -144,6 +146,9 @@ std::string write_table(const ExperimentPlan& plan, std::vector<std::string>& mi
   io::write_file_atomic(plan.out / "experiment.md", [&](const fs::path& tmp) { std::ofstream(tmp) << md; });
   io::write_file_atomic(plan.out / "experiment.json",
                         [&](const fs::path& tmp) { std::ofstream(tmp) << j.dump(2) << "\n"; });
+  if (plan.ablation)
+    io::write_file_atomic(plan.out / "ablation.md",
+                          [&](const fs::path& tmp) { std::ofstream(tmp) << ablation_markdown(table); });
   return md;
 }
 

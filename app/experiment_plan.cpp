@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ablation_table.h"
 #include "io/atomic_file.h"
 #include "sim/builtin_scenes.h"
 #include "train/train_config.h"
@@ -28,6 +29,26 @@ std::vector<std::string> split(const std::string& s) {
 std::string builtin_scene_seed(size_t index) { return std::to_string(index + 1); }
 
 // The scenes of --scenes with their folders and seeds; unknown scenes are refused here.
+std::vector<ExperimentScene> resolve_scenes(const std::vector<std::string>& scenes,
+                                            const std::vector<std::string>& blur, const std::string& sim_seed);
+
+// With --sim-seeds: every scene once per seed, its folder named <scene>-s<seed>.
+std::vector<ExperimentScene> resolve_scenes(const std::vector<std::string>& scenes,
+                                            const std::vector<std::string>& blur,
+                                            const std::vector<std::string>& seeds) {
+  std::vector<ExperimentScene> out;
+  for (size_t i = 0; i < scenes.size(); ++i)
+    for (const std::string& seed : seeds) {
+      ExperimentScene s = resolve_scenes({scenes[i]}, {blur[i]}, seed).front();
+      s.label += "-s" + seed;
+      for (const auto& o : out)
+        if (o.label == s.label)
+          throw std::invalid_argument("experiment: two scenes would share the folder '" + s.label + "'");
+      out.push_back(s);
+    }
+  return out;
+}
+
 std::vector<ExperimentScene> resolve_scenes(const std::vector<std::string>& scenes,
                                             const std::vector<std::string>& blur, const std::string& sim_seed) {
   const auto names = sim::builtin_scene_names();
@@ -69,7 +90,7 @@ std::string ExperimentPlan::help() {
   const auto names = sim::builtin_scene_names();
   std::string seeds;  // "default 1, gallery 2, ..."
   for (size_t i = 0; i < names.size(); ++i) seeds += (i ? ", " : "") + names[i] + " " + builtin_scene_seed(i);
-  char buf[4096];
+  char buf[8192];
   std::snprintf(
       buf, sizeof buf,
       "usage: evflow experiment --out DIR [--scenes %s] [--blur-px B,...]\n"
@@ -79,13 +100,19 @@ std::string ExperimentPlan::help() {
       "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device "
       "N|name]\n"
       "         [--no-baseline-pose-refine] [--poses perturbed|colmap] [--emit-jobs FILE | --job] [key=value ...]\n"
+      "         [--sim-seeds A,B,...] [--ablation]\n"
       "       evflow experiment --collect DIR\n"
       "  Simulates each built-in scene (blur size per scene; recorded poses perturbed like poses estimated\n"
       "  from blurry images), trains every method on it with the preset\n"
       "  and the key=value overrides, evaluates (deblur at mid-exposure; novel views as given and after\n"
       "  test-pose refinement) and writes DIR/experiment.md and DIR/experiment.json.\n"
       "  Each scene is simulated with its own seed (%s), so a scene's data\n"
-      "  do not depend on which scenes are listed; --sim-seed N uses N for every scene instead.\n"
+      "  do not depend on which scenes are listed; --sim-seed N uses N for every scene instead;\n"
+      "  --sim-seeds A,B,... simulates every scene once per seed, into DIR/<scene>-s<seed>/.\n"
+      "  --ablation: the paper's ablation (Table 3): the methods are its seven rows (blur-only,\n"
+      "  blur+events, blur+events+warp, blur+res, blur+events+warp+res, evflow-no-ldi-events, evflow),\n"
+      "  the seeds --sim-seeds 1,2 unless given, and DIR/ablation.md holds the table (rows averaged\n"
+      "  over the scenes and seeds, with each one's deblur PSNR).\n"
       "  A scene may be a glTF file (.glb/.gltf; needs --sim-seed): its data and runs go to DIR/<file stem>/.\n"
       "  plain and edi refine each training view's pose while they train (pose_refine=true), as the blur\n"
       "  methods do through their trajectories; --no-baseline-pose-refine turns that off.\n"
@@ -118,13 +145,16 @@ ExperimentPlan ExperimentPlan::from_args(ArgParser& p) {
       blur.push_back(v);
     }
   e.width = value_or("--width", e.width), e.height = value_or("--height", e.height);
-  e.methods = split(value_or("--methods", "plain,edi,blur-only,blur+events"));
+  const std::string methods = p.value("--methods");
+  e.methods = split(methods.empty() ? "plain,edi,blur-only,blur+events" : methods);
   e.preset = value_or("--preset", e.preset);
   e.refine_iters = value_or("--refine-iters", e.refine_iters);
   e.noise_rot = value_or("--pose-noise-rot", e.noise_rot);
   e.noise_trans = value_or("--pose-noise-trans", e.noise_trans);
   e.device = p.value("--device");
   e.sim_seed = p.value("--sim-seed");
+  e.sim_seeds = split(p.value("--sim-seeds"));
+  e.ablation = p.flag("--ablation");
   e.baseline_pose_refine = !p.flag("--no-baseline-pose-refine");
   e.poses = value_or("--poses", e.poses);
   p.reject_unknown();
@@ -132,6 +162,16 @@ ExperimentPlan ExperimentPlan::from_args(ArgParser& p) {
     throw std::invalid_argument("--poses must be perturbed or colmap, got '" + e.poses + "'");
   if (!e.sim_seed.empty() && e.sim_seed.find_first_not_of("0123456789") != std::string::npos)
     throw std::invalid_argument("--sim-seed needs a non-negative integer, got '" + e.sim_seed + "'");
+  for (const auto& seed : e.sim_seeds)
+    if (seed.find_first_not_of("0123456789") != std::string::npos)
+      throw std::invalid_argument("--sim-seeds needs non-negative integers, got '" + seed + "'");
+  if (!e.sim_seed.empty() && !e.sim_seeds.empty())
+    throw std::invalid_argument("experiment: --sim-seed and --sim-seeds exclude each other");
+  if (e.ablation) {
+    if (!methods.empty()) throw std::invalid_argument("experiment: --ablation sets the methods; drop --methods");
+    e.methods = ablation_methods();
+    if (e.sim_seed.empty() && e.sim_seeds.empty()) e.sim_seeds = {"1", "2"};
+  }
   for (auto& s : p.positional()) {
     if (s.find('=') == std::string::npos) throw std::invalid_argument("experiment: unexpected argument '" + s + "'");
     e.overrides.push_back(s);
@@ -145,7 +185,7 @@ ExperimentPlan ExperimentPlan::from_args(ArgParser& p) {
   }
   TrainConfig probe = TrainConfig::preset_named(e.preset);  // the overrides, before hours of work
   for (auto& kv : e.overrides) probe.set(kv.substr(0, kv.find('=')), kv.substr(kv.find('=') + 1));
-  e.scenes = resolve_scenes(scenes, blur, e.sim_seed);
+  e.scenes = e.sim_seeds.empty() ? resolve_scenes(scenes, blur, e.sim_seed) : resolve_scenes(scenes, blur, e.sim_seeds);
   return e;
 }
 
@@ -163,6 +203,8 @@ nlohmann::json ExperimentPlan::to_json() const {
           {"pose_noise_rot", noise_rot},
           {"pose_noise_trans", noise_trans},
           {"sim_seed", sim_seed},
+          {"sim_seeds", sim_seeds},
+          {"ablation", ablation},
           {"device", device},
           {"baseline_pose_refine", baseline_pose_refine},
           {"poses", poses},
@@ -189,6 +231,8 @@ ExperimentPlan ExperimentPlan::read(const fs::path& dir) {
     j.at("baseline_pose_refine").get_to(e.baseline_pose_refine);
     j.at("overrides").get_to(e.overrides);
     e.poses = j.value("poses", std::string("perturbed"));
+    e.sim_seeds = j.value("sim_seeds", std::vector<std::string>{});
+    e.ablation = j.value("ablation", false);
   } catch (const std::exception& ex) { throw std::runtime_error(path.string() + ": " + ex.what()); }
   e.out = fs::absolute(dir);  // the folder it was read from (it may have moved since)
   return e;
@@ -238,6 +282,7 @@ std::string ExperimentPlan::job_line(const std::string& self, size_t si, const s
                      shell_quote(preset) + " --refine-iters " + shell_quote(refine_iters) + " --pose-noise-rot " +
                      shell_quote(noise_rot) + " --pose-noise-trans " + shell_quote(noise_trans);
   if (!sim_seed.empty()) line += " --sim-seed " + sim_seed;
+  if (!sim_seeds.empty()) line += " --sim-seeds " + s.seed;  // the one seed of this scene's folder
   if (!baseline_pose_refine) line += " --no-baseline-pose-refine";
   if (poses != "perturbed") line += " --poses " + shell_quote(poses);
   line += device_option(device);

@@ -25,9 +25,11 @@ struct ExperimentPlan {
   std::vector<std::string> methods;
   std::string width = "173", height = "130", preset = "fast", refine_iters = "30";
   std::string noise_rot = "0.4", noise_trans = "0.01";
-  std::string poses = "perturbed";  // or "colmap": train on `evflow poses` of the simulated data
-  std::string sim_seed;             // "" when every scene has its own
-  std::string device;               // passed on to every step ("" : the default device)
+  std::string poses = "perturbed";     // or "colmap": train on `evflow poses` of the simulated data
+  std::string sim_seed;                // "" when every scene has its own
+  std::vector<std::string> sim_seeds;  // --sim-seeds: every scene once per seed, in DIR/<scene>-s<seed>/
+  bool ablation = false;               // the methods are the ablation's rows; DIR/ablation.md too
+  std::string device;                  // passed on to every step ("" : the default device)
   bool baseline_pose_refine = true;
   std::vector<std::string> overrides;  // key=value for every run
 

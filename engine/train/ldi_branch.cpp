@@ -98,7 +98,7 @@ void LdiBranch::initialise() {
 
 std::vector<std::pair<LossTerm*, bool>> LdiBranch::terms() {
   std::vector<std::pair<LossTerm*, bool>> t{{blur_.get(), false}};
-  if (event_) t.emplace_back(event_.get(), true);
+  if (event_) t.emplace_back(event_.get(), false);
   t.emplace_back(joint_.get(), false);
   return t;
 }
@@ -121,10 +121,11 @@ void LdiBranch::colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, co
 }
 
 void LdiBranch::record(gpu::Commands& cmd, uint32_t view, uint32_t step, const std::vector<const gpu::Buffer*>& renders,
-                       const ImageModel& image_model, bool events_on, double event_scale, uint64_t seed) {
+                       const ImageModel& image_model, bool joint_on, uint64_t seed) {
   const io::View& v = data_.train.at(view);
   const uint32_t W = v.camera.width, H = v.camera.height;
   view_ = view;
+  joint_on_ = joint_on;
   crop_ = choose_crop(step);
   ldi::record_crop(cmd, blurry_[view], W, H, 3, crop_, blurry_crop_);
   ldi::record_crop(cmd, target_[view], W, H, 3, crop_, target_crop_);
@@ -134,8 +135,11 @@ void LdiBranch::record(gpu::Commands& cmd, uint32_t view, uint32_t step, const s
         std::clamp(v.exposure_start + u * (v.exposure_end - v.exposure_start), v.exposure_start, v.exposure_end));
   model_->forward(cmd, view, times, crop_, blurry_crop_);
   record_blur(cmd);
-  record_joint(cmd, renders, image_model);
-  record_events(cmd, view, events_on, event_scale, seed);
+  if (joint_on)
+    record_joint(cmd, renders, image_model);
+  else
+    cmd.fill(joint_->value_buffer(), 0u, uint64_t(joint_->value_offset()) * 4, 4);
+  record_events(cmd, view, seed);
 }
 
 // L_blur^ldi: each frame's gradient starts as its share of the mean's.
@@ -172,13 +176,12 @@ void LdiBranch::record_joint(gpu::Commands& cmd, const std::vector<const gpu::Bu
   }
 }
 
-// L_ev^ldi on the LDI frames over the crop; its value reads 0 on steps it is off.
-void LdiBranch::record_events(gpu::Commands& cmd, uint32_t view, bool on, double scale, uint64_t seed) {
+// L_ev^ldi on the LDI frames over the crop, at every step and a constant weight: the events are
+// the network's only source of sharpness (E = 1, the blurry image, satisfies L_blur^ldi), and the
+// term reaches the network alone, so the splats' schedule (set by their time-direction check)
+// has no reason to apply.
+void LdiBranch::record_events(gpu::Commands& cmd, uint32_t view, uint64_t seed) {
   if (!event_) return;
-  if (!on) {
-    cmd.fill(event_->value_buffer(), 0u, uint64_t(event_->value_offset()) * 4, 4);
-    return;
-  }
   crop_events_->set_crop(crop_);
   const io::View& v = data_.train[view];
   ExposureFrames ef{view, crop_.w, crop_.h, v.exposure_start, v.exposure_end, frame_u_, {}, {}, seed};
@@ -186,14 +189,14 @@ void LdiBranch::record_events(gpu::Commands& cmd, uint32_t view, bool on, double
     ef.rgb.push_back(&model_->frame(i));
     ef.grad.push_back(&grad_[i]);
   }
-  event_->record(cmd, ef, float(event_->weight() * scale));
+  event_->record(cmd, ef, float(event_->weight()));
 }
 
 void LdiBranch::backward(gpu::Commands& cmd, const ImageModel& image_model) {
   const uint32_t W = data_.train[view_].camera.width, H = data_.train[view_].camera.height;
   std::vector<const gpu::Buffer*> grads;
   for (uint32_t i = 0; i < model_->frames(); ++i) {
-    ldi::record_uncrop_add(cmd, g_render_[i], W, H, 3, crop_, image_model.render_grad(i));
+    if (joint_on_) ldi::record_uncrop_add(cmd, g_render_[i], W, H, 3, crop_, image_model.render_grad(i));
     grads.push_back(&grad_[i]);
   }
   model_->backward_from_frames(cmd, grads);

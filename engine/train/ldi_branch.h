@@ -4,8 +4,9 @@
 //
 //   LDI frames C_ldi(t_i) = B / E(t_i) at the 2N+1 virtual frames' times (linear light)
 //   L_blur^ldi  the frames' mean against the blurry input (the trainer's image loss, loss_space)
-//   L_ev^ldi    the event loss on the LDI frames (the splats' event term's schedule)
-//   L_joint     (1/(2N+1)) sum_i L(C_ldi(t_i), C_gs(t_i)) in loss_space, into both sides
+//   L_ev^ldi    the event loss on the LDI frames, on from the first step at a constant weight
+//   L_joint     (1/(2N+1)) sum_i L(C_ldi(t_i), C_gs(t_i)) in loss_space, into both sides, on
+//               from joint_from (once the splats' exposures run the right way)
 //
 // record() runs in the trainer's loss stage (after the image model's forward); backward() after
 // the image model's render gradients: it adds the joint loss's gradients into the renders' and
@@ -39,13 +40,13 @@ class LdiBranch {
   LdiBranch(gpu::Context& ctx, const io::Dataset& data, const TrainConfig& cfg, const std::vector<double>& frame_u,
             const nn::SafetensorsFile* state, const std::string& source = "ldi.safetensors");
 
-  // The terms, for the trainer's list: (term, counted with the event schedule).
+  // The terms, for the trainer's list: (term, counted with the event schedule): none is.
   std::vector<std::pair<LossTerm*, bool>> terms();
   // Records the LDI frames and the three terms for view `view` with the step's renders (sRGB)
-  // and the image model (its linear frames). events_on: the event terms are on this step, with
-  // their weights times event_scale; seed: the step's random stream.
+  // and the image model (its linear frames). joint_on: L_joint is on this step (else its value
+  // reads 0 and it sends no gradient); seed: the step's random stream.
   void record(gpu::Commands& cmd, uint32_t view, uint32_t step, const std::vector<const gpu::Buffer*>& renders,
-              const ImageModel& image_model, bool events_on, double event_scale, uint64_t seed);
+              const ImageModel& image_model, bool joint_on, uint64_t seed);
   // Adds the joint loss's gradients into image_model.render_grad(i), and records the network's
   // backward and Adam step.
   void backward(gpu::Commands& cmd, const ImageModel& image_model);
@@ -62,7 +63,7 @@ class LdiBranch {
   ldi::Crop choose_crop(uint32_t step) const;
   void record_blur(gpu::Commands& cmd);
   void record_joint(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const ImageModel& im);
-  void record_events(gpu::Commands& cmd, uint32_t view, bool on, double scale, uint64_t seed);
+  void record_events(gpu::Commands& cmd, uint32_t view, uint64_t seed);
   void colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y);
 
   gpu::Context& ctx_;
@@ -80,6 +81,7 @@ class LdiBranch {
   std::vector<gpu::Buffer> blurry_, target_;  // per view: linear, and in loss_space
   ldi::Crop crop_;
   uint32_t view_ = 0;
+  bool joint_on_ = false;
   uint64_t values_;  // 3 x crop pixels
   gpu::Buffer blurry_crop_, target_crop_, mean_, mean_ls_, v_mean_ls_, v_mean_, tmp_;
   // Per frame: gradient of the LDI frame (linear), the frames in loss space, the joint's

@@ -160,14 +160,15 @@ std::vector<Setting> run_settings() {
        "`fast` (sized for CPUs) or `paper` (the paper's sizes: 40k iterations, 100k initial Gaussians); "
        "resets every other key to the preset's value, so it is applied first"},
       {"method", [](TrainConfig& c, const std::string& v) { c.apply_method(v); }, nullptr,
-       "sets `mode`, `target`, `event_weight`, `warp_weight` and `blur_upsample` for one of the paper's "
-       "configurations: `plain` "
-       "(3DGS on the blurry images), `edi` (3DGS on EDI-deblurred images), `blur-only` (mode=blur), "
-       "`blur+events` (mode=blur, event_weight 0.1), `blur+events+warp` (also warp_weight 0.1), "
-       "`blur+events+flow` (also blur_upsample 4); the others set warp_weight 0 and blur_upsample 1. Applied after "
-       "`preset` "
-       "and before the other keys of a config file; on "
-       "the command line, in order"},
+       "sets `mode`, `target`, `event_weight`, `warp_weight`, `blur_upsample`, `res_weight`, `ldi` and "
+       "`ldi_event_weight` for one of the paper's configurations: `plain` (3DGS on the blurry images), `edi` (3DGS "
+       "on EDI-deblurred images), `blur-only` (mode=blur), `blur+events` (mode=blur, event_weight 0.1), "
+       "`blur+events+warp` (also warp_weight 0.1), `blur+events+flow` (also blur_upsample 4), `blur+res` (mode=blur, "
+       "res_weight 0.1), `blur+events+warp+res`, `evflow-no-ldi-events` (also ldi=on, ldi_event_weight 0) and "
+       "`evflow` (the full model: ldi_event_weight 0.1); a method sets the keys it does not name to off (weights 0, "
+       "blur_upsample 1, ldi off, ldi_event_weight 0.1). The paper's ablation rows are these methods in this order "
+       "from `blur-only` ([experiments.md](experiments.md)). Applied after `preset` and before the other keys of a "
+       "config file; on the command line, in order"},
       field("iterations", &TrainConfig::iterations, "optimisation steps, one training view per step"),
       field("init", &TrainConfig::init,
             "what the Gaussians start from: `random` (`init_gaussians` of them, below) or `points` (one per sparse "
@@ -363,10 +364,14 @@ std::vector<Setting> ldi_settings() {
             "the blur term (`ssim_lambda`, `loss_space`)"),
       field("ldi_event_weight", &TrainConfig::ldi_event_weight,
             "λ of L_ev^ldi, the event loss on the LDI frames (thresholds, `event_pool`, `event_norm_floor` as "
-            "L_ev^gs); on from `event_from` and faded by `event_weight_end` as the splats' event term; 0: off"),
+            "L_ev^gs); on from the first step at this constant weight (the splats' schedule does not apply); 0: off"),
       field("joint_weight", &TrainConfig::joint_weight,
             "weight of L_joint (paper Eq. 10): the image loss between each LDI frame and the render at its time, "
             "gradients into both; 0: off"),
+      field("joint_from", &TrainConfig::joint_from,
+            "L_joint is on from this fraction of the run: before the splats' time-direction check ends "
+            "(`event_flip_until`) a view's renders may run backwards against the LDI frames, and the joint loss "
+            "then pulls both towards the blurry image ([ldi.md](ldi.md))"),
       field("ldi_lr", &TrainConfig::ldi_lr, "the LDI network's Adam learning rate (eps 1e-8), as EVDI"),
       field("ldi_init_steps", &TrainConfig::ldi_init_steps,
             "steps of the initialisation to EDI before training: the network regressed to EDI's double integral "
@@ -475,31 +480,59 @@ TrainConfig TrainConfig::preset_named(const std::string& name) {
   return c;
 }
 
+namespace {
+
+// What each method sets; every method sets all of these, so methods do not stack.
+struct MethodSpec {
+  const char* name;
+  TrainMode mode;
+  TrainTarget target;
+  double event_weight, warp_weight;
+  uint32_t blur_upsample;
+  double res_weight;
+  bool ldi;
+  double ldi_event_weight;
+};
+
+const std::vector<MethodSpec>& method_specs() {
+  using M = TrainMode;
+  using T = TrainTarget;
+  static const std::vector<MethodSpec> specs = {
+      {"plain", M::Plain, T::Blurry, 0, 0, 1, 0, false, 0.1},
+      {"edi", M::Plain, T::Edi, 0, 0, 1, 0, false, 0.1},
+      {"blur-only", M::Blur, T::Blurry, 0, 0, 1, 0, false, 0.1},
+      {"blur+events", M::Blur, T::Blurry, 0.1, 0, 1, 0, false, 0.1},
+      {"blur+events+warp", M::Blur, T::Blurry, 0.1, 0.1, 1, 0, false, 0.1},
+      {"blur+events+flow", M::Blur, T::Blurry, 0.1, 0.1, 4, 0, false, 0.1},
+      {"blur+res", M::Blur, T::Blurry, 0, 0, 1, 0.1, false, 0.1},
+      {"blur+events+warp+res", M::Blur, T::Blurry, 0.1, 0.1, 1, 0.1, false, 0.1},
+      {"evflow-no-ldi-events", M::Blur, T::Blurry, 0.1, 0.1, 1, 0.1, true, 0},
+      {"evflow", M::Blur, T::Blurry, 0.1, 0.1, 1, 0.1, true, 0.1},
+  };
+  return specs;
+}
+
+}  // namespace
+
+std::vector<std::string> TrainConfig::methods() {
+  std::vector<std::string> names;
+  for (const MethodSpec& m : method_specs()) names.push_back(m.name);
+  return names;
+}
+
 void TrainConfig::apply_method(const std::string& name) {
-  if (name == "plain") {
-    mode = TrainMode::Plain;
-    target = TrainTarget::Blurry;
-    event_weight = warp_weight = 0;
-    blur_upsample = 1;
-  } else if (name == "edi") {
-    mode = TrainMode::Plain;
-    target = TrainTarget::Edi;
-    event_weight = warp_weight = 0;
-    blur_upsample = 1;
-  } else if (name == "blur-only") {
-    mode = TrainMode::Blur;
-    target = TrainTarget::Blurry;
-    event_weight = warp_weight = 0;
-    blur_upsample = 1;
-  } else if (name == "blur+events" || name == "blur+events+warp" || name == "blur+events+flow") {
-    mode = TrainMode::Blur;
-    target = TrainTarget::Blurry;
-    event_weight = 0.1;
-    warp_weight = name == "blur+events" ? 0 : 0.1;
-    blur_upsample = name == "blur+events+flow" ? 4 : 1;
-  } else
-    throw std::invalid_argument("unknown method '" + name +
-                                "' (plain, edi, blur-only, blur+events, blur+events+warp, blur+events+flow)");
+  for (const MethodSpec& m : method_specs()) {
+    if (name != m.name) continue;
+    mode = m.mode, target = m.target;
+    event_weight = m.event_weight, warp_weight = m.warp_weight;
+    blur_upsample = m.blur_upsample;
+    res_weight = m.res_weight;
+    ldi = m.ldi, ldi_event_weight = m.ldi_event_weight;
+    return;
+  }
+  std::string all;
+  for (const MethodSpec& m : method_specs()) all += std::string(all.empty() ? "" : ", ") + m.name;
+  throw std::invalid_argument("unknown method '" + name + "' (" + all + ")");
 }
 
 void TrainConfig::set(const std::string& key, const std::string& value) {

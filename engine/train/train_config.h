@@ -79,6 +79,7 @@ struct TrainConfig {
   std::vector<uint32_t> ldi_widths{32, 16, 16, 1};
   uint32_t ldi_crop = 48;
   double ldi_blur_weight = 1.0, ldi_event_weight = 0.1, joint_weight = 1.0;
+  double joint_from = 0.8;
   double ldi_lr = 1e-3;
   uint32_t ldi_init_steps = 300;
   double ldi_init_lr = 3e-3;
@@ -87,11 +88,10 @@ struct TrainConfig {
   // The paper's configurations and baselines (key "method"): plain (3DGS on the blurry images),
   // edi (3DGS on EDI-deblurred images), blur-only (BAD-Gaussians-like: mode=blur), blur+events
   // (mode=blur + the event loss, lambda 0.1), blur+events+warp (+ the warped-event loss, lambda 0.1), blur+events+flow
-  // (+ the flow-upsampled blur, M = 4).
+  // (+ the flow-upsampled blur, M = 4), blur+res (blur + the residual loss), blur+events+warp+res,
+  // evflow-no-ldi-events (+ the LDI branch without its event loss), evflow (the full model).
   void apply_method(const std::string& name);
-  static std::vector<std::string> methods() {
-    return {"plain", "edi", "blur-only", "blur+events", "blur+events+warp", "blur+events+flow"};
-  }
+  static std::vector<std::string> methods();
   void set(const std::string& key, const std::string& value);  // throws naming the key and what it expects
   // "preset" first, then "method", then every other key (so explicit keys win).
   void apply_json(const nlohmann::json& j);

@@ -291,8 +291,7 @@ void Trainer::record_losses(StepStats& st, bool exposure_on) {
   if (exposure_on) record_exposure_terms(st);
   if (ldi_)
     ldi_->record(cmd_, st.view, step_, exposure_->images(), *image_model_,
-                 step_ > uint32_t(cfg_.event_from * cfg_.iterations), event_schedule(),
-                 cfg_.seed * 0x100000001B3ull + step_);
+                 step_ > uint32_t(cfg_.joint_from * cfg_.iterations), cfg_.seed * 0x100000001B3ull + step_);
   cmd_.submit();
 }
 
