@@ -1,15 +1,17 @@
 // The learnable double integral (engine/ldi/ldi_model.h): the frames and double integrals
 // against the double-precision reference (tests/reference/ldi_reference.h), the network's weight
 // gradients of both backward modes against central differences of that reference, the neutral
-// initialisation, and the checks on bad input.
+// initialisation, the checks on bad input, and the whole-view evaluation in tiles (full_view.h).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "events/gpu_events.h"
 #include "gpu/commands.h"
 #include "gpu_fixture.h"
+#include "ldi/full_view.h"
 #include "ldi/ldi_model.h"
 #include "reference/ldi_reference.h"
 
@@ -171,5 +173,78 @@ TEST_CASE("LDI: the neutral initialisation gives E = 1 without events, and bad i
   CHECK_THROWS_WITH(ldi::LdiModel(ctx, events, {32, 8, 1}, 7, 5, 2), Catch::Contains("leaves the 6x5 image"));
   CHECK_THROWS_WITH(model.forward(cmd, 0, {0.2, 0.3, 0.4}, {0, 0, 6, 5}, blurry), Catch::Contains("3 frame times"));
   CHECK_THROWS_WITH(model.forward(cmd, 0, {0.2, 1.5}, {0, 0, 6, 5}, blurry), Catch::Contains("outside view 0"));
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("LDI view tiles: the kept parts cover the sensor once, each at least the reach inside its tile", "[ldi]") {
+  const uint32_t W = 40, H = 30, reach = 3;
+  const std::vector<ldi::ViewTile> tiles = ldi::view_tiles(W, H, 13, 11, reach);
+  CHECK(tiles.size() > 4);
+  std::vector<int> covered(size_t(W) * H, 0);
+  for (const ldi::ViewTile& t : tiles) {
+    CHECK(t.run.w == 13);
+    CHECK(t.run.h == 11);
+    REQUIRE(t.run.x + t.run.w <= W);
+    REQUIRE(t.run.y + t.run.h <= H);
+    // Inside the tile, and `reach` away from its sides except where they are the sensor's.
+    CHECK((t.keep.x == 0 || t.keep.x >= t.run.x + reach));
+    CHECK((t.keep.y == 0 || t.keep.y >= t.run.y + reach));
+    CHECK((t.keep.x + t.keep.w == W || t.keep.x + t.keep.w + reach <= t.run.x + t.run.w));
+    CHECK((t.keep.y + t.keep.h == H || t.keep.y + t.keep.h + reach <= t.run.y + t.run.h));
+    for (uint32_t y = t.keep.y; y < t.keep.y + t.keep.h; ++y)
+      for (uint32_t x = t.keep.x; x < t.keep.x + t.keep.w; ++x) ++covered[size_t(y) * W + x];
+  }
+  CHECK(std::count(covered.begin(), covered.end(), 1) == int(W * H));
+  CHECK(ldi::view_tiles(W, H, 128, 128, reach).size() == 1);  // a tile larger than the sensor: one
+  CHECK_THROWS_WITH(ldi::view_tiles(W, H, 6, 11, reach), Catch::Contains("keeps nothing"));
+  // Tile sides: the whole axis when it fits, else as few tiles as the largest side allows, each
+  // as small as covers the axis: 346 = 2 x 170 kept + 2 x 3, 1000 in 4 tiles of 255.
+  CHECK(ldi::view_tile_side(173, 256, reach) == 173);
+  CHECK(ldi::view_tile_side(346, 256, reach) == 176);
+  CHECK(ldi::view_tile_side(1000, 256, reach) == 255);
+  CHECK(ldi::view_tiles(346, 260, 176, ldi::view_tile_side(260, 256, reach), reach).size() == 4);
+  CHECK(ldi::view_tiles(1000, 10, 255, 10, reach).size() == 4);
+  CHECK(ldi::view_tiles(1000, 10, 254, 10, reach).size() == 5);
+  CHECK_THROWS_WITH(ldi::view_tile_side(100, 6, reach), Catch::Contains("keep nothing"));
+}
+
+TEST_CASE("LDI view frames: overlapping tiles give what one forward over the whole view gives", "[ldi][gpu]") {
+  auto& ctx = test::gpu_context();
+  Case c = make_case();  // its weights; denser events on a larger sensor
+  const uint32_t W = 40, H = 30;
+  EventStream stream;
+  stream.width = W, stream.height = H;
+  std::mt19937 rng(5);
+  std::vector<double> t = uniform(3000, rng, 0.0, 1.0);
+  std::sort(t.begin(), t.end());
+  for (double ti : t) stream.push(uint16_t(rng() % W), uint16_t(rng() % H), ti, rng() % 3 ? 1 : -1);
+  GpuEvents events(ctx, stream, {{0.0, 1.0}}, "random events");
+  const std::vector<double> blurry_v = uniform(3 * W * H, rng, 0.1, 0.9);
+  gpu::Buffer blurry(ctx, blurry_v.size() * 4, "blurry");
+  blurry.write(to_float(blurry_v));
+  // The reference: one model over the whole sensor.
+  ldi::LdiModel whole(ctx, events, c.net.widths, W, H, 3);
+  set_weights(whole, c.net);
+  gpu::Commands cmd(ctx);
+  whole.forward(cmd, 0, c.times, {0, 0, W, H}, blurry);
+  // The source of the weights is a crop-sized model, as in training.
+  ldi::LdiModel source(ctx, events, c.net.widths, 8, 8, 3);
+  set_weights(source, c.net);
+  ldi::FullViewFrames tiled(ctx, events, c.net.widths, 13, 11, 3);
+  REQUIRE(tiled.reach() == 3);
+  REQUIRE(tiled.tiles().size() > 4);
+  tiled.forward(cmd, source, 0, c.times, blurry);
+  cmd.submit();
+  for (uint32_t i = 0; i < 3; ++i) {
+    const std::vector<float> want = whole.frame(i).read<float>(3 * W * H), got = tiled.frame(i).read<float>(3 * W * H);
+    double worst = 0, largest = 0;
+    for (size_t k = 0; k < want.size(); ++k) {
+      worst = std::max(worst, std::abs(double(got[k]) - want[k]));
+      largest = std::max(largest, std::abs(double(want[k])));
+    }
+    WARN("frame " << i << ": largest difference " << worst << " of values up to " << largest);
+    CHECK(worst <= 1e-6 * largest);
+  }
+  CHECK_THROWS_WITH(ldi::FullViewFrames(ctx, events, {32, 8, 8, 8, 1}, 8, 8, 1), Catch::Contains("keeps nothing"));
   test::require_no_validation_messages();
 }
