@@ -38,6 +38,18 @@ void ResidualLoss::set_view_residuals(uint32_t view, const std::vector<float>& r
   set_[view] = true;
 }
 
+std::vector<float> ResidualLoss::view_residuals(uint32_t view) const {
+  if (view >= set_.size() || !set_[view])
+    throw std::logic_error("residual loss: no residuals for view " + std::to_string(view));
+  const size_t n = size_t(width_) * height_ * 3;
+  std::vector<float> out;
+  for (const gpu::Buffer& b : residuals_[view]) {
+    const std::vector<float> r = b.read<float>(n);
+    out.insert(out.end(), r.begin(), r.end());
+  }
+  return out;
+}
+
 void ResidualLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
   if (f.rgb.size() != frames_ || f.grad.size() != frames_ || f.width != width_ || f.height != height_)
     throw std::invalid_argument("residual loss: the exposure's frames do not match the term's size");

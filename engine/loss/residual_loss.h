@@ -19,6 +19,8 @@ class ResidualLoss : public ExposureLossTerm {
   uint32_t frames() const { return frames_; }
   // View v's residuals: (frames - 1) planar RGB images, the non-middle frames in order.
   void set_view_residuals(uint32_t view, const std::vector<float>& residuals);
+  // What set_view_residuals() stored for view `view` (read back from the device).
+  std::vector<float> view_residuals(uint32_t view) const;
 
   void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) override;
   using ExposureLossTerm::record;

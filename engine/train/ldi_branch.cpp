@@ -15,6 +15,9 @@ namespace evflow {
 
 namespace {
 
+// view_frames() runs a model of at most this many pixels square, tile by tile.
+constexpr uint32_t kViewTile = 256;
+
 std::unique_ptr<GpuEvents> branch_events(gpu::Context& ctx, const io::Dataset& data) {
   if (data.events.size() == 0)
     throw std::invalid_argument("ldi=on needs an event stream with times, and the dataset in '" + data.root +
@@ -129,17 +132,42 @@ void LdiBranch::record(gpu::Commands& cmd, uint32_t view, uint32_t step, const s
   crop_ = choose_crop(step);
   ldi::record_crop(cmd, blurry_[view], W, H, 3, crop_, blurry_crop_);
   ldi::record_crop(cmd, target_[view], W, H, 3, crop_, target_crop_);
-  std::vector<double> times;  // inside the exposure, whatever the rounding of t_0 + u T
-  for (double u : frame_u_)
-    times.push_back(
-        std::clamp(v.exposure_start + u * (v.exposure_end - v.exposure_start), v.exposure_start, v.exposure_end));
-  model_->forward(cmd, view, times, crop_, blurry_crop_);
+  model_->forward(cmd, view, frame_times(view), crop_, blurry_crop_);
   record_blur(cmd);
   if (joint_on)
     record_joint(cmd, renders, image_model);
   else
     cmd.fill(joint_->value_buffer(), 0u, uint64_t(joint_->value_offset()) * 4, 4);
   record_events(cmd, view, seed);
+}
+
+// Inside the exposure, whatever the rounding of t_0 + u T.
+std::vector<double> LdiBranch::frame_times(uint32_t view) const {
+  const io::View& v = data_.train.at(view);
+  std::vector<double> times;
+  for (double u : frame_u_)
+    times.push_back(
+        std::clamp(v.exposure_start + u * (v.exposure_end - v.exposure_start), v.exposure_start, v.exposure_end));
+  return times;
+}
+
+std::vector<std::vector<float>> LdiBranch::view_frames(gpu::Commands& cmd, uint32_t view) {
+  const uint32_t W = events_->width(), H = events_->height();
+  const auto& cam = data_.train.at(view).camera;
+  if (cam.width != W || cam.height != H)
+    throw std::invalid_argument("ldi: view '" + data_.train[view].name + "' is not of the event sensor's size");
+  if (!full_view_) {
+    const uint32_t reach = uint32_t(cfg_.ldi_widths.size() - 1);
+    full_view_ =
+        std::make_unique<ldi::FullViewFrames>(ctx_, *events_, cfg_.ldi_widths, ldi::view_tile_side(W, kViewTile, reach),
+                                              ldi::view_tile_side(H, kViewTile, reach), model_->max_frames());
+  }
+  const std::vector<double> times = frame_times(view);
+  full_view_->forward(cmd, *model_, view, times, blurry_[view]);
+  cmd.submit();
+  std::vector<std::vector<float>> frames;
+  for (uint32_t i = 0; i < times.size(); ++i) frames.push_back(full_view_->frame(i).read<float>(size_t(3) * W * H));
+  return frames;
 }
 
 // L_blur^ldi: each frame's gradient starts as its share of the mean's.

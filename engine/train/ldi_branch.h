@@ -21,6 +21,7 @@
 #include "events/gpu_events.h"
 #include "io/dataset.h"
 #include "ldi/crop_events.h"
+#include "ldi/full_view.h"
 #include "ldi/joint_loss.h"
 #include "ldi/ldi_model.h"
 #include "loss/event_loss.h"
@@ -55,6 +56,13 @@ class LdiBranch {
   // "adam.<group>.exp_avg_sq") and the Adam step count (metadata "adam_step").
   nn::SafetensorsFile state() const;
   ldi::LdiModel& model() { return *model_; }
+  // The LDI frames at the virtual frames' times over the whole of view `view` with the current
+  // weights (for display: a tile-sized second model, made at the first call, runs them; the
+  // training model and its crop are untouched). Records and submits on `cmd`; per frame planar
+  // linear RGB, 3 x H x W.
+  std::vector<std::vector<float>> view_frames(gpu::Commands& cmd, uint32_t view);
+  // The frames' times of view `view`: t_0 + u (t_2N - t_0) for each virtual frame's u.
+  std::vector<double> frame_times(uint32_t view) const;
   const ldi::Crop& crop() const { return crop_; }  // of the last record
 
  private:
@@ -78,7 +86,8 @@ class LdiBranch {
   std::unique_ptr<EventLoss> event_;
   std::unique_ptr<ldi::JointLoss> joint_;
   std::unique_ptr<Adam> adam_;
-  std::vector<gpu::Buffer> blurry_, target_;  // per view: linear, and in loss_space
+  std::unique_ptr<ldi::FullViewFrames> full_view_;  // view_frames(), made at its first call
+  std::vector<gpu::Buffer> blurry_, target_;        // per view: linear, and in loss_space
   ldi::Crop crop_;
   uint32_t view_ = 0;
   bool joint_on_ = false;

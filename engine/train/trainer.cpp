@@ -150,6 +150,7 @@ void Trainer::add_residual_term() {
                                              uint32_t(data_.train.size()), float(cfg_.res_weight));
   const auto residuals = prior::predict_residuals(ctx_, cfg_.res_prior, data_, u);
   for (uint32_t v = 0; v < residuals.size(); ++v) term->set_view_residuals(v, residuals[v]);
+  residual_ = term.get();
   add_loss(std::move(term));
 }
 
@@ -360,7 +361,7 @@ void Trainer::backward(uint32_t view, bool exposure_on) {
   cameras_->backward_and_step(view, pose, step_);
 }
 
-ViewSnapshot Trainer::snapshot(uint32_t v, int interval) {
+ViewSnapshot Trainer::snapshot(uint32_t v, int interval, SnapshotExtras extras) {
   render_exposure(v);
   const size_t n = size_t(data_.train.at(v).camera.width) * data_.train[v].camera.height * 3;
   ViewSnapshot out{cameras_->frame_times(), exposure_->images(), image_model_->prediction().read<float>(n),
@@ -372,7 +373,31 @@ ViewSnapshot Trainer::snapshot(uint32_t v, int interval) {
     out.has_flow = true;
     out.flow = flow_snapshot(v, uint32_t(interval));
   }
+  if (extras.residuals && residual_) {
+    out.has_residuals = true;
+    out.residuals = residual_snapshot(v);
+  }
+  if (extras.ldi_frames && ldi_) out.ldi_frames = ldi_->view_frames(cmd_, v);
   return out;
+}
+
+// After render_exposure(v): the prior's residuals of view v and the frames' F_i - F_N.
+ResidualSnapshot Trainer::residual_snapshot(uint32_t v) const {
+  const size_t n = size_t(data_.train.at(v).camera.width) * data_.train[v].camera.height * 3;
+  const uint32_t frames = exposure_->frames(), mid = frames / 2;
+  const std::vector<float> prior = residual_->view_residuals(v);
+  const std::vector<float> f_mid = image_model_->linear_frame(mid).read<float>(n);
+  ResidualSnapshot r;
+  for (uint32_t i = 0, k = 0; i < frames; ++i) {
+    if (i == mid) continue;
+    std::vector<float> d = image_model_->linear_frame(i).read<float>(n);
+    for (size_t j = 0; j < n; ++j) d[j] -= f_mid[j];
+    r.frames.push_back(i);
+    r.prior.emplace_back(prior.begin() + k * n, prior.begin() + (k + 1) * n);
+    r.renders.push_back(std::move(d));
+    ++k;
+  }
+  return r;
 }
 
 // After render_exposure(v): interval i's flow and, with the warped-event loss, what it compares

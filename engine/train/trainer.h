@@ -14,6 +14,7 @@
 
 #include "events/gpu_events.h"
 #include "io/dataset.h"
+#include "loss/residual_loss.h"
 #include "loss/warped_event_loss.h"
 #include "splat/rasterizer.h"
 #include "train/camera_model.h"
@@ -56,6 +57,14 @@ struct FlowSnapshot {
   std::vector<float> measured, predicted;
 };
 
+// What the residual loss L_res compares for a training view (res_weight > 0), per non-middle
+// virtual frame i in frame order, planar linear RGB (3 x H x W each).
+struct ResidualSnapshot {
+  std::vector<uint32_t> frames;             // the frames' indices i (the middle one, N, left out)
+  std::vector<std::vector<float>> prior;    // the residual prior's R(t_i), as the loss holds it
+  std::vector<std::vector<float>> renders;  // the renders' F_i - F_N in linear light
+};
+
 // Training view v as the model sees it between steps (for viewers).
 struct ViewSnapshot {
   std::vector<double> times;  // the frames' exposure times u
@@ -65,6 +74,17 @@ struct ViewSnapshot {
   std::vector<float> target;  // the training target, planar sRGB
   bool has_flow = false;      // snapshot(v, interval) of a run that uses flow: `flow` is set
   FlowSnapshot flow;
+  // Asked for (SnapshotExtras::ldi_frames) in an ldi=on run: the LDI network's frames C_ldi(t_i)
+  // at `times` over the whole view, planar linear RGB (LdiBranch::view_frames); else empty.
+  std::vector<std::vector<float>> ldi_frames;
+  bool has_residuals = false;  // asked for in a run with the residual loss: `residuals` is set
+  ResidualSnapshot residuals;
+};
+
+// What a snapshot adds to the renders on request (each costs time: for viewers that show it).
+struct SnapshotExtras {
+  bool ldi_frames = false;  // ldi=on: the LDI frames over the whole view (2 (2N+1) - 2 network calls)
+  bool residuals = false;   // res_weight > 0: what the residual loss compares (read back)
 };
 
 // The training view of a step: a seeded shuffle of the views per epoch (steps count from 1).
@@ -102,8 +122,9 @@ class Trainer {
   const std::vector<double>& last_camera_gradient() const { return cameras_->last_gradient(); }
   uint32_t trajectory_flips() const { return flips_; }
   // Renders view v's exposure as the next step would (its render settings) without training;
-  // with interval >= 0 and a run that uses flow, also that interval's flow and warped events.
-  ViewSnapshot snapshot(uint32_t v, int interval = -1);
+  // with interval >= 0 and a run that uses flow, also that interval's flow and warped events;
+  // and the extras asked for that the run has.
+  ViewSnapshot snapshot(uint32_t v, int interval = -1, SnapshotExtras extras = {});
   // The flow's intervals per exposure (2N) when the run uses flow (warp_weight, blur_upsample), else 0.
   uint32_t flow_intervals() const { return flows_.empty() ? 0 : uint32_t(flows_[0].size()); }
   // The step at which the model's flow was last computed (flow=model, flow_model_from); 0: never.
@@ -125,6 +146,7 @@ class Trainer {
   void refresh_model_flow(uint32_t v);
   void upload_view_flow(uint32_t v);
   FlowSnapshot flow_snapshot(uint32_t v, uint32_t interval);
+  ResidualSnapshot residual_snapshot(uint32_t v) const;
   RenderSettings render_settings() const;
   // The stages of a step.
   void render_exposure(uint32_t view);
@@ -153,6 +175,7 @@ class Trainer {
   // Per view, per interval: the flow in use, H * W * 2 (NaN: none); empty when no term uses flow.
   std::vector<std::vector<std::vector<float>>> flows_;
   WarpedEventLoss* warp_ = nullptr;        // the warped-event term, when on
+  ResidualLoss* residual_ = nullptr;       // the residual term, when on
   std::unique_ptr<ModelFlow> model_flow_;  // flow=model or flow_model_from
   uint32_t model_flow_step_ = 0;
   std::unique_ptr<GaussianOptimizer> optimizer_;
