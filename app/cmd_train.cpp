@@ -99,10 +99,10 @@ static const std::vector<ViewOption>& view_options() {
                                "the last presented frame with the UI, written when the viewer closes"),
       view_option<std::string>(
           "--view-report", "F.json", &O::report,
-          "written when the viewer closes: per frame {frame, step, paused, view, content_step, u, ms}, the "
-          "panels' tile rectangles (with source sizes), the free-camera rectangle, the UI widgets' rectangles, "
-          "the shown view's PSNR and event counts, u, the loss weights, screenshots taken, viewer and training "
-          "wall seconds"),
+          "written when the viewer closes: per frame {frame, step, paused, view, content_step, u, panels, ms}, "
+          "the panels' tile rectangles (with source sizes), the free-camera rectangle, the UI widgets' "
+          "rectangles, the shown view's PSNR, event counts, flow, LDI frames and residuals, u, the loss weights, "
+          "screenshots taken, viewer and training wall seconds"),
       view_option<std::string>(
           "--view-script", "\"F:ACTION,...\"", &O::script,
           "testing: just before frame F is drawn, presses a key (space, n, right, left, 1-9, o, r), clicks a UI "
@@ -179,11 +179,12 @@ static void print_help() {
   std::printf(
       "  --view: watch training live in a window (docs/viewer.md): the splats from a free camera, and for\n"
       "    one training view its blurry input, a render at u along the exposure, the virtual frames along the\n"
-      "    exposure and the events, and in runs that use flow one interval's flow and warped events;\n"
+      "    exposure and the events, in runs that use flow one interval's flow and warped events, with ldi=on\n"
+      "    the LDI network's frames, with res_weight > 0 the prior's residuals beside the renders';\n"
       "    a UI window (Dear ImGui) with step, loss plots, PSNR, Gaussians, it/s, pause / step / view / u /\n"
       "    interval / panel / screenshot controls and the loss weights, live.\n"
       "    keys: Space pause/resume, N single step (pauses first), Right/] and Left/[ next/previous view,\n"
-      "    1-6 toggle panels, O the UI window, R camera to the shown view, Esc close the viewer (training\n"
+      "    1-8 toggle panels, O the UI window, R camera to the shown view, Esc close the viewer (training\n"
       "    goes on);\n"
       "    mouse: left-drag orbit, wheel zoom; W/A/S/D/Q/E fly. Its options (--view-options: as a table):\n");
   for (const ViewOption& v : view_options())

@@ -1,6 +1,7 @@
 // `evflow train --view` (docs/viewer.md): the viewer's drawing kernels offscreen, and the live
-// training viewer end to end under Xvfb: its panels against the dataset and offscreen renders,
-// the pause / single-step / view / panel keys and the UI's widgets through --view-script.
+// training viewer end to end under Xvfb: its panels against the dataset, offscreen renders and
+// the trainer's snapshot (flow, warped events, LDI frames, residuals), the pause / single-step /
+// view / panel keys and the UI's widgets through --view-script.
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -23,6 +24,7 @@
 #include "io/dataset_writer.h"
 #include "io/image.h"
 #include "metrics/srgb_metrics.h"
+#include "prior/residual_prior.h"
 #include "sim/flow_truth.h"
 #include "train/synthetic_dataset.h"
 #include "train/trainer.h"
@@ -31,6 +33,7 @@
 #include "viewer/event_image.h"
 #include "viewer/flow_image.h"
 #include "viewer/layout.h"
+#include "viewer/residual_image.h"
 
 using namespace evflow;
 namespace fs = std::filesystem;
@@ -247,6 +250,17 @@ TEST_CASE("viewer layout: nearest-neighbour source index, aspect fit and tile gr
                          tiles[i].y + tiles[i].h <= tiles[j].y || tiles[j].y + tiles[j].h <= tiles[i].y;
       REQUIRE(apart);
     }
+  // Six tiles in a 300 x 150 box: three to a row at best, which splits tiles 2 and 3 over two
+  // rows; in groups of two, four to a row, each pair on one row.
+  const auto free6 = viewer::tile_grid({0, 0, 300, 150}, 6, 4, 3);
+  const auto pairs6 = viewer::tile_grid({0, 0, 300, 150}, 6, 4, 3, 2, 2);
+  REQUIRE(free6.size() == 6);
+  REQUIRE(pairs6.size() == 6);
+  CHECK(free6[2].y == free6[0].y);
+  CHECK(free6[3].y > free6[2].y);
+  for (size_t k = 0; k < 6; k += 2) CHECK(pairs6[k + 1].y == pairs6[k].y);
+  CHECK(pairs6[3].y == pairs6[0].y);
+  CHECK(pairs6[4].y > pairs6[0].y);
   const auto l = viewer::train_layout(1280, 720, 4, 20);
   CHECK(l.main.w == 640);
   REQUIRE(l.boxes.size() == 4);
@@ -464,6 +478,10 @@ TEST_CASE("train --view under Xvfb: the UI's buttons, sliders and check boxes dr
   std::vector<std::string> ids;
   for (const auto& p : rep["panels"]) ids.push_back(p["id"]);
   CHECK(ids == std::vector<std::string>{"blurry", "mid", "virtual"});
+  // A run without the LDI branch or the residual loss has neither panel, nor their check boxes.
+  CHECK_FALSE(rep["widgets"].contains("panel.ldi"));
+  CHECK_FALSE(rep["widgets"].contains("panel.residual"));
+  CHECK(rep["widgets"].contains("panel.warped"));
   // The weight slider set the trainer's weight: every step after it has a total loss of 0, every
   // step before it a positive one.
   CHECK(rep["weights"]["l1_ssim"] == 0.0);
@@ -658,6 +676,162 @@ TEST_CASE("train --view under Xvfb: the flow and warped-event panels show the in
   const io::Image off = io::read_image(off_png);
   CHECK(changed(shot, off, flow_tile) > 0.5);
   CHECK(changed(shot, off, warped[0]) > 0.5);
+  test::require_no_validation_messages();
+  fs::remove_all(dir);
+}
+
+namespace {
+
+// The keys of the LDI and residual run: both on, N = 3 (the shipped prior's 7 frames), the LDI
+// network He-initialised (no pre-fit), so that it changes only near the view's events.
+const std::vector<std::pair<std::string, std::string>> kLdiKeys = {
+    {"iterations", "2"},     {"init_gaussians", "400"}, {"sh_degree", "0"},   {"mode", "blur"},
+    {"virtual_frames", "3"}, {"densify", "false"},      {"seed", "3"},        {"lr_trajectory_init", "0.05"},
+    {"ldi", "true"},         {"ldi_init_steps", "0"},   {"res_weight", "0.1"}};
+
+std::vector<std::string> panel_ids(const json& frame) { return frame["panels"].get<std::vector<std::string>>(); }
+
+// The largest |a - b| over the pixels of a crop's interior (the crop less `margin` pixels on each
+// side that is not the sensor's edge): `full` is 3 x H x W, `part` 3 x crop.h x crop.w.
+double crop_difference(const std::vector<float>& full, uint32_t W, uint32_t H, const std::vector<float>& part,
+                       uint32_t cx, uint32_t cy, uint32_t cw, uint32_t ch, uint32_t margin) {
+  double worst = 0;
+  for (uint32_t c = 0; c < 3; ++c)
+    for (uint32_t y = cy == 0 ? 0 : margin; y < (cy + ch == H ? ch : ch - margin); ++y)
+      for (uint32_t x = cx == 0 ? 0 : margin; x < (cx + cw == W ? cw : cw - margin); ++x)
+        worst = std::max(
+            worst, std::abs(double(full[(size_t(c) * H + cy + y) * W + cx + x]) - part[(size_t(c) * ch + y) * cw + x]));
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("train --view under Xvfb: the LDI and residual panels show the LDI frames and what L_res compares",
+          "[viewer]") {
+  require_xvfb();
+  const fs::path dir = fresh_dir("ldi");
+  const fs::path data_dir = write_dataset(dir);
+  const fs::path shot_png = dir / "shot.png", report_json = dir / "report.json";
+  std::string keys;
+  for (auto& [k, v] : kLdiKeys) keys += " " + k + "=" + v;
+  // Paused. Keys 7 and 8 hide both panels before frame 1; N steps once before frame 2, which
+  // hides the loss plots (five terms: the check boxes would lie below the window's end); their
+  // check boxes show the panels again in frame 3 (their content, fetched only while they are
+  // shown, is then fetched at the same step).
+  const Run r = run_evflow(dir, "train " + quote(data_dir.string()) + " --out " + quote((dir / "run").string()) + keys +
+                                    " --view --view-width 800 --view-height 600 --view-paused --view-frames 3"
+                                    " --view-script 1:7,1:8,2:n,2:click=plots,3:click=panel.ldi,3:click=panel.residual"
+                                    " --view-fps-cap 0 --view-screenshot " +
+                                    quote(shot_png.string()) + " --view-report " + quote(report_json.string()));
+  INFO(r.out);
+  REQUIRE(r.rc == 0);
+  const json rep = json::parse(slurp(report_json));
+  INFO(rep["frames"].dump(1));
+  const std::vector<std::string> base{"blurry", "mid", "virtual", "events"};
+  std::vector<std::string> all = base;
+  all.insert(all.end(), {"ldi", "residual"});
+  REQUIRE(rep["frames"].size() == 3);
+  CHECK(panel_ids(rep["frames"][0]) == base);
+  CHECK(panel_ids(rep["frames"][1]) == base);
+  CHECK(panel_ids(rep["frames"][2]) == all);
+  CHECK(rep["frames"][1]["step"] == 1);
+  CHECK(rep["frames"][2]["step"] == 1);
+  REQUIRE(rep["content"]["step"] == 1);
+  CHECK(rep["content"]["ldi"]["frames"] == 7);
+  CHECK(rep["content"]["residual"]["frames"] == std::vector<uint32_t>{0, 1, 2, 4, 5, 6});
+  const io::Image shot = io::read_image(shot_png);
+
+  // The same run in this process: one step, then the trainer's snapshot of view 0.
+  auto& ctx = test::gpu_context();
+  const io::Dataset data = io::load_dataset(data_dir);
+  TrainConfig cfg;
+  for (auto& [k, v] : kLdiKeys) cfg.set(k, v);
+  Trainer t(ctx, data, cfg);
+  t.step();
+  const ViewSnapshot snap = t.snapshot(0, -1, {true, true});
+  REQUIRE(snap.ldi_frames.size() == 7);
+  REQUIRE(snap.has_residuals);
+  int max_diff = 0;
+  const json& lt = panel(rep, "ldi")["tiles"];
+  REQUIRE(lt.size() == 7);
+  for (size_t i = 0; i < 7; ++i) {
+    std::vector<float> srgb = snap.ldi_frames[i];
+    for (float& x : srgb) x = io::linear_to_srgb(x);
+    CHECK(tile_match(shot, lt[i], srgb, &max_diff) >= 0.99);
+  }
+  // Tiles come in pairs on a row: the prior's R(t_i) beside the renders' F_i - F_N.
+  const viewer::ResidualImages ri = viewer::residual_images(snap.residuals);
+  const json& rt = panel(rep, "residual")["tiles"];
+  REQUIRE(rt.size() == 12);
+  for (size_t k = 0; k < 12; ++k) {
+    CHECK(tile_match(shot, rt[k], ri.tiles[k], &max_diff) >= 0.99);
+    if (k % 2 == 1) CHECK(rt[k]["y"] == rt[k - 1]["y"]);
+  }
+  CHECK(std::abs(rep["content"]["residual"]["scale"].get<double>() - ri.scale) <= 1e-6 * ri.scale);
+
+  const uint32_t W = 96, H = 72;
+  const std::vector<float> blurry = io::planar_rgb(data.train[0].blurry);
+  {  // LDI frames: the training network's forward on a crop, and changed only near the view's events
+    // The branch's own model on a 48 x 48 crop holding both events of view 0: equal on the
+    // crop's interior (3 pixels, the network's reach, in from the sides inside the view).
+    const ldi::Crop crop{6, 4, 48, 48};
+    std::vector<float> part(size_t(3) * 48 * 48);
+    for (uint32_t c = 0; c < 3; ++c)
+      for (uint32_t y = 0; y < 48; ++y)
+        for (uint32_t x = 0; x < 48; ++x)
+          part[(size_t(c) * 48 + y) * 48 + x] = blurry[(size_t(c) * H + crop.y + y) * W + crop.x + x];
+    gpu::Buffer part_buf(ctx, part.size() * 4, "blurry_crop");
+    part_buf.write(part);
+    gpu::Commands cmd(ctx);
+    t.ldi()->model().forward(cmd, 0, t.ldi()->frame_times(0), crop, part_buf);
+    cmd.submit();
+    for (uint32_t i = 0; i < 7; ++i) {
+      const double d = crop_difference(snap.ldi_frames[i], W, H, t.ldi()->model().frame(i).read<float>(part.size()),
+                                       crop.x, crop.y, crop.w, crop.h, 3);
+      INFO("frame " << i << ": largest difference " << d);
+      CHECK(d <= 1e-6);
+    }
+    // Relative change C / B - 1 within the reach of an event pixel, and elsewhere.
+    double near_events = 0, elsewhere = 0;
+    for (uint32_t i = 0; i < 7; ++i)
+      for (uint32_t y = 0; y < H; ++y)
+        for (uint32_t x = 0; x < W; ++x) {
+          const bool close = (std::max(std::abs(int(x) - 10), std::abs(int(y) - 10)) <= 3) ||
+                             (std::max(std::abs(int(x) - 40), std::abs(int(y) - 30)) <= 3);
+          for (uint32_t c = 0; c < 3; ++c) {
+            const size_t p = (size_t(c) * H + y) * W + x;
+            const double rel = std::abs(snap.ldi_frames[i][p] / std::max(blurry[p], 1e-4f) - 1.0);
+            double& worst = close ? near_events : elsewhere;
+            worst = std::max(worst, rel);
+          }
+        }
+    WARN("LDI frames vs the blurry image: up to " << near_events << " near the events, " << elsewhere << " elsewhere");
+    CHECK(near_events > 0.1);
+    CHECK(elsewhere < 0.01);
+  }
+  {  // residuals: the prior's prediction, and the renders' differences from the middle frame
+    const auto prior = prior::predict_residuals(ctx, cfg.res_prior, data, snap.times).at(0);
+    const size_t n = size_t(3) * W * H;
+    REQUIRE(snap.residuals.prior.size() == 6);
+    double prior_max = 0, render_max = 0, render_err = 0;
+    std::vector<float> mid = snap.frames[3]->read<float>(n);
+    for (float& x : mid) x = io::srgb_to_linear(x);
+    for (size_t k = 0; k < 6; ++k) {
+      CHECK(snap.residuals.prior[k] == std::vector<float>(prior.begin() + k * n, prior.begin() + (k + 1) * n));
+      std::vector<float> f = snap.frames[snap.residuals.frames[k]]->read<float>(n);
+      for (size_t j = 0; j < n; ++j) {
+        const double want = double(io::srgb_to_linear(f[j])) - mid[j];
+        render_err = std::max(render_err, std::abs(snap.residuals.renders[k][j] - want));
+        render_max = std::max(render_max, std::abs(want));
+        prior_max = std::max(prior_max, std::abs(double(snap.residuals.prior[k][j])));
+      }
+    }
+    WARN("residuals: prior up to " << prior_max << "; renders up to " << render_max << ", off by " << render_err);
+    // (One step moves the exposure trajectory a little: the renders' residuals are small yet.)
+    CHECK(prior_max > 1e-2);
+    CHECK(render_max > 1e-4);
+    CHECK(render_err <= 1e-3 * render_max);
+  }
   test::require_no_validation_messages();
   fs::remove_all(dir);
 }

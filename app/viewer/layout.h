@@ -32,11 +32,14 @@ inline Rect fit_aspect(const Rect& box, uint32_t src_w, uint32_t src_h) {
 }
 
 // `count` tiles of aspect src_w : src_h in `box`: the grid (columns x rows) that gives the
-// largest tiles; each tile centred in its grid cell. Row-major order.
-inline std::vector<Rect> tile_grid(const Rect& box, uint32_t count, uint32_t src_w, uint32_t src_h, uint32_t gap = 2) {
+// largest tiles; each tile centred in its grid cell. Row-major order. group > 1 (dividing
+// count): the columns are a multiple of it, so that each group of tiles shares a row.
+inline std::vector<Rect> tile_grid(const Rect& box, uint32_t count, uint32_t src_w, uint32_t src_h, uint32_t gap = 2,
+                                   uint32_t group = 1) {
   std::vector<Rect> best;
   uint64_t best_area = 0;
-  for (uint32_t cols = 1; cols <= count; ++cols) {
+  const uint32_t g = group > 1 && count % group == 0 ? group : 1;
+  for (uint32_t cols = g; cols <= count; cols += g) {
     const uint32_t rows = (count + cols - 1) / cols;
     if (box.w < cols * (gap + 1) || box.h < rows * (gap + 1)) break;
     const uint32_t cw = (box.w - (cols - 1) * gap) / cols, ch = (box.h - (rows - 1) * gap) / rows;

@@ -15,6 +15,7 @@
 #include "metrics/srgb_metrics.h"
 #include "viewer/event_image.h"
 #include "viewer/flow_image.h"
+#include "viewer/residual_image.h"
 #include "viewer/view_camera.h"
 
 namespace evflow::viewer {
@@ -40,7 +41,18 @@ std::vector<float> encoded(std::vector<float> linear) {
   return linear;
 }
 
-// The side panels. An LDI panel will be appended the same way.
+// One buffer per image (planar, what the canvas shows), grown or shrunk to the images' count.
+void upload_all(gpu::Context& ctx, std::vector<gpu::Buffer>& bufs, const std::vector<std::vector<float>>& images,
+                const char* name) {
+  while (bufs.size() < images.size()) bufs.emplace_back(ctx, 16, name);
+  bufs.resize(images.size());
+  for (size_t i = 0; i < images.size(); ++i) {
+    bufs[i].ensure(images[i].size() * 4);
+    bufs[i].write(images[i]);
+  }
+}
+
+// The side panels.
 class BlurryPanel : public Panel {
  public:
   BlurryPanel() : Panel("blurry", GLFW_KEY_1) {}
@@ -112,6 +124,38 @@ class WarpedPanel : public Panel {
   std::vector<Tile> tiles(const ShownView& s) const override {
     return {{&s.measured, s.width, s.height}, {&s.predicted, s.width, s.height}};
   }
+};
+
+// The LDI network's frames over the whole view (ldi=on), tiled as the virtual frames.
+class LdiPanel : public Panel {
+ public:
+  LdiPanel() : Panel("ldi", GLFW_KEY_7) {}
+  bool available(const ShownView& s) const override { return s.has_ldi; }
+  std::string label(const ShownView& s) const override {
+    return "7 LDI frames x" + std::to_string(s.ldi_frames.size());
+  }
+  std::vector<Tile> tiles(const ShownView& s) const override {
+    std::vector<Tile> t;
+    for (auto& f : s.ldi_frames) t.push_back({&f, s.width, s.height});
+    return t;
+  }
+};
+
+// What L_res compares (res_weight > 0): per non-middle frame, the prior's R(t_i) beside the
+// renders' F_i - F_N.
+class ResidualPanel : public Panel {
+ public:
+  ResidualPanel() : Panel("residual", GLFW_KEY_8) {}
+  bool available(const ShownView& s) const override { return s.has_residuals; }
+  std::string label(const ShownView& s) const override {
+    return "8 residuals prior | render x" + std::to_string(s.residual_frames.size());
+  }
+  std::vector<Tile> tiles(const ShownView& s) const override {
+    std::vector<Tile> t;
+    for (auto& r : s.residuals) t.push_back({&r, s.width, s.height});
+    return t;
+  }
+  uint32_t group() const override { return 2; }
 };
 
 }  // namespace
@@ -206,6 +250,8 @@ TrainView::TrainView(Display& display, Trainer& trainer, const io::Dataset& data
   panels_.push_back(std::make_unique<EventsPanel>());
   panels_.push_back(std::make_unique<FlowPanel>());
   panels_.push_back(std::make_unique<WarpedPanel>());
+  if (trainer_.ldi()) panels_.push_back(std::make_unique<LdiPanel>());
+  if (trainer_.config().res_weight > 0) panels_.push_back(std::make_unique<ResidualPanel>());
 
   centre_ = initial_orbit(trainer_.cloud());
   std::vector<Camera> cams;
@@ -390,32 +436,16 @@ void TrainView::refresh_content(bool renders) {
   const bool running = !paused_ && !training_done_;
   const bool stale = shown_.step != step && (!running || now_s() - last_refresh_ >= opt_.refresh_s);
   const bool new_interval = shown_.has_flow && shown_.interval != interval_;
-  if (!new_view && !stale && !new_interval && shown_.u == u_) return;
+  // A panel whose content is fetched only while it is shown, shown again.
+  const bool missing =
+      (panel_visible("ldi") && !shown_.has_ldi) || (panel_visible("residual") && !shown_.has_residuals);
+  if (!new_view && !stale && !new_interval && shown_.u == u_ && !missing) return;
   const uint32_t W = view.camera.width, H = view.camera.height;
   const size_t n = size_t(W) * H * 3;
   if (new_view) load_view_inputs();
   if (!renders) return;
   const bool blur = trainer_.config().mode == TrainMode::Blur;
-  if (new_view || stale || new_interval || shown_.step == UINT32_MAX) {
-    // The exposure as training sees it, from the trainer: its frames, its image model, its
-    // target, and the chosen interval's flow and warped events.
-    const uint32_t intervals = trainer_.flow_intervals();
-    interval_ = std::min(interval_, intervals > 0 ? intervals - 1 : 0u);
-    const ViewSnapshot snap = trainer_.snapshot(view_, intervals > 0 ? int(interval_) : -1);
-    load_flow(snap);
-    shown_.times = snap.frames.size() > 1 ? snap.times : std::vector<double>{};
-    while (shown_.frames.size() < shown_.times.size())
-      shown_.frames.emplace_back(ctx_, n * 4, "view_frame" + std::to_string(shown_.frames.size()));
-    shown_.frames.resize(shown_.times.size());
-    for (size_t i = 0; i < shown_.frames.size(); ++i) {
-      shown_.frames[i].ensure(n * 4);
-      cmd_.copy(*snap.frames[i], shown_.frames[i], n * 4);
-    }
-    cmd_.submit();
-    shown_.psnr = psnr(snap.model, snap.target);
-    shown_.step = step;
-    last_refresh_ = now_s();
-  }
+  if (new_view || stale || new_interval || missing || shown_.step == UINT32_MAX) load_snapshot(step);
   // The render panel: the virtual frame at u when there is one, else a render at u along the
   // view's trajectory (plain mode: the view's training camera).
   const auto at = std::find(shown_.times.begin(), shown_.times.end(), u_);
@@ -432,6 +462,56 @@ void TrainView::refresh_content(bool renders) {
   const bool at_mid = !blur || u_ == 0.5;
   shown_.psnr_mid_sharp = view.sharp_mid && at_mid ? psnr(mid, encoded(io::planar_rgb(*view.sharp_mid))) : -1;
   for (auto& p : panels_) p->refresh(shown_);
+}
+
+// The exposure as training sees it, from the trainer: its frames, its image model, its target,
+// the chosen interval's flow and warped events, and, while their panels are shown, the LDI
+// frames and what the residual loss compares.
+void TrainView::load_snapshot(uint32_t step) {
+  const io::View& view = data_.train[view_];
+  const size_t n = size_t(view.camera.width) * view.camera.height * 3;
+  const uint32_t intervals = trainer_.flow_intervals();
+  interval_ = std::min(interval_, intervals > 0 ? intervals - 1 : 0u);
+  const ViewSnapshot snap =
+      trainer_.snapshot(view_, intervals > 0 ? int(interval_) : -1, {panel_visible("ldi"), panel_visible("residual")});
+  load_flow(snap);
+  load_ldi(snap);
+  load_residuals(snap);
+  shown_.times = snap.frames.size() > 1 ? snap.times : std::vector<double>{};
+  while (shown_.frames.size() < shown_.times.size())
+    shown_.frames.emplace_back(ctx_, n * 4, "view_frame" + std::to_string(shown_.frames.size()));
+  shown_.frames.resize(shown_.times.size());
+  for (size_t i = 0; i < shown_.frames.size(); ++i) {
+    shown_.frames[i].ensure(n * 4);
+    cmd_.copy(*snap.frames[i], shown_.frames[i], n * 4);
+  }
+  cmd_.submit();
+  shown_.psnr = psnr(snap.model, snap.target);
+  shown_.step = step;
+  last_refresh_ = now_s();
+}
+
+bool TrainView::panel_visible(const std::string& id) const {
+  for (auto& p : panels_)
+    if (p->id() == id) return p->visible;
+  return false;
+}
+
+// The LDI panel's frames (linear light) encoded for the canvas.
+void TrainView::load_ldi(const ViewSnapshot& snap) {
+  shown_.has_ldi = !snap.ldi_frames.empty();
+  std::vector<std::vector<float>> srgb;
+  for (const auto& f : snap.ldi_frames) srgb.push_back(encoded(f));
+  upload_all(ctx_, shown_.ldi_frames, srgb, "view_ldi_frame");
+}
+
+// The residual panel's signed images of what L_res compares (none when not fetched).
+void TrainView::load_residuals(const ViewSnapshot& snap) {
+  shown_.has_residuals = snap.has_residuals;
+  const ResidualImages im = snap.has_residuals ? residual_images(snap.residuals) : ResidualImages{{}, 0};
+  shown_.residual_frames = snap.residuals.frames;
+  shown_.residual_scale = im.scale;
+  upload_all(ctx_, shown_.residuals, im.tiles, "view_residual");
 }
 
 // The flow panels' images of the snapshot's interval.
@@ -503,12 +583,15 @@ void TrainView::draw_frame() {
   next_frame_ = opt_.fps_cap > 0 ? std::max(next_frame_ + 1.0 / opt_.fps_cap, t1) : t1;
   if (!ok) return;
   ++frames_shown_;
+  std::vector<std::string> ids;  // the panels this frame showed
+  for (auto& [id, placed] : last_tiles_) ids.push_back(id);
   frame_log_.push_back({{"frame", frames_shown_},
                         {"step", trainer_.current_step()},
                         {"paused", paused_},
                         {"view", view_},
                         {"content_step", shown_.step},
                         {"u", shown_.u},
+                        {"panels", ids},
                         {"ms", 1000.0 * (t1 - t0)}});
   char title[256];
   std::snprintf(title, sizeof title, "evflow train - step %u/%u - %.2f it/s - view %u - %s", trainer_.current_step(),
@@ -544,7 +627,7 @@ std::vector<std::pair<Rect, std::string>> TrainView::compose() {
     std::vector<std::pair<Rect, Tile>> placed;
     if (!tiles.empty()) {
       const std::vector<Rect> rects =
-          tile_grid(layout.boxes[i], uint32_t(tiles.size()), tiles[0].width, tiles[0].height);
+          tile_grid(layout.boxes[i], uint32_t(tiles.size()), tiles[0].width, tiles[0].height, 2, shown[i]->group());
       for (size_t k = 0; k < rects.size() && k < tiles.size(); ++k) {
         canvas_.blit(*tiles[k].rgb, tiles[k].width, tiles[k].height, rects[k]);
         placed.push_back({rects[k], tiles[k]});
@@ -613,33 +696,37 @@ nlohmann::json TrainView::report() const {
   for (const LossTerm* t : trainer_.losses()) weights[t->name()] = t->weight();
   json widgets = json::object();
   for (auto& [name, r] : ui_->widgets()) widgets[name] = {{"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}};
-  return json{{"canvas", {canvas_.width(), canvas_.height()}},
-              {"main", rect(main_rect_)},
-              {"panels", panels},
-              {"frames", frame_log_},
-              {"content",
-               {{"view", shown_.view},
-                {"step", shown_.step},
-                {"psnr", shown_.psnr},
-                {"psnr_mid_sharp", shown_.psnr_mid_sharp},
-                {"events_pos", shown_.events_pos},
-                {"events_neg", shown_.events_neg},
-                {"virtual_times", shown_.times},
-                {"flow",
-                 {{"shown", shown_.has_flow},
-                  {"warped", shown_.has_warped},
-                  {"interval", shown_.interval},
-                  {"intervals", shown_.intervals},
-                  {"max_px", shown_.flow_max_px}}}}},
-              {"u", u_},
-              {"weights", weights},
-              {"widgets", widgets},
-              {"screenshots", shots_},
-              {"last_screenshot", last_shot_},
-              {"viewer_seconds", viewer_s_},
-              {"viewer_seconds_untimed", other_s_},
-              {"training_wall_seconds", training_wall_s_},
-              {"budget", opt_.budget}};
+  return json{
+      {"canvas", {canvas_.width(), canvas_.height()}},
+      {"main", rect(main_rect_)},
+      {"panels", panels},
+      {"frames", frame_log_},
+      {"content",
+       {{"view", shown_.view},
+        {"step", shown_.step},
+        {"psnr", shown_.psnr},
+        {"psnr_mid_sharp", shown_.psnr_mid_sharp},
+        {"events_pos", shown_.events_pos},
+        {"events_neg", shown_.events_neg},
+        {"virtual_times", shown_.times},
+        {"flow",
+         {{"shown", shown_.has_flow},
+          {"warped", shown_.has_warped},
+          {"interval", shown_.interval},
+          {"intervals", shown_.intervals},
+          {"max_px", shown_.flow_max_px}}},
+        {"ldi", {{"shown", shown_.has_ldi}, {"frames", shown_.ldi_frames.size()}}},
+        {"residual",
+         {{"shown", shown_.has_residuals}, {"frames", shown_.residual_frames}, {"scale", shown_.residual_scale}}}}},
+      {"u", u_},
+      {"weights", weights},
+      {"widgets", widgets},
+      {"screenshots", shots_},
+      {"last_screenshot", last_shot_},
+      {"viewer_seconds", viewer_s_},
+      {"viewer_seconds_untimed", other_s_},
+      {"training_wall_seconds", training_wall_s_},
+      {"budget", opt_.budget}};
 }
 
 void TrainView::close() {

@@ -66,8 +66,19 @@ struct ShownView {
   uint32_t interval = 0, intervals = 0;
   double flow_max_px = 0;                 // the colour wheel's full saturation
   gpu::Buffer flow, measured, predicted;  // colour wheel, M_i, P_i: planar sRGB, width x height
-  double psnr = 0;                        // model image (blur: mean of the frames) vs the training target
-  double psnr_mid_sharp = -1;             // mid render vs the sharp ground truth (when the view has one)
+  // LDI panel (ldi=on, loaded only while the panel is shown): the LDI network's frames at
+  // `times` over the whole view, planar sRGB.
+  bool has_ldi = false;
+  std::vector<gpu::Buffer> ldi_frames;
+  // Residual panel (res_weight > 0, loaded only while the panel is shown): per non-middle frame i
+  // (residual_frames), the prior's R(t_i) and the renders' F_i - F_N as signed images
+  // (residual_image.h), in pairs, on one scale.
+  bool has_residuals = false;
+  std::vector<uint32_t> residual_frames;
+  std::vector<gpu::Buffer> residuals;  // planar sRGB: prior_i, render_i, ...
+  double residual_scale = 0;
+  double psnr = 0;             // model image (blur: mean of the frames) vs the training target
+  double psnr_mid_sharp = -1;  // mid render vs the sharp ground truth (when the view has one)
 };
 
 struct Tile {
@@ -76,8 +87,8 @@ struct Tile {
 };
 
 // A side panel: a label and a few images (tiles) of the shown training view. Panels are a
-// list; a new one (LDI) derives from Panel, takes its data from ShownView or its own
-// refresh(), and is appended in TrainView's constructor with its toggle key.
+// list; a new one derives from Panel, takes its data from ShownView or its own refresh(), and
+// is appended in TrainView's constructor with its toggle key.
 class Panel {
  public:
   Panel(std::string id, int key) : id_(std::move(id)), key_(key) {}
@@ -88,6 +99,8 @@ class Panel {
   virtual bool available(const ShownView&) const { return true; }
   virtual std::string label(const ShownView&) const = 0;
   virtual std::vector<Tile> tiles(const ShownView&) const = 0;
+  // Tiles come in groups of this many that keep to one row of the panel's grid.
+  virtual uint32_t group() const { return 1; }
   // Called after ShownView was refreshed (for panels with their own content).
   virtual void refresh(const ShownView&) {}
 
@@ -128,7 +141,11 @@ class TrainView {
   // The side panels' content; `renders` false: only the view's inputs (blurry, events).
   void refresh_content(bool renders);
   void load_view_inputs();
+  void load_snapshot(uint32_t step);
   void load_flow(const ViewSnapshot& snap);
+  void load_ldi(const ViewSnapshot& snap);
+  void load_residuals(const ViewSnapshot& snap);
+  bool panel_visible(const std::string& id) const;
   void render_free_view(const Rect& m);
   void poll();
   void apply_script(int frame);
