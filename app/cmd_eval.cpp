@@ -8,6 +8,7 @@
 #include "camera/trajectory.h"
 #include "cli.h"
 #include "io/atomic_file.h"
+#include "ldi_eval.h"
 #include "metrics/srgb_metrics.h"
 #include "run_files.h"
 #include "splat/rasterizer.h"
@@ -119,7 +120,9 @@ static int run_eval(const Args& a) {
         "  and writes PSNR/SSIM per view and mean to RUN/eval.json and RUN/eval.md, scored on 8-bit sRGB\n"
         "  images as a saved PNG holds them; the scored renders go to RUN/eval/<set>/<view>.png.\n"
         "  Novel views are scored at the given poses ('novel') and after N Adam steps of test-pose\n"
-        "  refinement with the Gaussians frozen ('novel_refined'; default N = 60, 0 skips it).\n");
+        "  refinement with the Gaussians frozen ('novel_refined'; default N = 60, 0 skips it).\n"
+        "  Runs with ldi=on also score the LDI network's own mid-exposure frame of every training view\n"
+        "  ('ldi', frames in RUN/eval/ldi/).\n");
     return 0;
   }
   std::string data_override = p.value("--data");
@@ -153,6 +156,13 @@ static int run_eval(const Args& a) {
   sc.score(data.train, "deblur", false);
   sc.score(data.novel, "novel", false);
   if (refine_iters > 0) sc.score(data.novel, "novel_refined", true);
+  if (nlohmann::json ldi = score_ldi_frames(ctx, run, data, cfg); !ldi.is_null()) {
+    char line[160];
+    std::snprintf(line, sizeof line, "| ldi (the LDI's mid-exposure frames) | %zu | %.2f | %.4f |\n",
+                  ldi["views"].size(), ldi["mean_psnr"].get<double>(), ldi["mean_ssim"].get<double>());
+    sc.md << line;
+    sc.out["ldi"] = std::move(ldi);
+  }
   if (sc.out.empty()) throw std::runtime_error("the dataset has no sharp ground-truth images to evaluate against");
   sc.out["scored_on"] = "8-bit sRGB; SSIM: 11x11 Gaussian window, sigma 1.5, valid region, channel mean";
   sc.out["step"] = run.checkpoint.step;

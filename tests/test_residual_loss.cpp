@@ -144,11 +144,11 @@ TEST_CASE("residual loss in training: a finite, changing L_res whose gradients m
   CHECK(with.rows[0][size_t(image)] == without.rows[0][size_t(image)]);
   CHECK(with.rows[5][size_t(image)] != without.rows[5][size_t(image)]);
   CHECK(test::run_evflow(dir,
-                         "train sim --out bad res_weight=0.1 method=blur-only virtual_frames=2 iterations=1 "
+                         "train sim --out bad method=blur-only res_weight=0.1 virtual_frames=2 iterations=1 "
                          "res_prior=prior.safetensors",
                          out) != 0);
   CHECK(out.find("the residual prior predicts 7 virtual frames") != std::string::npos);
-  CHECK(test::run_evflow(dir, "train sim --out bad2 res_weight=0.1 method=blur-only res_prior=none.safetensors", out) !=
+  CHECK(test::run_evflow(dir, "train sim --out bad2 method=blur-only res_weight=0.1 res_prior=none.safetensors", out) !=
         0);
   CHECK(out.find("none.safetensors") != std::string::npos);
   fs::remove_all(dir);
