@@ -141,7 +141,7 @@ static int bench_train(ArgParser& p) {
   cfg.iterations = std::max<uint32_t>(cfg.iterations, uint32_t(steps) + 1);  // the warm-up step and the timed ones
   Trainer t(ctx, data, cfg);
   t.step();  // warm-up: pipelines compiled, buffers sized
-  std::vector<double> total, fwd, loss, bwd, opt;
+  std::vector<double> total, fwd, loss, bwd, opt, ldi;
   std::map<std::string, std::vector<double>> stages;  // the rasterizer's own stages
   std::vector<std::string> order;
   for (int i = 0; i < steps; ++i) {
@@ -155,6 +155,7 @@ static int bench_train(ArgParser& p) {
     loss.push_back(st.loss_ms);
     bwd.push_back(st.raster_backward_ms);
     opt.push_back(st.optimizer_ms);
+    ldi.push_back(st.ldi_ms);
   }
   const double m = median(total);
   if (json) {
@@ -162,9 +163,9 @@ static int bench_train(ArgParser& p) {
         "{\"bench\": \"train\", \"method\": \"%s\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": "
         "%u, \"steps\": %d, "
         "\"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, \"rasterize_backward\": %.2f, "
-        "\"optimizer\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
+        "\"optimizer\": %.2f, \"ldi\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
         method.c_str(), ctx.caps().name.c_str(), W, H, N, steps, 1000.0 / m, median(fwd), median(loss), median(bwd),
-        median(opt), m);
+        median(opt), median(ldi), m);
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
     std::printf("}}\n");
@@ -173,8 +174,8 @@ static int bench_train(ArgParser& p) {
                 ctx.caps().name.c_str(), W, H, N, steps);
     std::printf(
         "  rasterize forward   %9.2f ms\n  loss terms          %9.2f ms\n  rasterize backward  %9.2f ms\n"
-        "  optimizer (Adam)    %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
-        median(fwd), median(loss), median(bwd), median(opt), m, 1000.0 / m);
+        "  optimizer (Adam)    %9.2f ms\n  LDI branch          %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
+        median(fwd), median(loss), median(bwd), median(opt), median(ldi), m, 1000.0 / m);
     std::printf("  rasterizer stages:");
     for (auto& name : order) std::printf(" %s %.1f,", name.c_str(), median(stages[name]));
     std::printf(" ms\n");

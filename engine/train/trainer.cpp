@@ -265,11 +265,24 @@ StepStats Trainer::step() {
   st.raster_forward_ms = clock.lap();
   record_losses(st, exposure_on);
   st.loss_ms = clock.lap();
+  if (ldi_) {
+    ldi_->record(cmd_, st.view, step_, exposure_->images(), *image_model_,
+                 step_ > uint32_t(cfg_.joint_from * cfg_.iterations), cfg_.seed * 0x100000001B3ull + step_);
+    cmd_.submit();
+    st.ldi_ms = clock.lap();
+  }
   read_losses(st, exposure_on);
   if (st.flipped && model_flow_step_ > 0) refresh_model_flow(st.view);  // the reversed trajectory's flow
   if (!st.flipped && !st.skipped) {
-    backward(st.view, exposure_on);
+    backward_images(exposure_on);
     st.raster_backward_ms = clock.lap();
+    if (ldi_) {
+      ldi_->backward(cmd_, *image_model_);  // the joint loss's share of the renders' gradients
+      cmd_.submit();
+      st.ldi_ms += clock.lap();
+    }
+    backward_raster(st.view);
+    st.raster_backward_ms += clock.lap();
     optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_);
     st.optimizer_ms = clock.lap();
   }
@@ -290,9 +303,6 @@ void Trainer::render_exposure(uint32_t view) {
 void Trainer::record_losses(StepStats& st, bool exposure_on) {
   terms_.record_image_terms(cmd_, *image_model_, targets_[st.view]);
   if (exposure_on) record_exposure_terms(st);
-  if (ldi_)
-    ldi_->record(cmd_, st.view, step_, exposure_->images(), *image_model_,
-                 step_ > uint32_t(cfg_.joint_from * cfg_.iterations), cfg_.seed * 0x100000001B3ull + step_);
   cmd_.submit();
 }
 
@@ -347,15 +357,19 @@ void Trainer::read_losses(StepStats& st, bool exposure_on) const {
                data_.train[st.view].name.c_str(), v.first_bad ? v.first_bad->name().c_str() : "sum");
 }
 
-// From the loss gradients to every frame's render, through the rasterizer to the Gaussians and
-// the frames' poses, and on to the view's camera parameters (with their Adam step).
-void Trainer::backward(uint32_t view, bool exposure_on) {
-  std::vector<const gpu::Buffer*> frame_grads, v_rgb;
+// From the loss gradients to every frame's render.
+void Trainer::backward_images(bool exposure_on) {
+  std::vector<const gpu::Buffer*> frame_grads;
   if (exposure_on)
     for (auto& g : frame_grad_) frame_grads.push_back(&g);
   image_model_->render_grads(cmd_, frame_grads);
-  if (ldi_) ldi_->backward(cmd_, *image_model_);  // the joint loss's share of the renders' gradients
-  cmd_.submit();                                  // the rasterizer's backward passes run on its own command buffer
+  cmd_.submit();  // the rasterizer's backward passes run on its own command buffer
+}
+
+// Through the rasterizer to the Gaussians and the frames' poses, and on to the view's camera
+// parameters (with their Adam step).
+void Trainer::backward_raster(uint32_t view) {
+  std::vector<const gpu::Buffer*> v_rgb;
   for (uint32_t i = 0; i < exposure_->frames(); ++i) v_rgb.push_back(&image_model_->render_grad(i));
   const std::vector<lie::Vec6> pose = exposure_->backward(raster_, *params_, v_rgb, v_alpha_, *grads_);
   cameras_->backward_and_step(view, pose, step_);

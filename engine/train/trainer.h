@@ -39,8 +39,8 @@ struct StepStats {
   bool flipped = false;  // the view's trajectory was reversed in time (events scored it better); no update this step
   double ms = 0;
   // Wall-clock split of the step (each part ends in a submit and wait); optimizer_ms includes
-  // density control.
-  double raster_forward_ms = 0, loss_ms = 0, raster_backward_ms = 0, optimizer_ms = 0;
+  // density control; ldi_ms: the LDI branch's forward, terms, backward and Adam step (ldi=on).
+  double raster_forward_ms = 0, loss_ms = 0, raster_backward_ms = 0, optimizer_ms = 0, ldi_ms = 0;
   // Each term's unweighted value, in the order the terms were added (names: Trainer::losses()).
   std::vector<double> term_values;
 };
@@ -154,7 +154,10 @@ class Trainer {
   void record_exposure_terms(StepStats& st);
   void read_losses(StepStats& st, bool exposure_on) const;
   double event_schedule() const;
-  void backward(uint32_t view, bool exposure_on);
+  // The loss gradients to every frame's render; then backward_raster() through the rasterizer
+  // (the LDI branch adds the joint loss's share in between).
+  void backward_images(bool exposure_on);
+  void backward_raster(uint32_t view);
 
   gpu::Context& ctx_;
   const io::Dataset& data_;
