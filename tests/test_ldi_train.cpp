@@ -27,7 +27,13 @@ constexpr uint32_t W = 48, H = 32;
 constexpr float kGrey = 0.35f;
 
 // Three views of a drifting cloud: blurry images (linear mean of 17 renders) and their events.
-io::Dataset drift_dataset(gpu::Context& ctx, const GaussianCloud& truth) {
+// The drifting cloud's ground truth.
+GaussianCloud drift_truth() {
+  return synthetic_cloud(42, 200, 0, Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0}));
+}
+
+io::Dataset drift_dataset(gpu::Context& ctx) {
+  const GaussianCloud truth = drift_truth();
   io::Dataset data = render_synthetic_dataset(ctx, W, H, 3, 0, truth.size());
   GaussianBuffers gt(ctx, truth.size(), truth.sh_degree, "gt_");
   gt.upload(truth);
@@ -80,14 +86,12 @@ nn::NamedTensor& tensor(nn::SafetensorsFile& f, const std::string& name) {
 
 TEST_CASE("LDI branch: the joint loss's gradient reaches the LDI weights and the splats", "[gpu][train][ldi]") {
   auto& ctx = test::gpu_context();
-  const Camera cam0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
-  const GaussianCloud truth = synthetic_cloud(42, 200, 0, cam0);
-  const io::Dataset data = drift_dataset(ctx, truth);
+  const io::Dataset data = drift_dataset(ctx);
   REQUIRE(data.events.size() > 100);
   TrainConfig cfg = ldi_config();
   cfg.ldi_blur_weight = 0;  // the joint loss alone on the LDI
   cfg.ldi_event_weight = 0;
-  Checkpoint start{0, truth, {}};
+  Checkpoint start{0, drift_truth(), {}};
   for (size_t i = 0; i < start.cloud.sh.size(); ++i) start.cloud.sh[i] += 0.3f * float((i % 7) / 6.0 - 0.5);
   start.ldi = Trainer(ctx, data, cfg).checkpoint().ldi;  // the He-initialised network
   start.step = 0;
@@ -142,9 +146,7 @@ TEST_CASE("LDI branch: the joint loss's gradient reaches the LDI weights and the
 TEST_CASE("LDI branch: a short run with every term changes the network and the splats, and its state round-trips",
           "[gpu][train][ldi]") {
   auto& ctx = test::gpu_context();
-  const Camera cam0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
-  const GaussianCloud truth = synthetic_cloud(42, 200, 0, cam0);
-  const io::Dataset data = drift_dataset(ctx, truth);
+  const io::Dataset data = drift_dataset(ctx);
   TrainConfig cfg = ldi_config();
   cfg.ldi_init_steps = 20;
   Trainer t(ctx, data, cfg);
@@ -180,9 +182,7 @@ TEST_CASE("LDI branch: a short run with every term changes the network and the s
 TEST_CASE("LDI branch: L_ev^ldi trains from the first step, L_joint reaches the splats only from joint_from",
           "[gpu][train][ldi]") {
   auto& ctx = test::gpu_context();
-  const Camera cam0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
-  const GaussianCloud truth = synthetic_cloud(42, 200, 0, cam0);
-  const io::Dataset data = drift_dataset(ctx, truth);
+  const io::Dataset data = drift_dataset(ctx);
   TrainConfig cfg = ldi_config();
   cfg.iterations = 4;
   cfg.event_from = 0.5;
