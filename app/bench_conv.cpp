@@ -119,12 +119,14 @@ int bench_conv(ArgParser& p) {
   const uint32_t W = uint32_t(p.integer("--width", 346)), H = uint32_t(p.integer("--height", 260));
   const std::vector<uint32_t> widths = parse_widths(p.value("--widths", "32,64,128,64,16,1"));
   const int repeats = int(p.integer("--repeats", 5)), warmup = int(p.integer("--warmup", 1));
+  const long batch = p.integer("--batch", 1);
   const bool json = p.flag("--json");
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
-  if (W == 0 || H == 0 || repeats < 1) throw std::invalid_argument("bench conv: size and repeats must be positive");
+  if (W == 0 || H == 0 || repeats < 1 || batch < 1 || batch > 4096)
+    throw std::invalid_argument("bench conv: size, batch and repeats must be positive");
   gpu::Context ctx(o);
-  nn::ConvStack stack(ctx, widths, H, W, "bench");
+  nn::ConvStack stack(ctx, widths, H, W, "bench", uint32_t(batch));
   stack.init_he(1);
   std::vector<float> v(stack.input().count());
   for (size_t i = 0; i < v.size(); ++i) v[i] = float((i * 2654435761u) % 1000) / 1000.0f;
@@ -132,7 +134,7 @@ int bench_conv(ArgParser& p) {
   stack.output_grad().upload(std::vector<float>(stack.output().count(), 1e-3f));
   const Timing t = run_repeats(ctx, stack, warmup, repeats);
   std::vector<uint64_t> macs;
-  for (size_t i = 0; i < stack.layers(); ++i) macs.push_back(stack.layer(i).macs({widths[i], H, W}));
+  for (size_t i = 0; i < stack.layers(); ++i) macs.push_back(stack.layer(i).macs({widths[i], H, W, uint32_t(batch)}));
   std::string list;
   for (uint32_t w : widths) {
     if (!list.empty()) list += ',';
@@ -141,13 +143,13 @@ int bench_conv(ArgParser& p) {
   char head[512];
   if (json) {
     std::snprintf(head, sizeof head,
-                  "{\"bench\": \"conv\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"widths\": [%s], "
-                  "\"repeats\": %d",
-                  ctx.caps().name.c_str(), W, H, list.c_str(), repeats);
+                  "{\"bench\": \"conv\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"batch\": %ld, "
+                  "\"widths\": [%s], \"repeats\": %d",
+                  ctx.caps().name.c_str(), W, H, batch, list.c_str(), repeats);
     print_json(macs, t, head);
   } else {
-    std::snprintf(head, sizeof head, "conv bench on %s: %ux%u, 3x3 widths %s, median of %d", ctx.caps().name.c_str(), W,
-                  H, list.c_str(), repeats);
+    std::snprintf(head, sizeof head, "conv bench on %s: %ld x %ux%u, 3x3 widths %s, median of %d",
+                  ctx.caps().name.c_str(), batch, W, H, list.c_str(), repeats);
     print_table(macs, t, head);
   }
   return 0;

@@ -247,10 +247,11 @@ static int run_bench(const Args& a) {
         "       evflow bench flow --data DIR [--views N] [--json]\n"
         "  Optical flow from events of the first N (default all) training views: seconds in all and\n"
         "  the GPU stages summed over every evaluation of the contrast.\n"
-        "       evflow bench conv [--width 346] [--height 260] [--widths 32,64,128,64,16,1] [--repeats 5] "
-        "[--json]\n"
+        "       evflow bench conv [--width 346] [--height 260] [--batch 1] [--widths 32,64,128,64,16,1]\n"
+        "                         [--repeats 5] [--json]\n"
         "  Forward and backward of a stack of 3x3 convolutions with ReLU between (the LDI network's\n"
-        "  layers; --widths: input channels, then each layer's): ms and GFLOP/s per layer.\n");
+        "  layers; --widths: input channels, then each layer's) over a batch of images, one dispatch\n"
+        "  per layer: ms and GFLOP/s per layer.\n");
     return pos.empty() ? 2 : 0;
   }
   p.args.erase(std::find(p.args.begin(), p.args.end(), pos[0]));

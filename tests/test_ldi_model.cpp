@@ -85,7 +85,12 @@ TEST_CASE("LDI: frames against the double reference, weight gradients against ce
   auto& ctx = test::gpu_context();
   Case c = make_case();
   GpuEvents events(ctx, c.stream, {{0.0, 1.0}}, "random events");
-  ldi::LdiModel model(ctx, events, c.net.widths, c.crop.w, c.crop.h, 3);
+  // The 4 calls (t_0 and t_2N have one side each) as one batch, one call at a time, and in a
+  // chunk of 3 and one of 1 (the backward runs the first chunk's forward again).
+  const uint32_t max_batch = GENERATE(0u, 1u, 3u);
+  INFO("calls per chunk at most " << max_batch);
+  ldi::LdiModel model(ctx, events, c.net.widths, c.crop.w, c.crop.h, 3, max_batch);
+  CHECK(model.batch() == (max_batch ? max_batch : 6u));
   set_weights(model, c.net);
   gpu::Buffer blurry(ctx, c.blurry.v.size() * 4, "blurry_crop");
   blurry.write(to_float(c.blurry.v));

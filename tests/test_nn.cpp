@@ -89,6 +89,66 @@ void check_conv(const ConvCase& cs) {
   test::require_no_validation_messages();
 }
 
+// A batch: `images` images of a tensor that holds `capacity`, one forward and backward over
+// them; each image's output against the reference of that image alone, the weight and bias
+// gradients against central differences of the sum over the images, dx (with check_dx) too.
+void check_conv_batch(const ConvCase& cs, uint32_t images, uint32_t capacity, bool check_dx) {
+  auto& ctx = test::gpu_context();
+  INFO("batch of " << images << " in " << capacity << ": conv " << cs.in_c << "->" << cs.out_c << " k" << cs.ksize
+                   << " s" << cs.stride << " " << cs.w << "x" << cs.h);
+  std::vector<NnTensor> xs(images, NnTensor(cs.in_c, cs.h, cs.w));
+  for (uint32_t b = 0; b < images; ++b) xs[b].v = random_values(xs[b].v.size(), 20 + b), round_to_float(xs[b].v);
+  std::vector<double> w = random_values(size_t(cs.out_c) * cs.in_c * cs.ksize * cs.ksize, 2, 0.5);
+  std::vector<double> b = random_values(cs.out_c, 3);
+  round_to_float(w), round_to_float(b);
+  const NnTensor y0 = ref::nn_conv2d(xs[0], w, b, cs.out_c, cs.ksize, cs.stride);
+  std::vector<std::vector<double>> rs(images);
+  for (uint32_t i = 0; i < images; ++i) rs[i] = random_values(y0.v.size(), 40 + i), round_to_float(rs[i]);
+
+  auto concat = [&](auto part) {
+    std::vector<double> all;
+    for (uint32_t i = 0; i < images; ++i) {
+      const std::vector<double>& v = part(i);
+      all.insert(all.end(), v.begin(), v.end());
+    }
+    return all;
+  };
+  const std::vector<double> x_all = concat([&](uint32_t i) -> const std::vector<double>& { return xs[i].v; });
+  const std::vector<double> r_all = concat([&](uint32_t i) -> const std::vector<double>& { return rs[i]; });
+  std::vector<float> x_up = to_float(x_all), r_up = to_float(r_all);
+  nn::Tensor gx(ctx, {cs.in_c, cs.h, cs.w, capacity}, "x"), dx(ctx, gx.shape(), "dx");
+  nn::Tensor gy(ctx, {y0.c, y0.h, y0.w, capacity}, "y"), dy(ctx, gy.shape(), "dy");
+  x_up.resize(gx.count(), 7.0f), r_up.resize(dy.count(), 7.0f);  // images past the batch: must not count
+  gx.upload(x_up), dy.upload(r_up);
+  nn::Conv2d conv(ctx, {cs.in_c, cs.out_c, cs.ksize, cs.stride}, "conv");
+  conv.set_parameters(to_float(w), to_float(b));
+  gpu::Commands cmd(ctx);
+  conv.forward(cmd, gx, gy, images);
+  conv.backward(cmd, gx, dy, &dx, false, false, images);
+  cmd.submit();
+  std::vector<float> y = gy.download(), g = dx.download();
+  for (uint32_t i = 0; i < images; ++i) {
+    const NnTensor want = ref::nn_conv2d(xs[i], w, b, cs.out_c, cs.ksize, cs.stride);
+    require_close(std::vector<float>(y.begin() + i * want.v.size(), y.begin() + (i + 1) * want.v.size()), want.v, 1e-4,
+                  "y");
+  }
+  auto loss = [&] {
+    double l = 0;
+    for (uint32_t i = 0; i < images; ++i)
+      l += ref::nn_dot(ref::nn_conv2d(xs[i], w, b, cs.out_c, cs.ksize, cs.stride), rs[i]);
+    return l;
+  };
+  require_close(conv.weight_grad().read<float>(w.size()), ref::nn_central_differences(w, loss, 1e-3), 1e-3, "dw");
+  require_close(conv.bias_grad().read<float>(b.size()), ref::nn_central_differences(b, loss, 1e-3), 1e-3, "db");
+  if (check_dx)
+    for (uint32_t i = 0; i < images; ++i) {
+      const size_t n = xs[i].v.size();
+      require_close(std::vector<float>(g.begin() + i * n, g.begin() + (i + 1) * n),
+                    ref::nn_central_differences(xs[i].v, loss, 1e-3), 1e-3, "dx");
+    }
+  test::require_no_validation_messages();
+}
+
 }  // namespace
 
 TEST_CASE("nn: 3x3 and 1x1 convolutions, stride 1 and 2, forward and gradients at odd sizes", "[gpu][nn]") {
@@ -97,6 +157,15 @@ TEST_CASE("nn: 3x3 and 1x1 convolutions, stride 1 and 2, forward and gradients a
                             ConvCase{3, 5, 1, 2, 9, 13}, ConvCase{7, 33, 3, 1, 11, 17}, ConvCase{7, 70, 3, 2, 11, 17},
                             ConvCase{4, 1, 3, 1, 23, 29}})
     check_conv(c);
+}
+
+TEST_CASE("nn: a batch of images runs as one convolution, each image padded on its own", "[gpu][nn]") {
+  // Images of 9 x 13 pixels: the GEMM's 128-pixel tiles and its vec4 loads straddle images.
+  check_conv_batch({3, 5, 3, 1, 9, 13}, 3, 3, true);
+  check_conv_batch({3, 5, 3, 2, 9, 13}, 3, 4, true);  // the first 3 images of a batch of 4
+  check_conv_batch({7, 33, 3, 1, 11, 17}, 2, 2, false);
+  // 5 images of 25 x 40: 5000 output pixels, three splits of the weight gradient's partial sums.
+  check_conv_batch({2, 3, 3, 1, 25, 40}, 5, 5, false);
 }
 
 TEST_CASE("nn: the weight gradient over several pixel splits and the accumulating forms", "[gpu][nn]") {

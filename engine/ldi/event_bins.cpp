@@ -55,18 +55,34 @@ Bounds side_bounds(const GpuEvents& events, size_t view, double t_i, Side side) 
   return bounds;
 }
 
+void record_side_counts(gpu::Commands& cmd, const GpuEvents& events, size_t view, double t_i, Side side,
+                        const Crop& crop, const gpu::Buffer& out, uint32_t slot) {
+  check_crop(crop, events.width(), events.height(), "LDI event tensor");
+  const uint64_t n = crop.pixels() * shaderio::kLdiChannels;
+  if (out.size() < (uint64_t(slot) + 1) * n * 4)
+    throw std::invalid_argument("LDI event tensor: " + out.name() + " has no image " + std::to_string(slot) +
+                                " of 32 x crop floats");
+  const Bounds bounds = side_bounds(events, view, t_i, side);
+  record_bins(cmd, events, bounds.data(), shaderio::kLdiBins, side == Side::Before, slot * shaderio::kLdiChannels, crop,
+              out);
+}
+
+void record_counts_to_float(gpu::Commands& cmd, const gpu::Buffer& out, uint64_t values) {
+  if (out.size() < values * 4) throw std::invalid_argument("LDI event tensor: " + out.name() + " is too small");
+  shaderio::LdiCountPC pc{uint32_t(values), 0, 0, 0};
+  cmd.dispatch("ldi/counts_to_float", {{shaderio::kLdiCountBindValues, out}}, pc,
+               cmd.linear_groups(gpu::Commands::div_up(values, shaderio::kLdiGroupSize)));
+}
+
 void record_side_tensor(gpu::Commands& cmd, const GpuEvents& events, size_t view, double t_i, Side side,
                         const Crop& crop, const gpu::Buffer& out) {
   check_crop(crop, events.width(), events.height(), "LDI event tensor");
   const uint64_t n = crop.pixels() * shaderio::kLdiChannels;
   if (out.size() < n * 4)
     throw std::invalid_argument("LDI event tensor: " + out.name() + " holds fewer than 32 x crop floats");
-  const Bounds bounds = side_bounds(events, view, t_i, side);
   cmd.fill(out, 0u, 0, n * 4);
-  record_bins(cmd, events, bounds.data(), shaderio::kLdiBins, side == Side::Before, 0, crop, out);
-  shaderio::LdiCountPC pc{uint32_t(n), 0, 0, 0};
-  cmd.dispatch("ldi/counts_to_float", {{shaderio::kLdiCountBindValues, out}}, pc,
-               cmd.linear_groups(gpu::Commands::div_up(n, shaderio::kLdiGroupSize)));
+  record_side_counts(cmd, events, view, t_i, side, crop, out, 0);
+  record_counts_to_float(cmd, out, n);
 }
 
 void record_crop_counts(gpu::Commands& cmd, const GpuEvents& events, size_t view, double t0, double t1,

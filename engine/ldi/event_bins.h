@@ -41,6 +41,12 @@ std::array<uint32_t, shaderio::kLdiBins + 1> side_bounds(const GpuEvents& events
 // overwrites; t_i must lie in the view's window.
 void record_side_tensor(gpu::Commands& cmd, const GpuEvents& events, size_t view, double t_i, Side side,
                         const Crop& crop, const gpu::Buffer& out);
+// The same for a batch, in two steps: the side's counts (uint) added into image `slot` of a
+// batch of such tensors in `out` (zeroed before the first slot), then, once every slot is in,
+// record_counts_to_float over the batch's first `values` values.
+void record_side_counts(gpu::Commands& cmd, const GpuEvents& events, size_t view, double t_i, Side side,
+                        const Crop& crop, const gpu::Buffer& out, uint32_t slot);
+void record_counts_to_float(gpu::Commands& cmd, const gpu::Buffer& out, uint64_t values);
 
 // Adds the positive / negative event counts of view w in [t0, t1) over the crop to plane `plane`
 // of `counts` (uint, [positive crop][negative crop] per plane): the event loss's counts of a crop.

@@ -1,5 +1,6 @@
 #include "ldi/ldi_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -19,17 +20,31 @@ const std::vector<uint32_t>& checked_widths(const std::vector<uint32_t>& widths)
   return widths;
 }
 
+// The activations (and their gradients) one chunk of calls may hold.
+constexpr uint64_t kLdiActivationBytes = 256ull << 20;
+
 }  // namespace
 
+uint32_t LdiModel::batch_for(const gpu::Context& ctx, const std::vector<uint32_t>& widths, uint32_t crop_w,
+                             uint32_t crop_h, uint32_t max_frames) {
+  const uint64_t pixels = uint64_t(crop_w) * crop_h;
+  const uint64_t by_memory =
+      kLdiActivationBytes / std::max<uint64_t>(nn::ConvStack::bytes_per_image(widths, crop_h, crop_w), 1);
+  const uint64_t by_binding =
+      ctx.caps().max_storage_buffer_range / std::max<uint64_t>(uint64_t(nn::ConvStack::widest(widths)) * pixels * 4, 1);
+  return uint32_t(std::max<uint64_t>(1, std::min<uint64_t>({2ull * max_frames, by_memory, by_binding})));
+}
+
 LdiModel::LdiModel(gpu::Context& ctx, const GpuEvents& events, const std::vector<uint32_t>& widths, uint32_t crop_w,
-                   uint32_t crop_h, uint32_t max_frames)
+                   uint32_t crop_h, uint32_t max_frames, uint32_t max_batch)
     : ctx_(ctx),
       events_(events),
       widths_(checked_widths(widths)),
       crop_w_(crop_w),
       crop_h_(crop_h),
       max_frames_(max_frames),
-      net_(ctx, widths, crop_h, crop_w, "ldi"),
+      net_(ctx, widths, crop_h, crop_w, "ldi",
+           std::min(batch_for(ctx, widths, crop_w, crop_h, max_frames), max_batch ? max_batch : ~0u)),
       sides_(ctx, 2ull * max_frames * crop_w * crop_h * 4, "ldi_sides"),
       side_grads_(ctx, 2ull * max_frames * crop_w * crop_h * 4, "ldi_side_grads"),
       integral_(ctx, uint64_t(max_frames) * crop_w * crop_h * 4, "ldi_integral") {
@@ -51,10 +66,28 @@ double LdiModel::weight(uint32_t i, Side side) const {
   return side == Side::Before ? u : 1.0 - u;
 }
 
-// One network call: the side's events into the input, the forward pass.
-void LdiModel::run_call(gpu::Commands& cmd, const Call& c) {
-  record_side_tensor(cmd, events_, view_, times_[c.frame], c.side, crop_, net_.input().buffer());
-  net_.forward(cmd);
+uint32_t LdiModel::call_of(uint32_t i, Side side) const {
+  for (uint32_t c = 0; c < calls_.size(); ++c)
+    if (calls_[c].frame == i && calls_[c].side == side) return c;
+  return shaderio::kLdiNoSide;
+}
+
+uint32_t LdiModel::chunk_size(uint32_t first) const {
+  return std::min<uint32_t>(batch(), uint32_t(calls_.size()) - first);
+}
+
+// Calls first .. first + chunk_size - 1: their event tensors into the network's input, one
+// forward over them.
+void LdiModel::run_chunk(gpu::Commands& cmd, uint32_t first) {
+  const uint32_t n = chunk_size(first);
+  const uint64_t values = uint64_t(n) * shaderio::kLdiChannels * pixels();
+  cmd.fill(net_.input().buffer(), 0u, 0, values * 4);
+  for (uint32_t j = 0; j < n; ++j) {
+    const Call& c = calls_[first + j];
+    record_side_counts(cmd, events_, view_, times_[c.frame], c.side, crop_, net_.input().buffer(), j);
+  }
+  record_counts_to_float(cmd, net_.input().buffer(), values);
+  net_.forward(cmd, "", n);
 }
 
 void LdiModel::forward(gpu::Commands& cmd, size_t view, const std::vector<double>& times, const Crop& crop,
@@ -70,23 +103,27 @@ void LdiModel::forward(gpu::Commands& cmd, size_t view, const std::vector<double
                                 " crop for a model of " + std::to_string(crop_w_) + "x" + std::to_string(crop_h_));
   if (blurry.size() < 3 * pixels() * 4) throw std::invalid_argument("LDI: the blurry crop holds fewer than 3 planes");
   view_ = view, crop_ = crop, times_ = times, blurry_ = &blurry;
+  calls_.clear();
+  for (uint32_t i = 0; i < frames(); ++i)
+    for (Side side : {Side::Before, Side::After})
+      if (weight(i, side) != 0) calls_.push_back({i, side});
   const uint64_t plane = pixels() * 4;
-  for (uint32_t i = 0; i < frames(); ++i) {
-    for (Side side : {Side::Before, Side::After}) {
-      const uint64_t at = (2 * i + (side == Side::After ? 1 : 0)) * plane;
-      if (weight(i, side) == 0) {
-        cmd.fill(sides_, 0u, at, plane);
-        continue;
-      }
-      run_call(cmd, {i, side});
-      cmd.copy(net_.output().buffer(), sides_, plane, 0, at);
-    }
-    combine(cmd, i);
+  for (uint32_t first = 0; first < calls_.size(); first += batch()) {
+    run_chunk(cmd, first);
+    cmd.copy(net_.output().buffer(), sides_, chunk_size(first) * plane, 0, first * plane);
   }
+  for (uint32_t i = 0; i < frames(); ++i) combine(cmd, i);
 }
 
 shaderio::LdiCombinePC LdiModel::combine_pc(uint32_t i, uint32_t mode, float scale) const {
-  return {uint32_t(pixels()), i, float(weight(i, Side::Before)), float(weight(i, Side::After)), mode, scale, 0, 0};
+  return {uint32_t(pixels()),
+          i,
+          float(weight(i, Side::Before)),
+          float(weight(i, Side::After)),
+          mode,
+          scale,
+          call_of(i, Side::Before),
+          call_of(i, Side::After)};
 }
 
 void LdiModel::combine(gpu::Commands& cmd, uint32_t i) {
@@ -128,18 +165,19 @@ void LdiModel::backward_from_target(gpu::Commands& cmd, const gpu::Buffer& targe
   backward_calls(cmd);
 }
 
-// Each call again (the sides' gradients recorded before): forward, its output's gradient, backward.
+// Chunk by chunk from the last, whose activations the forward left in the network; every other
+// chunk's forward runs again first. The sides' gradients were recorded before.
 void LdiModel::backward_calls(gpu::Commands& cmd) {
   const uint64_t plane = pixels() * 4;
-  bool first = true;
-  for (uint32_t i = 0; i < frames(); ++i)
-    for (Side side : {Side::Before, Side::After}) {
-      if (weight(i, side) == 0) continue;
-      run_call(cmd, {i, side});
-      cmd.copy(side_grads_, net_.output_grad().buffer(), plane, (2 * i + (side == Side::After ? 1 : 0)) * plane, 0);
-      net_.backward(cmd, false, !first);
-      first = false;
-    }
+  const uint32_t count = uint32_t(calls_.size());
+  if (count == 0) return;
+  const uint32_t last = (count - 1) / batch() * batch();
+  for (uint32_t first = last;; first -= batch()) {
+    if (first != last) run_chunk(cmd, first);
+    cmd.copy(side_grads_, net_.output_grad().buffer(), chunk_size(first) * plane, first * plane, 0);
+    net_.backward(cmd, false, first != last, "", chunk_size(first));
+    if (first == 0) break;
+  }
 }
 
 }  // namespace evflow::ldi

@@ -9,9 +9,11 @@
 // sides and every frame, and P the event tensors of engine/ldi/event_bins.h. A side with weight 0
 // (t_i at an end of the exposure) is not run.
 //
-// The network owns activations for one call, so the backward runs each call's forward again
-// before its backward (2F - 2 calls of F frames each way); the weight gradients of all calls
-// are summed (Conv2d's accumulate_params).
+// The calls of a forward (2F - 2 for F frames, fewer when a frame lies at an end of the exposure)
+// run as one batch of the network, one dispatch per layer, when the batch's activations fit
+// (batch_for()); otherwise in chunks of that many calls. The backward uses the activations the
+// forward left (the last chunk's) and runs every other chunk's forward again before its backward;
+// the weight gradients of all calls are summed (Conv2d's accumulate_params).
 #pragma once
 #include <cstdint>
 #include <string>
@@ -33,9 +35,17 @@ float neutral_bias();
 class LdiModel {
  public:
   // widths: 32, the hidden layers' widths, 1. crop_w x crop_h: the size of every crop it runs on;
-  // max_frames: the most frame times per forward.
+  // max_frames: the most frame times per forward. max_batch: the most calls per chunk (0: as
+  // many as batch_for allows).
   LdiModel(gpu::Context& ctx, const GpuEvents& events, const std::vector<uint32_t>& widths, uint32_t crop_w,
-           uint32_t crop_h, uint32_t max_frames);
+           uint32_t crop_h, uint32_t max_frames, uint32_t max_batch = 0);
+
+  // Calls per chunk for a network of these widths on crops of crop_w x crop_h: all 2 max_frames
+  // calls where their activations fit kLdiActivationBytes and the widest tensor one storage
+  // binding of the device, else as many as do (at least 1).
+  static uint32_t batch_for(const gpu::Context& ctx, const std::vector<uint32_t>& widths, uint32_t crop_w,
+                            uint32_t crop_h, uint32_t max_frames);
+  uint32_t batch() const { return net_.batch(); }
 
   uint32_t max_frames() const { return max_frames_; }
   uint32_t frames() const { return uint32_t(times_.size()); }  // of the last forward
@@ -76,21 +86,24 @@ class LdiModel {
   shaderio::LdiCombinePC combine_pc(uint32_t i, uint32_t mode, float scale) const;
   void combine(gpu::Commands& cmd, uint32_t i);
   void combine_bwd(gpu::Commands& cmd, uint32_t i, uint32_t mode, const gpu::Buffer& grads, float scale);
-  void run_call(gpu::Commands& cmd, const Call& c);
+  uint32_t chunk_size(uint32_t first) const;
+  void run_chunk(gpu::Commands& cmd, uint32_t first);
   void backward_calls(gpu::Commands& cmd);
   double weight(uint32_t i, Side side) const;
+  uint32_t call_of(uint32_t i, Side side) const;  // its plane of sides_, or kLdiNoSide
 
   gpu::Context& ctx_;
   const GpuEvents& events_;
   std::vector<uint32_t> widths_;
   uint32_t crop_w_, crop_h_, max_frames_;
   nn::ConvStack net_;
-  gpu::Buffer sides_, side_grads_, integral_;
+  gpu::Buffer sides_, side_grads_, integral_;  // sides: one plane per call
   std::vector<gpu::Buffer> frames_buf_;
   // The last forward's view, crop, times and blurry crop.
   size_t view_ = 0;
   Crop crop_;
   std::vector<double> times_;
+  std::vector<Call> calls_;  // the sides of positive weight, frame by frame
   const gpu::Buffer* blurry_ = nullptr;
 };
 

@@ -58,10 +58,31 @@ Shape Conv2d::output_shape(const Shape& in) const {
   if (in.c != spec_.in_c)
     throw std::invalid_argument("conv " + name_ + ": input has " + std::to_string(in.c) + " channels, expected " +
                                 std::to_string(spec_.in_c));
-  return {spec_.out_c, (in.h + spec_.stride - 1) / spec_.stride, (in.w + spec_.stride - 1) / spec_.stride};
+  return {spec_.out_c, (in.h + spec_.stride - 1) / spec_.stride, (in.w + spec_.stride - 1) / spec_.stride, in.n};
 }
 
-uint64_t Conv2d::macs(const Shape& in) const { return output_shape(in).pixels() * weight_count(); }
+uint64_t Conv2d::macs(const Shape& in) const { return output_shape(in).count() / spec_.out_c * weight_count(); }
+
+Shape Conv2d::run_shape(const Tensor& x, uint32_t images) const {
+  const Shape& s = x.shape();
+  if (images > s.n)
+    throw std::invalid_argument("conv " + name_ + ": " + std::to_string(images) + " images asked of " + x.name() +
+                                " (" + s.str() + ")");
+  return s.batch(images ? images : s.n);
+}
+
+// The partial sums' bytes for a backward over `in`, and the output pixels per split.
+uint64_t Conv2d::partial_bytes(const Shape& in, uint32_t* pixels_per_split) const {
+  const Shape out = output_shape(in);
+  const uint64_t per_split = uint64_t(spec_.out_c) * (spec_.in_c * spec_.ksize * spec_.ksize + 1) * 4;
+  const uint64_t pixels = out.count() / out.c;
+  uint32_t pps = kPixelsPerSplit;
+  while (per_split * gpu::Commands::div_up(pixels, pps) > ctx_.caps().max_storage_buffer_range) pps *= 2;
+  if (pixels_per_split) *pixels_per_split = pps;
+  return per_split * gpu::Commands::div_up(pixels, pps);
+}
+
+void Conv2d::reserve(const Shape& in) { partial_.ensure(partial_bytes(in, nullptr)); }
 
 void Conv2d::init_he(uint64_t seed) {
   set_parameters(he_normal(weight_count(), spec_.in_c * spec_.ksize * spec_.ksize, seed),
@@ -77,11 +98,13 @@ void Conv2d::set_parameters(const std::vector<float>& weight, const std::vector<
   bias_.write(bias);
 }
 
-void Conv2d::forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y) const {
-  const Shape out = output_shape(x.shape());
-  require_shape(y, out, "conv " + name_ + " output");
+void Conv2d::forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t images) const {
+  const Shape in = run_shape(x, images), out = output_shape(in);
+  if (y.shape().image() != out.image() || y.shape().n < in.n)
+    throw std::invalid_argument("conv " + name_ + " output: " + y.name() + " is " + y.shape().str() + ", expected " +
+                                out.str());
   const uint32_t taps = spec_.ksize * spec_.ksize;
-  const ConvPC pc = conv_pc(spec_, x.shape(), out, spec_.out_c, uint32_t(out.pixels()), spec_.in_c * taps);
+  ConvPC pc = conv_pc(spec_, in, out, spec_.out_c, uint32_t(out.count() / out.c), spec_.in_c * taps);
   cmd.dispatch(
       kernel("conv_fwd", pc.gemm_m),
       {{kConvFwdBindX, x.buffer()}, {kConvFwdBindW, weight_}, {kConvFwdBindBias, bias_}, {kConvFwdBindY, y.buffer()}},
@@ -89,46 +112,47 @@ void Conv2d::forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y) const
 }
 
 void Conv2d::backward(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, const Tensor* dx, bool accumulate_input,
-                      bool accumulate_params) {
-  const Shape out = output_shape(x.shape());
-  require_shape(dy, out, "conv " + name_ + " output gradient");
+                      bool accumulate_params, uint32_t images) {
+  const Shape in = run_shape(x, images), out = output_shape(in);
+  if (dy.shape().image() != out.image() || dy.shape().n < in.n)
+    throw std::invalid_argument("conv " + name_ + " output gradient: " + dy.name() + " is " + dy.shape().str() +
+                                ", expected " + out.str());
   if (dx) {
-    require_shape(*dx, x.shape(), "conv " + name_ + " input gradient");
+    if (dx->shape().image() != in.image() || dx->shape().n < in.n)
+      throw std::invalid_argument("conv " + name_ + " input gradient: " + dx->name() + " is " + dx->shape().str() +
+                                  ", expected " + in.str());
     const uint32_t taps = spec_.ksize * spec_.ksize;
-    ConvPC pc = conv_pc(spec_, x.shape(), out, spec_.in_c, uint32_t(x.shape().pixels()), spec_.out_c * taps);
+    ConvPC pc = conv_pc(spec_, in, out, spec_.in_c, uint32_t(in.count() / in.c), spec_.out_c * taps);
     pc.accumulate = accumulate_input ? 1u : 0u;
     cmd.dispatch(
         kernel("conv_bwd_input", pc.gemm_m),
         {{kConvBwdInputBindDy, dy.buffer()}, {kConvBwdInputBindW, weight_}, {kConvBwdInputBindDx, dx->buffer()}}, pc,
         tile_groups(cmd, pc));
   }
-  backward_weights(cmd, x, dy, accumulate_params);
+  backward_weights(cmd, in, x, dy, accumulate_params);
 }
 
 // Partial sums per chunk of output pixels (m = out_c, n = weights per output channel + the bias
-// column, k = output pixels), then their sums in split order.
-void Conv2d::backward_weights(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, bool accumulate) {
-  const Shape out = dy.shape();
-  const uint32_t n = spec_.in_c * spec_.ksize * spec_.ksize + 1, pixels = uint32_t(out.pixels());
-  ConvPC pc = conv_pc(spec_, x.shape(), out, spec_.out_c, n, pixels);
-  const uint64_t per_split = uint64_t(pc.gemm_m) * n * 4;
-  uint32_t pps = kPixelsPerSplit;
-  while (per_split * gpu::Commands::div_up(pixels, pps) > ctx_.caps().max_storage_buffer_range) pps *= 2;
-  pc.pixels_per_split = pps;
-  pc.splits = gpu::Commands::div_up(pixels, pps);
+// column, k = output pixels of every image), then their sums in split order.
+void Conv2d::backward_weights(gpu::Commands& cmd, const Shape& in, const Tensor& x, const Tensor& dy, bool accumulate) {
+  const Shape out = output_shape(in);
+  const uint32_t n = spec_.in_c * spec_.ksize * spec_.ksize + 1, pixels = uint32_t(out.count() / out.c);
+  ConvPC pc = conv_pc(spec_, in, out, spec_.out_c, n, pixels);
+  const uint64_t bytes = partial_bytes(in, &pc.pixels_per_split);
+  pc.splits = gpu::Commands::div_up(pixels, pc.pixels_per_split);
   if (pc.splits > ctx_.caps().max_workgroup_count[2])
     throw gpu::Error("conv " + name_ + ": " + std::to_string(pc.splits) + " pixel splits exceed the device grid");
-  partial_.ensure(per_split * pc.splits);
+  partial_.ensure(bytes);
   gpu::Groups g = tile_groups(cmd, pc);
   g.z = pc.splits;
   cmd.dispatch(kernel("conv_bwd_weight", pc.gemm_m),
                {{kConvBwdWeightBindX, x.buffer()},
                 {kConvBwdWeightBindDy, dy.buffer()},
-                {kConvBwdWeightBindPartial, gpu::BufferRef(partial_, 0, per_split * pc.splits)}},
+                {kConvBwdWeightBindPartial, gpu::BufferRef(partial_, 0, bytes)}},
                pc, g);
   pc.accumulate = accumulate ? 1u : 0u;
   cmd.dispatch("nn/conv_reduce",
-               {{kConvReduceBindPartial, gpu::BufferRef(partial_, 0, per_split * pc.splits)},
+               {{kConvReduceBindPartial, gpu::BufferRef(partial_, 0, bytes)},
                 {kConvReduceBindDw, weight_grad_},
                 {kConvReduceBindDb, bias_grad_}},
                pc, cmd.linear_groups(gpu::Commands::div_up(uint64_t(pc.gemm_m) * n, kReduceGroupSize)));

@@ -28,10 +28,13 @@ class Conv2d {
   const ConvSpec& spec() const { return spec_; }
   const std::string& name() const { return name_; }
   uint64_t weight_count() const { return uint64_t(spec_.out_c) * spec_.in_c * spec_.ksize * spec_.ksize; }
-  // The output's shape for an input of `in` (throws when in.c differs from in_c).
+  // The output's shape for an input of `in`, as many images (throws when in.c differs from in_c).
   Shape output_shape(const Shape& in) const;
   // Multiply-adds of one forward pass over an input of `in` (the backward costs twice this).
   uint64_t macs(const Shape& in) const;
+  // Sizes the weight gradient's partial sums for inputs up to `in` (images included), so that
+  // backward() over such inputs never reallocates inside a recorded batch.
+  void reserve(const Shape& in);
 
   // He initialisation of the weights (fan_in = in_c ksize^2), zero bias.
   void init_he(uint64_t seed);
@@ -39,14 +42,15 @@ class Conv2d {
   std::vector<float> weight_values() const { return weight_.read<float>(weight_count()); }
   std::vector<float> bias_values() const { return bias_.read<float>(spec_.out_c); }
 
-  // y = conv(x) + bias.
-  void forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y) const;
+  // y = conv(x) + bias, image by image over the first `images` images of x and y (0: all of x's).
+  void forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t images = 0) const;
   // From dy (the gradient at y): dx (skipped when null; added into with accumulate_input), and
-  // the weight and bias gradients (added into with accumulate_params, e.g. for weights shared
-  // by two calls). The partial sums' buffer grows to the largest input seen: record a backward
-  // over a larger input than before only after the batch that used the smaller one was submitted.
+  // the weight and bias gradients summed over the images (added into with accumulate_params,
+  // e.g. for weights shared by two calls). The partial sums' buffer grows to the largest input
+  // seen: reserve() it, or record a backward over a larger input than before only after the
+  // batch that used the smaller one was submitted.
   void backward(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, const Tensor* dx, bool accumulate_input = false,
-                bool accumulate_params = false);
+                bool accumulate_params = false, uint32_t images = 0);
 
   const gpu::Buffer& weight() const { return weight_; }
   const gpu::Buffer& bias() const { return bias_; }
@@ -56,7 +60,10 @@ class Conv2d {
   void add_to(Adam& adam, float lr) const;
 
  private:
-  void backward_weights(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, bool accumulate);
+  void backward_weights(gpu::Commands& cmd, const Shape& in, const Tensor& x, const Tensor& dy, bool accumulate);
+  // The images a pass runs over x (`images`, 0 for all), checked against x's batch.
+  Shape run_shape(const Tensor& x, uint32_t images) const;
+  uint64_t partial_bytes(const Shape& in, uint32_t* pixels_per_split) const;
   gpu::Context& ctx_;
   ConvSpec spec_;
   std::string name_;

@@ -10,50 +10,61 @@ using namespace shaderio;
 
 namespace {
 
-void elementwise(gpu::Commands& cmd, const char* kernel, const Tensor& in, const Tensor& out) {
+// The values of the first `images` images of t (0: all of them).
+uint32_t values(const Tensor& t, uint32_t images, const char* kernel) {
+  if (images > t.shape().n)
+    throw std::invalid_argument(std::string(kernel) + ": " + std::to_string(images) + " images asked of " + t.name() +
+                                " (" + t.shape().str() + ")");
+  return uint32_t(images ? t.shape().batch(images).count() : t.count());
+}
+
+void elementwise(gpu::Commands& cmd, const char* kernel, const Tensor& in, const Tensor& out, uint32_t images) {
   PointwisePC pc{};
-  pc.count = uint32_t(out.count());
+  pc.count = values(out, images, kernel);
   cmd.dispatch(kernel, {{kActFwdBindX, in.buffer()}, {kActFwdBindY, out.buffer()}}, pc,
                cmd.linear_groups(gpu::Commands::div_up(pc.count, kNnGroupSize)));
 }
 
 void elementwise_backward(gpu::Commands& cmd, const char* kernel, const Tensor& y, const Tensor& dy, const Tensor& dx,
-                          bool accumulate) {
+                          bool accumulate, uint32_t images) {
   require_shape(dy, y.shape(), std::string(kernel) + " output gradient");
   require_shape(dx, y.shape(), std::string(kernel) + " input gradient");
   PointwisePC pc{};
-  pc.count = uint32_t(y.count());
+  pc.count = values(y, images, kernel);
   pc.accumulate = accumulate ? 1u : 0u;
   cmd.dispatch(kernel, {{kActBwdBindY, y.buffer()}, {kActBwdBindDy, dy.buffer()}, {kActBwdBindDx, dx.buffer()}}, pc,
                cmd.linear_groups(gpu::Commands::div_up(pc.count, kNnGroupSize)));
 }
 
 PointwisePC upsample_pc(const Shape& low, const Shape& high) {
-  if (high.c != low.c || high.h > 2 * low.h || high.w > 2 * low.w || high.h + 1 < 2 * low.h || high.w + 1 < 2 * low.w)
+  if (high.c != low.c || high.n != low.n || high.h > 2 * low.h || high.w > 2 * low.w || high.h + 1 < 2 * low.h ||
+      high.w + 1 < 2 * low.w)
     throw std::invalid_argument("upsample: " + low.str() + " cannot be up-sampled x2 to " + high.str());
   PointwisePC pc{};
-  pc.channels = low.c, pc.in_h = low.h, pc.in_w = low.w, pc.out_h = high.h, pc.out_w = high.w;
+  pc.channels = low.c * low.n, pc.in_h = low.h, pc.in_w = low.w, pc.out_h = high.h, pc.out_w = high.w;
   return pc;
 }
 
 }  // namespace
 
-void relu_forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y) {
+void relu_forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t images) {
   require_shape(y, x.shape(), "relu output");
-  elementwise(cmd, "nn/relu", x, y);
+  elementwise(cmd, "nn/relu", x, y, images);
 }
 
-void relu_backward(gpu::Commands& cmd, const Tensor& y, const Tensor& dy, const Tensor& dx, bool accumulate) {
-  elementwise_backward(cmd, "nn/relu_bwd", y, dy, dx, accumulate);
+void relu_backward(gpu::Commands& cmd, const Tensor& y, const Tensor& dy, const Tensor& dx, bool accumulate,
+                   uint32_t images) {
+  elementwise_backward(cmd, "nn/relu_bwd", y, dy, dx, accumulate, images);
 }
 
-void sigmoid_forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y) {
+void sigmoid_forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t images) {
   require_shape(y, x.shape(), "sigmoid output");
-  elementwise(cmd, "nn/sigmoid", x, y);
+  elementwise(cmd, "nn/sigmoid", x, y, images);
 }
 
-void sigmoid_backward(gpu::Commands& cmd, const Tensor& y, const Tensor& dy, const Tensor& dx, bool accumulate) {
-  elementwise_backward(cmd, "nn/sigmoid_bwd", y, dy, dx, accumulate);
+void sigmoid_backward(gpu::Commands& cmd, const Tensor& y, const Tensor& dy, const Tensor& dx, bool accumulate,
+                      uint32_t images) {
+  elementwise_backward(cmd, "nn/sigmoid_bwd", y, dy, dx, accumulate, images);
 }
 
 void upsample_forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y) {
@@ -73,6 +84,7 @@ void upsample_backward(gpu::Commands& cmd, const Tensor& dy, const Tensor& dx, b
 
 Shape concat_shape(const Shape& a, const Shape& b) {
   if (a.h != b.h || a.w != b.w) throw std::invalid_argument("concat: sizes differ, " + a.str() + " and " + b.str());
+  if (a.n != 1 || b.n != 1) throw std::invalid_argument("concat: batches of images are not supported, " + a.str());
   return {a.c + b.c, a.h, a.w};
 }
 

@@ -1,19 +1,22 @@
 // The layers without weights, recorded into a command batch: ReLU, sigmoid, x2 nearest
 // up-sampling (shaders/nn) and channel concatenation (buffer copies). Backward functions write
-// the input gradient, or add into it with `accumulate` (for a tensor used twice).
+// the input gradient, or add into it with `accumulate` (for a tensor used twice). `images`: run
+// over the first images of a batch only (0: all the tensors hold).
 #pragma once
 #include "gpu/commands.h"
 #include "nn/tensor.h"
 
 namespace evflow::nn {
 
-void relu_forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y);
+void relu_forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t images = 0);
 // From the forward's output y: dx = dy where y > 0, else 0.
-void relu_backward(gpu::Commands& cmd, const Tensor& y, const Tensor& dy, const Tensor& dx, bool accumulate = false);
+void relu_backward(gpu::Commands& cmd, const Tensor& y, const Tensor& dy, const Tensor& dx, bool accumulate = false,
+                   uint32_t images = 0);
 
-void sigmoid_forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y);
+void sigmoid_forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t images = 0);
 // From the forward's output y: dx = dy y (1 - y).
-void sigmoid_backward(gpu::Commands& cmd, const Tensor& y, const Tensor& dy, const Tensor& dx, bool accumulate = false);
+void sigmoid_backward(gpu::Commands& cmd, const Tensor& y, const Tensor& dy, const Tensor& dx, bool accumulate = false,
+                      uint32_t images = 0);
 
 // y(c, v, u) = x(c, v / 2, u / 2) for y of x's channels and 2h or 2h - 1 rows, 2w or 2w - 1
 // columns (so that an odd size down-sampled by a stride-2 convolution comes back to itself).

@@ -5,7 +5,10 @@
 
 namespace evflow::nn {
 
-std::string Shape::str() const { return std::to_string(c) + "x" + std::to_string(h) + "x" + std::to_string(w); }
+std::string Shape::str() const {
+  const std::string chw = std::to_string(c) + "x" + std::to_string(h) + "x" + std::to_string(w);
+  return n == 1 ? chw : std::to_string(n) + "x" + chw;
+}
 
 Tensor::Tensor(gpu::Context& ctx, Shape shape, std::string name) : shape_(shape) {
   ctx.check_binding_size(shape.count() * 4, "tensor " + name + " (" + shape.str() + ")");

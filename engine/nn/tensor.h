@@ -1,5 +1,5 @@
-// A tensor on the device: a float32 storage buffer and its shape, NCHW with N = 1 (element
-// (c, y, x) at (c * h + y) * w + x).
+// A tensor on the device: a float32 storage buffer and its shape, NCHW: channel k at (x, y) of
+// image b of a batch of n images of c channels is element ((b * c + k) * h + y) * w + x.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -11,11 +11,14 @@ namespace evflow::nn {
 
 struct Shape {
   uint32_t c = 0, h = 0, w = 0;
-  uint64_t count() const { return uint64_t(c) * h * w; }
-  uint64_t pixels() const { return uint64_t(h) * w; }
-  bool operator==(const Shape& o) const { return c == o.c && h == o.h && w == o.w; }
+  uint32_t n = 1;  // images in the batch
+  uint64_t count() const { return uint64_t(n) * c * h * w; }
+  uint64_t pixels() const { return uint64_t(h) * w; }  // of one image
+  Shape image() const { return {c, h, w, 1}; }
+  Shape batch(uint32_t images) const { return {c, h, w, images}; }
+  bool operator==(const Shape& o) const { return c == o.c && h == o.h && w == o.w && n == o.n; }
   bool operator!=(const Shape& o) const { return !(*this == o); }
-  std::string str() const;  // "CxHxW"
+  std::string str() const;  // "CxHxW", "NxCxHxW" for a batch
 };
 
 class Tensor {

@@ -12,10 +12,12 @@ layout(std430, binding = kLdiCombineBindFrames) writeonly buffer Frames { float 
 layout(push_constant) uniform PC { LdiCombinePC pc; };
 #include "ldi/ldi_math.glsl"
 
+float ldi_side(uint plane, uint n, uint p) { return plane == kLdiNoSide ? 0.0 : sides[plane * n + p]; }
+
 void main() {
   uint p = evf_linear_invocation(kLdiGroupSize), n = pc.pixels;
   if (p >= n) return;
-  float e = ldi_integral(sides[2u * pc.frame * n + p], sides[(2u * pc.frame + 1u) * n + p]);
+  float e = ldi_integral(ldi_side(pc.before, n, p), ldi_side(pc.after, n, p));
   integral[pc.frame * n + p] = e;
   for (uint c = 0u; c < 3u; ++c) frames[c * n + p] = ldi_frame(blurry[c * n + p], e);
 }

@@ -13,10 +13,12 @@ layout(std430, binding = kLdiCombineBwdBindSideGrads) writeonly buffer SideGrads
 layout(push_constant) uniform PC { LdiCombinePC pc; };
 #include "ldi/ldi_math.glsl"
 
+float ldi_side(uint plane, uint n, uint p) { return plane == kLdiNoSide ? 0.0 : sides[plane * n + p]; }
+
 void main() {
   uint p = evf_linear_invocation(kLdiGroupSize), n = pc.pixels;
   if (p >= n) return;
-  float a = sides[2u * pc.frame * n + p], b = sides[(2u * pc.frame + 1u) * n + p];
+  float a = ldi_side(pc.before, n, p), b = ldi_side(pc.after, n, p);
   float e = ldi_integral(a, b), g_e = 0.0;
   if (pc.mode == kLdiFromTarget) {
     g_e = ldi_regression_bwd(e, grads[pc.frame * n + p]);
@@ -24,6 +26,6 @@ void main() {
     for (uint c = 0u; c < 3u; ++c) g_e += ldi_frame_bwd(blurry[c * n + p], e, grads[c * n + p]);
   }
   float g_x = pc.scale * ldi_integral_bwd(a, b, g_e);
-  side_grads[2u * pc.frame * n + p] = pc.w1 * g_x;
-  side_grads[(2u * pc.frame + 1u) * n + p] = pc.w2 * g_x;
+  if (pc.before != kLdiNoSide) side_grads[pc.before * n + p] = pc.w1 * g_x;
+  if (pc.after != kLdiNoSide) side_grads[pc.after * n + p] = pc.w2 * g_x;
 }

@@ -53,16 +53,18 @@ struct LdiCropPC {
 };
 
 // The double integral of frame i (ldi_math.glsl), per crop pixel p, from the two sides' network
-// outputs a = LDI(P(E[t_i, t_0])) and b = LDI(P(E[t_i, t_2N])) (planes 2 i and 2 i + 1 of `sides`):
+// outputs a = LDI(P(E[t_i, t_0])) and b = LDI(P(E[t_i, t_2N])) (planes `before` and `after` of
+// `sides`, one plane per network call; kLdiNoSide for a side that was not run, whose weight is 0):
 //   x = w1 a + w2 b,  E = softplus(x) + kLdiFloor,  C[c] = B[c] / E  (B: the blurry crop, linear).
 // ldi/combine writes E (plane i of `integral`) and C (frame i's own 3-plane buffer).
-// ldi/combine_bwd writes d/da and d/db (planes 2 i, 2 i + 1 of `side_grads`) from `grads`:
+// ldi/combine_bwd writes d/da and d/db (planes `before`, `after` of `side_grads`) from `grads`:
 //   mode kLdiFromFrames: d/dC (frame i's own 3-plane buffer), scaled by `scale`;
 //   mode kLdiFromTarget: the regression (log E - log D)^2 to the target D (plane i), scaled by
 //                        `scale` (1 / the number of regressed values).
 EVF_CONST(float, kLdiFloor, 1e-3)
 EVF_CONST(uint, kLdiFromFrames, 0u)
 EVF_CONST(uint, kLdiFromTarget, 1u)
+EVF_CONST(uint, kLdiNoSide, 0xffffffffu)
 struct LdiCombinePC {
   uint pixels;  // crop_w * crop_h
   uint frame;   // i
@@ -70,7 +72,8 @@ struct LdiCombinePC {
   float w2;
   uint mode;
   float scale;
-  uint pad0, pad1;
+  uint before;  // planes of the sides (network calls), or kLdiNoSide
+  uint after;
 };
 
 // ldi/mean_values: values[dst] = scale * sum over k < count of src[first + k * stride] (the mean

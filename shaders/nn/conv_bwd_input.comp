@@ -1,6 +1,6 @@
 #version 450
-// Convolution backward to the input (nn_layout.h): dx[ci][i] = sum over (co, tap) of
-// W[co][ci][tap] dy[co][the output pixel whose tap reads i], as the tiled implicit GEMM; written,
+// Convolution backward to the input (nn_layout.h): dx[b][ci][i] = sum over (co, tap) of
+// W[co][ci][tap] dy[b][co][the output pixel whose tap reads i], as the tiled implicit GEMM; written,
 // or added with pc.accumulate.
 #extension GL_GOOGLE_include_directive : require
 #include "nn/nn_layout.h"
@@ -24,16 +24,17 @@ vec4 gemm_load_b(uint k, uint n) {
   vec4 v = vec4(0.0);
   if (k >= pc.gemm_k) return v;
   ConvTap t = conv_tap(k);
-  uvec2 i = conv_pixel(n, pc.in_w), o;
+  uvec3 i = conv_pixel(n, pc.in_w, pc.in_h);
+  uvec2 o;
   for (uint j = 0u; j < 4u; ++j) {
-    if (n + j < pc.gemm_n && conv_output_of(ivec2(i), t, o)) v[j] = dy[(t.c * pc.out_h + o.y) * pc.out_w + o.x];
-    i = conv_pixel_next(i, pc.in_w);
+    if (n + j < pc.gemm_n && conv_output_of(ivec2(i.xy), t, o)) v[j] = dy[conv_element(t.c, o, i.z, pc.out_c, pc.out_h, pc.out_w)];
+    i = conv_pixel_next(i, pc.in_w, pc.in_h);
   }
   return v;
 }
 
 void gemm_store(uint m, uint n, float c) {
-  uint e = m * pc.gemm_n + n;
+  uint e = conv_plane_element(m, n, pc.in_c, pc.in_h * pc.in_w);
   dx[e] = pc.accumulate != 0u ? dx[e] + c : c;
 }
 

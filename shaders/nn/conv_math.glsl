@@ -25,12 +25,19 @@ ConvTap conv_tap_next(ConvTap t) {
   return t;
 }
 
-// Pixel n of a w-wide image as (x, y).
-uvec2 conv_pixel(uint n, uint w) {
-  uint y = n / w;
-  return uvec2(n - y * w, y);
+// Pixel n of a batch of w x h images as (x, y, image).
+uvec3 conv_pixel(uint n, uint w, uint h) {
+  uint hw = w * h, b = n / hw, r = n - b * hw, y = r / w;
+  return uvec3(r - y * w, y, b);
 }
-uvec2 conv_pixel_next(uvec2 p, uint w) { return p.x + 1u == w ? uvec2(0u, p.y + 1u) : uvec2(p.x + 1u, p.y); }
+uvec3 conv_pixel_next(uvec3 p, uint w, uint h) {
+  if (p.x + 1u < w) return uvec3(p.x + 1u, p.y, p.z);
+  return p.y + 1u < h ? uvec3(0u, p.y + 1u, p.z) : uvec3(0u, 0u, p.z + 1u);
+}
+// The element of channel c at pixel p (x, y, image) of a batch of c_count-channel w x h images.
+uint conv_element(uint c, uvec2 xy, uint b, uint c_count, uint h, uint w) { return ((b * c_count + c) * h + xy.y) * w + xy.x; }
+// The element of channel c at the n-th batch pixel (conv_pixel's n), images of hw pixels.
+uint conv_plane_element(uint c, uint n, uint c_count, uint hw) { return n + ((n / hw) * (c_count - 1u) + c) * hw; }
 
 // The input pixel that tap t of output pixel o reads (may lie outside the input).
 ivec2 conv_input_pixel(uvec2 o, ConvTap t) { return ivec2(o * pc.stride) + t.d; }

@@ -1,12 +1,15 @@
 // Neural layers: push constants, tile sizes and bindings shared by engine/nn (C++) and
-// shaders/nn (GLSL). Tensors are NCHW float32 with N = 1: element (c, y, x) at (c * H + y) * W + x.
+// shaders/nn (GLSL). Tensors are NCHW float32: element (b, c, y, x) of a batch of N images at
+// ((b * C + c) * H + y) * W + x.
 #ifndef EVF_NN_LAYOUT_H
 #define EVF_NN_LAYOUT_H
 #include "common/shared_prelude.h"
 EVF_NAMESPACE_BEGIN
 
 // Convolutions as one implicit GEMM, C[m][n] = sum_k A(m, k) B(k, n) (nn/gemm.glsl), in three
-// forms over a KxK kernel (K = 1 or 3), padding K / 2, stride 1 or 2, weights W[co][ci][ky][kx]:
+// forms over a KxK kernel (K = 1 or 3), padding K / 2, stride 1 or 2, weights W[co][ci][ky][kx],
+// over a batch of images ("pixel" below runs over every image's pixels, image after image, so n
+// and k count batch x pixels; padding is per image):
 //   forward      (nn/conv_fwd):        m = co, n = output pixel, k = (ci, ky, kx);
 //                                      A = W, B = input at the tap (0 outside), C + bias[co] -> y
 //   input grad   (nn/conv_bwd_input):  m = ci, n = input pixel, k = (co, ky, kx);
