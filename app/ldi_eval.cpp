@@ -29,7 +29,7 @@ nlohmann::json score_ldi_frames(gpu::Context& ctx, const RunFolder& run, const i
   for (uint32_t vi = 0; vi < data.train.size(); ++vi) {
     const io::View& v = data.train[vi];
     if (!v.sharp_mid) continue;
-    const std::vector<float> frame = ldi.view_frames(cmd, vi).at(mid);  // planar linear RGB
+    const std::vector<float> frame = ldi.view_frames(cmd, vi, {uint32_t(mid)}).at(0);  // planar linear RGB
     const metrics::Image8 ldi8 = metrics::encode_linear(frame, v.camera.width, v.camera.height, 3);
     const metrics::Image8 gt8 =
         metrics::encode_linear(io::planar_rgb(*v.sharp_mid), v.sharp_mid->width, v.sharp_mid->height, 3);

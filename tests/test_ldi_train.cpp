@@ -162,6 +162,15 @@ TEST_CASE("LDI branch: a short run with every term changes the network and the s
   CHECK(t.ldi()->model().network().layer(0).weight_values() != w0);
   CHECK(t.cloud().sh != c0.sh);
 
+  // The whole-view frames: a subset, in the order asked, equals those frames of the full set.
+  gpu::Commands cmd(ctx);
+  const auto all = t.ldi()->view_frames(cmd, 1), some = t.ldi()->view_frames(cmd, 1, {2, 0});
+  REQUIRE(all.size() == cfg.virtual_frames * 2 + 1);
+  REQUIRE(some.size() == 2);
+  CHECK(some[0] == all[2]);
+  CHECK(some[1] == all[0]);
+  CHECK(all[2] != all[0]);
+
   // The checkpoint's LDI state continues the run bit-identically.
   const Checkpoint ck = t.checkpoint();
   REQUIRE(ck.ldi);

@@ -151,7 +151,8 @@ std::vector<double> LdiBranch::frame_times(uint32_t view) const {
   return times;
 }
 
-std::vector<std::vector<float>> LdiBranch::view_frames(gpu::Commands& cmd, uint32_t view) {
+std::vector<std::vector<float>> LdiBranch::view_frames(gpu::Commands& cmd, uint32_t view,
+                                                       const std::vector<uint32_t>& only) {
   const uint32_t W = events_->width(), H = events_->height();
   const auto& cam = data_.train.at(view).camera;
   if (cam.width != W || cam.height != H)
@@ -162,7 +163,12 @@ std::vector<std::vector<float>> LdiBranch::view_frames(gpu::Commands& cmd, uint3
         std::make_unique<ldi::FullViewFrames>(ctx_, *events_, cfg_.ldi_widths, ldi::view_tile_side(W, kViewTile, reach),
                                               ldi::view_tile_side(H, kViewTile, reach), model_->max_frames());
   }
-  const std::vector<double> times = frame_times(view);
+  std::vector<double> times = frame_times(view);
+  if (!only.empty()) {
+    std::vector<double> picked;
+    for (uint32_t i : only) picked.push_back(times.at(i));
+    times = picked;
+  }
   full_view_->forward(cmd, *model_, view, times, blurry_[view]);
   cmd.submit();
   std::vector<std::vector<float>> frames;

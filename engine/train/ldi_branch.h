@@ -59,8 +59,9 @@ class LdiBranch {
   // The LDI frames at the virtual frames' times over the whole of view `view` with the current
   // weights (for display: a tile-sized second model, made at the first call, runs them; the
   // training model and its crop are untouched). Records and submits on `cmd`; per frame planar
-  // linear RGB, 3 x H x W.
-  std::vector<std::vector<float>> view_frames(gpu::Commands& cmd, uint32_t view);
+  // linear RGB, 3 x H x W. `only`: the virtual frames to compute, in the order given (empty: all).
+  std::vector<std::vector<float>> view_frames(gpu::Commands& cmd, uint32_t view,
+                                              const std::vector<uint32_t>& only = {});
   // The frames' times of view `view`: t_0 + u (t_2N - t_0) for each virtual frame's u.
   std::vector<double> frame_times(uint32_t view) const;
   const ldi::Crop& crop() const { return crop_; }  // of the last record
