@@ -102,13 +102,13 @@ void print_json(const std::vector<uint64_t>& macs, const Timing& timing, const s
   const std::vector<Figures> rows = layer_figures(macs, timing, t);
   for (size_t i = 0; i < rows.size(); ++i)
     std::printf(
-        "%s{\"macs\": %llu, \"forward_ms\": %.3f, \"forward_gflops\": %.3f, \"backward_ms\": %.3f, "
-        "\"backward_gflops\": %.3f}",
+        "%s{\"macs\": %llu, \"forward_ms\": %.3f, \"forward_gflops\": %.6g, \"backward_ms\": %.3f, "
+        "\"backward_gflops\": %.6g}",
         i ? ", " : "", (unsigned long long)macs[i], rows[i].fwd_ms, rows[i].fwd_gflops(), rows[i].bwd_ms,
         rows[i].bwd_gflops());
   std::printf(
-      "], \"forward_ms\": %.3f, \"forward_gflops\": %.3f, \"backward_ms\": %.3f, \"backward_gflops\": %.3f, "
-      "\"gflops\": %.3f, \"cpu_seconds\": %.3f, \"gflop_per_cpu_second\": %.3f}\n",
+      "], \"forward_ms\": %.3f, \"forward_gflops\": %.6g, \"backward_ms\": %.3f, \"backward_gflops\": %.6g, "
+      "\"gflops\": %.6g, \"cpu_seconds\": %.3f, \"gflop_per_cpu_second\": %.6g}\n",
       t.fwd_ms, t.fwd_gflops(), t.bwd_ms, t.bwd_gflops(), t.gflops(), timing.cpu_s,
       (t.fwd_flop + t.bwd_flop) / timing.cpu_s * 1e-9);
 }
