@@ -21,9 +21,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Small enough for the test budget (about 20 s to simulate, 10 s for COLMAP on 2 cores); at this
-// size COLMAP's poses are a few degrees off (docs/poses.md has the full-size figures).
-const char* kSmallScene = "simulate --out sim --width 160 --height 120 --train-views 8 --novel-views 3 --blur-px 6";
+// Small enough for the test budget (about 11 s to simulate, 6 s for COLMAP on 2 cores), large enough
+// for COLMAP to place every view within about 1.5 degrees run after run: at 160 x 120 one run in
+// five lost a view or erred by 10 degrees (COLMAP's CPU SIFT is not deterministic; docs/poses.md).
+const char* kSmallScene = "simulate --out sim --width 240 --height 180 --train-views 8 --novel-views 3 --blur-px 6";
 
 std::vector<Camera> cameras(const io::Dataset& d) {
   std::vector<Camera> c;
@@ -74,9 +75,10 @@ TEST_CASE("poses: COLMAP on EDI frames registers every view of a simulated scene
   REQUIRE(est.novel.size() == truth.novel.size());
   const std::vector<Camera> ref = cameras(truth);
   const PoseErrors e = pose_errors(cameras(est), ref, camera_extent(ref));
-  CHECK(e.rot_mean_deg < 5.0);
-  CHECK(e.trans_mean_pct < 8.0);
-  CHECK(e.relative_rot_mean_deg < 3.0);
+  // Six runs measured 0.82-1.54 deg, 0.70-1.04 % and 0.43-0.72 deg.
+  CHECK(e.rot_mean_deg < 2.5);
+  CHECK(e.trans_mean_pct < 2.0);
+  CHECK(e.relative_rot_mean_deg < 1.5);
   CHECK(e.rot_mean_deg == Approx(report["vs_input_poses"]["rot_mean_deg"].get<double>()).epsilon(1e-6));
   CHECK(est.points.size() >= 6 * 50);
   CHECK(est.near > 0);
