@@ -10,6 +10,7 @@ namespace evflow::test {
 
 gpu::Context& gpu_context();
 bool gpu_context_exists();
+void release_gpu_context();  // before exit (tests/main.cpp)
 
 inline void require_no_validation_messages() {
   auto msgs = gpu_context().take_validation_messages();

@@ -26,6 +26,8 @@ gpu::Context& gpu_context() {
 
 bool gpu_context_exists() { return g_ctx != nullptr; }
 
+void release_gpu_context() { g_ctx.reset(); }
+
 }  // namespace evflow::test
 
 // Takes every "--env NAME=VALUE" out of the arguments and sets it in the environment before
@@ -54,5 +56,9 @@ int main(int argc, char* argv[]) {
       rc = rc ? rc : 1;
     }
   }
+  // Destroyed here, not by a static destructor: at exit the validation layer's own statics
+  // (registered after this context's, when the layer was loaded) are gone before it, and
+  // GPU-assisted validation touches them while the device is destroyed.
+  evflow::test::release_gpu_context();
   return rc;
 }

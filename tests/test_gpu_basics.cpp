@@ -93,3 +93,31 @@ TEST_CASE("gpu: dispatch binds by name and checks the bindings against the kerne
   CHECK(a.read<uint32_t>(16)[15] == 15u);
   test::require_no_validation_messages();
 }
+
+TEST_CASE("gpu: GPU-assisted validation reports a write past the end of a buffer", "[gpu][gpu-av]") {
+  gpu::ContextOptions o = gpu::ContextOptions::from_env();
+  o.validation = true;
+  o.gpu_validation = true;
+  gpu::Context ctx(o);
+  REQUIRE(ctx.bound_descriptor_sets());
+  gpu::Buffer b(ctx, 64, "values");
+  gpu::Commands cmd(ctx);
+  struct {
+    uint32_t n, offset;
+  } pc{16, 0};
+  // Within the buffer: no message.
+  cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, b}}, pc, gpu::Groups{1, 1, 1});
+  cmd.submit();
+  CHECK(b.read<uint32_t>(16)[15] == 15u);
+  CHECK(ctx.take_validation_messages().empty());
+  // 32 values into a 16-value buffer: the instrumented shader skips and reports the writes past
+  // its end (the layer checks against the whole buffer, not the bound range).
+  pc.n = 32;
+  pc.offset = 100;
+  cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, b}}, pc, gpu::Groups{1, 1, 1});
+  cmd.submit();
+  CHECK(b.read<uint32_t>(16)[15] == 115u);
+  const std::vector<std::string> msgs = ctx.take_validation_messages();
+  REQUIRE_FALSE(msgs.empty());
+  CHECK_THAT(msgs[0], Catch::Contains("out of bounds", Catch::CaseSensitive::No));
+}

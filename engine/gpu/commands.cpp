@@ -25,6 +25,7 @@ Commands::~Commands() {
   VkDevice d = ctx_.device();
   if (recording_) vkEndCommandBuffer(cb_);
   if (queries_) vkDestroyQueryPool(d, queries_, nullptr);
+  for (VkDescriptorPool p : set_pools_) vkDestroyDescriptorPool(d, p, nullptr);
   vkDestroyFence(d, fence_, nullptr);
   vkFreeCommandBuffers(d, ctx_.command_pool(), 1, &cb_);
 }
@@ -36,6 +37,8 @@ void Commands::begin() {
   recording_ = true;
   empty_ = true;
   marks_.clear();
+  for (VkDescriptorPool p : set_pools_) EVF_VK(vkResetDescriptorPool(ctx_.device(), p, 0));
+  set_pool_ = 0;
   if (queries_) {
     vkCmdResetQueryPool(cb_, queries_, 0, query_capacity_);
     vkCmdWriteTimestamp(cb_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries_, 0);
@@ -114,9 +117,7 @@ void Commands::dispatch(const std::string& name, std::initializer_list<Bind> bin
     writes[i].pBufferInfo = &infos[i];
   }
   vkCmdBindPipeline(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.pipeline());
-  if (!writes.empty())
-    ctx_.push_descriptor_set()(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.layout(), 0, static_cast<uint32_t>(writes.size()),
-                               writes.data());
+  if (!writes.empty()) bind_descriptors(k, writes);
   uint8_t pc[kPushConstantBytes] = {};
   if (push_bytes > kPushConstantBytes) throw Error("push constants above 128 bytes for kernel '" + name + "'");
   if (push_bytes) std::copy_n(static_cast<const uint8_t*>(push), push_bytes, pc);
@@ -124,6 +125,46 @@ void Commands::dispatch(const std::string& name, std::initializer_list<Bind> bin
   vkCmdDispatch(cb_, g.x, g.y, g.z);
   barrier();
   empty_ = false;
+}
+
+void Commands::bind_descriptors(const Kernel& k, const std::vector<VkWriteDescriptorSet>& writes) {
+  if (!ctx_.bound_descriptor_sets()) {
+    ctx_.push_descriptor_set()(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.layout(), 0, static_cast<uint32_t>(writes.size()),
+                               writes.data());
+    return;
+  }
+  VkDescriptorSet set = allocate_set(k.set_layout());
+  std::vector<VkWriteDescriptorSet> w = writes;
+  for (VkWriteDescriptorSet& x : w) x.dstSet = set;
+  vkUpdateDescriptorSets(ctx_.device(), static_cast<uint32_t>(w.size()), w.data(), 0, nullptr);
+  vkCmdBindDescriptorSets(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.layout(), 0, 1, &set, 0, nullptr);
+}
+
+// A set from the current pool; a full pool moves on to the next one, made when there is none.
+VkDescriptorSet Commands::allocate_set(VkDescriptorSetLayout layout) {
+  constexpr uint32_t kSetsPerPool = 256, kBindingsPerSet = 32;
+  for (;; ++set_pool_) {
+    const bool fresh = set_pool_ == set_pools_.size();
+    if (fresh) {
+      VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * kBindingsPerSet};
+      VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+      pci.maxSets = kSetsPerPool;
+      pci.poolSizeCount = 1;
+      pci.pPoolSizes = &size;
+      VkDescriptorPool pool = VK_NULL_HANDLE;
+      EVF_VK(vkCreateDescriptorPool(ctx_.device(), &pci, nullptr, &pool));
+      set_pools_.push_back(pool);
+    }
+    VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    ai.descriptorPool = set_pools_[set_pool_];
+    ai.descriptorSetCount = 1;
+    ai.pSetLayouts = &layout;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    const VkResult r = vkAllocateDescriptorSets(ctx_.device(), &ai, &set);
+    if (r == VK_SUCCESS) return set;
+    if (fresh || (r != VK_ERROR_OUT_OF_POOL_MEMORY && r != VK_ERROR_FRAGMENTED_POOL))
+      check(r, "vkAllocateDescriptorSets");
+  }
 }
 
 void Commands::fill(const Buffer& b, uint32_t value, uint64_t offset, uint64_t bytes) {

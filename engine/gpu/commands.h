@@ -61,6 +61,12 @@ class Commands {
  private:
   void begin();
   void barrier();
+  // Binds the descriptor writes of one dispatch: pushed, or (GPU-assisted validation) in a set
+  // allocated from this recording's pools, which begin() resets.
+  void bind_descriptors(const Kernel& k, const std::vector<VkWriteDescriptorSet>& writes);
+  VkDescriptorSet allocate_set(VkDescriptorSetLayout layout);
+  std::vector<VkDescriptorPool> set_pools_;
+  size_t set_pool_ = 0;  // the pool allocate_set takes from
   Context& ctx_;
   VkCommandBuffer cb_ = VK_NULL_HANDLE;
   VkFence fence_ = VK_NULL_HANDLE;

@@ -27,6 +27,7 @@ ContextOptions ContextOptions::from_env() {
   o.force_cas = env_flag("EVF_FORCE_CAS");
   o.print_validation = env_flag("EVF_VALIDATION_PRINT");
   o.sync_validation = env_flag("EVF_VALIDATION_SYNC");
+  o.gpu_validation = env_flag("EVF_VALIDATION_GPU");
   if (const char* e = std::getenv("EVF_SORT_ITEMS"))
     o.sort_items = std::clamp<uint32_t>(uint32_t(std::atoi(e)), 1u, 256u);
   if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) o.subgroup_reduce = e[0] == '1' ? 1 : 0;
@@ -175,6 +176,7 @@ void Context::create_instance() {
   }
   std::vector<VkValidationFeatureEnableEXT> features;
   if (opts_.sync_validation) features.push_back(VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT);
+  if (opts_.gpu_validation) features.push_back(VK_VALIDATION_FEATURE_ENABLE_GPU_ASSISTED_EXT);
   instance_ = make_instance(opts_.validation, &dbg, extra_exts, features);
   if (!opts_.validation) return;
   auto fn = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(

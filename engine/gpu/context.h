@@ -32,6 +32,10 @@ struct ContextOptions {
   bool print_validation = false;  // also print each validation message to stderr
   // With `validation`: the layer's synchronisation checks (hazards between commands, barriers).
   bool sync_validation = false;
+  // With `validation`: GPU-assisted validation (each shader instrumented to report out-of-bounds
+  // and uninitialised descriptor accesses). Kernels then bind allocated descriptor sets instead
+  // of push descriptors, which the layer's GPU-assisted checks cannot follow.
+  bool gpu_validation = false;
   // Kernel choices for the device, overridden where set (Rasterizer, RadixSort read them):
   uint32_t sort_items = 0;    // keys per radix-sort invocation, 1..256; 0 = by device and size
   int subgroup_reduce = -1;   // rasterize backward: 1 = subgroupAdd first, 0 = per-lane adds; -1 = by device
@@ -42,7 +46,8 @@ struct ContextOptions {
   bool presentation = false;
   std::vector<std::string> instance_extensions;
   // Defaults that read the environment, once: EVF_DEVICE, EVF_VALIDATION=1, EVF_POISON=1,
-  // EVF_FORCE_CAS=1, EVF_VALIDATION_PRINT=1, EVF_VALIDATION_SYNC=1, EVF_SORT_ITEMS=n,
+  // EVF_FORCE_CAS=1, EVF_VALIDATION_PRINT=1, EVF_VALIDATION_SYNC=1, EVF_VALIDATION_GPU=1,
+  // EVF_SORT_ITEMS=n,
   // EVF_SUBGROUP_REDUCE=0|1, EVF_RASTER_KERNEL=pixel|block.
   static ContextOptions from_env();
 };
@@ -89,6 +94,9 @@ class Context {
   VkCommandPool command_pool() const { return pool_; }
   // vkCmdPushDescriptorSetKHR of this context's device (loaded when the device is created).
   PFN_vkCmdPushDescriptorSetKHR push_descriptor_set() const { return push_descriptor_set_; }
+  // Whether kernels bind allocated descriptor sets (GPU-assisted validation) instead of push
+  // descriptors.
+  bool bound_descriptor_sets() const { return opts_.validation && opts_.gpu_validation; }
 
   // Whether the compute queue family can present to `surface` (presentation contexts only);
   // require_present throws a clear error naming the device when it cannot.

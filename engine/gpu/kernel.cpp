@@ -74,7 +74,7 @@ Kernel::Kernel(Context& ctx, const std::string& name) : ctx_(ctx), name_(name) {
     binds[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
   }
   VkDescriptorSetLayoutCreateInfo dci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  dci.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
+  dci.flags = ctx.bound_descriptor_sets() ? 0 : VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
   dci.bindingCount = static_cast<uint32_t>(binds.size());
   dci.pBindings = binds.data();
   EVF_VK(vkCreateDescriptorSetLayout(ctx.device(), &dci, nullptr, &set_layout_));

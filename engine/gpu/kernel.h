@@ -1,7 +1,7 @@
 // A compute pipeline built from an embedded SPIR-V module. Its descriptor set layout (push
-// descriptors, one storage buffer per binding) is read from the module: each variable's Binding
-// decoration and the name of its block type (glslang keeps names). Every kernel has a 128-byte
-// push-constant range (the Vulkan minimum).
+// descriptors, or allocated sets under GPU-assisted validation; one storage buffer per binding)
+// is read from the module: each variable's Binding decoration and the name of its block type
+// (glslang keeps names). Every kernel has a 128-byte push-constant range (the Vulkan minimum).
 #pragma once
 #include <string>
 #include <vector>
@@ -29,6 +29,7 @@ class Kernel {
   const std::vector<Binding>& bindings() const { return bindings_; }
   VkPipeline pipeline() const { return pipeline_; }
   VkPipelineLayout layout() const { return layout_; }
+  VkDescriptorSetLayout set_layout() const { return set_layout_; }
 
  private:
   Context& ctx_;
