@@ -53,3 +53,17 @@ TEST_CASE("fuzz regressions: a NeRF-synthetic camera_angle_x that is a string is
                       Contains((dir / "transforms_train.json").string()) && Contains("type must be number"));
   fs::remove_all(dir);
 }
+
+TEST_CASE("fuzz regressions: a NeRF-synthetic frame with an absolute file_path to no image names the manifest",
+          "[io][fuzz]") {
+  const fs::path dir = fs::temp_directory_path() / ("evf_fuzz_nerf_abs_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  io::write_png(dir / "train" / "001.png", io::Image(4, 3, 3, 0.5f));
+  std::ofstream(dir / "transforms_train.json")
+      << R"({"camera_angle_x": 0.69, "frames": [{"file_path": "/./train/000", )"
+      << R"("transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]}]})";
+  REQUIRE_THROWS_WITH(io::load_dataset(dir), Contains((dir / "transforms_train.json").string()) &&
+                                                 Contains("frame 0") && Contains("/./train/000.png") &&
+                                                 Contains("view image is missing"));
+  fs::remove_all(dir);
+}

@@ -32,7 +32,12 @@ Dataset load_nerf_synthetic(const fs::path& dir) {
       const std::string where = "frame " + std::to_string(k);
       fs::path img = dir / get(frames[k], "file_path", file, where).get<std::string>();
       if (!img.has_extension() || !fs::exists(img)) img += ".png";
-      Image im = load_view_image(img, 0, 0);
+      // A missing or bad image is named with the manifest and the frame that points at it (an
+      // absolute file_path leaves the dataset folder out of the image's own path).
+      Image im;
+      try {
+        im = load_view_image(img, 0, 0);
+      } catch (const std::runtime_error& e) { fail(file, where + ": " + e.what()); }
       const json& M = get(frames[k], "transform_matrix", file, where);
       if (!M.is_array() || M.size() < 3) fail(file, where + ": transform_matrix must be 4x4");
       double c2w[3][4];
