@@ -5,6 +5,8 @@
 #include <map>
 #include <vector>
 
+#include <sys/resource.h>
+
 #include "bench_conv.h"
 #include "cli.h"
 #include "flow/flow_estimator.h"
@@ -104,6 +106,13 @@ static int bench_raster(ArgParser& p) {
   return 0;
 }
 
+// The process's largest resident set so far (MiB). On a CPU driver it holds the device's buffers too.
+static double peak_host_mib() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;  // KiB on Linux
+}
+
 // Training steps (sharp views rendered from a synthetic ground-truth cloud, or a dataset folder
 // with any method): it/s and the split between rasterization, loss terms and optimizer.
 static int bench_train(ArgParser& p) {
@@ -158,14 +167,15 @@ static int bench_train(ArgParser& p) {
     ldi.push_back(st.ldi_ms);
   }
   const double m = median(total);
+  const double host_mib = peak_host_mib(), device_mib = double(ctx.peak_device_bytes()) / (1 << 20);
   if (json) {
     std::printf(
         "{\"bench\": \"train\", \"method\": \"%s\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": "
-        "%u, \"steps\": %d, "
+        "%u, \"steps\": %d, \"peak_host_mib\": %.1f, \"peak_device_mib\": %.1f, "
         "\"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, \"rasterize_backward\": %.2f, "
         "\"optimizer\": %.2f, \"ldi\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
-        method.c_str(), ctx.caps().name.c_str(), W, H, N, steps, 1000.0 / m, median(fwd), median(loss), median(bwd),
-        median(opt), median(ldi), m);
+        method.c_str(), ctx.caps().name.c_str(), W, H, N, steps, host_mib, device_mib, 1000.0 / m, median(fwd),
+        median(loss), median(bwd), median(opt), median(ldi), m);
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
     std::printf("}}\n");
@@ -179,6 +189,8 @@ static int bench_train(ArgParser& p) {
     std::printf("  rasterizer stages:");
     for (auto& name : order) std::printf(" %s %.1f,", name.c_str(), median(stages[name]));
     std::printf(" ms\n");
+    std::printf("  peak memory: host %.1f MiB (the process's resident set), device %.1f MiB (buffers)\n", host_mib,
+                device_mib);
   }
   return 0;
 }

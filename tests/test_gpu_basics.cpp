@@ -121,3 +121,21 @@ TEST_CASE("gpu: GPU-assisted validation reports a write past the end of a buffer
   REQUIRE_FALSE(msgs.empty());
   CHECK_THAT(msgs[0], Catch::Contains("out of bounds", Catch::CaseSensitive::No));
 }
+
+TEST_CASE("gpu: the context counts its buffers' device memory, now and at its peak", "[gpu]") {
+  auto& ctx = test::gpu_context();
+  const uint64_t before = ctx.device_bytes();
+  {
+    gpu::Buffer a(ctx, 1 << 20, "a");
+    CHECK(ctx.device_bytes() >= before + (1 << 20));
+    gpu::Buffer b(ctx, 1 << 20, "b");
+    CHECK(ctx.device_bytes() >= before + (2 << 20));
+    gpu::Buffer moved = std::move(a);  // a move changes nothing
+    CHECK(ctx.device_bytes() >= before + (2 << 20));
+    b.ensure(4 << 20);  // grown to 5 MiB (25 % headroom): the old memory is returned, the new counted
+    CHECK(ctx.device_bytes() >= before + (1 << 20) + (5 << 20));
+    CHECK(ctx.device_bytes() < before + (2 << 20) + (5 << 20));
+  }
+  CHECK(ctx.device_bytes() == before);
+  CHECK(ctx.peak_device_bytes() >= before + (6 << 20));
+}

@@ -17,6 +17,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
     ctx_ = o.ctx_;
     name_ = std::move(o.name_);
     size_ = o.size_;
+    allocated_ = std::exchange(o.allocated_, 0);
     buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
     memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
     mapped_ = std::exchange(o.mapped_, nullptr);
@@ -29,6 +30,8 @@ void Buffer::release() {
   if (!ctx_) return;
   if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
   if (memory_) vkFreeMemory(ctx_->device(), memory_, nullptr);
+  if (allocated_) ctx_->count_allocation(-int64_t(allocated_));
+  allocated_ = 0;
   buffer_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;
   mapped_ = nullptr;
@@ -60,6 +63,8 @@ void Buffer::allocate(uint64_t bytes) {
   VkResult r = vkAllocateMemory(ctx_->device(), &mai, nullptr, &memory_);
   if (r != VK_SUCCESS)
     throw Error("out of device memory allocating buffer '" + name_ + "' of " + std::to_string(bytes) + " bytes");
+  allocated_ = req.size;
+  ctx_->count_allocation(int64_t(allocated_));
   EVF_VK(vkBindBufferMemory(ctx_->device(), buffer_, memory_, 0));
   size_ = bytes;
   if (ctx_->caps().unified_memory) EVF_VK(vkMapMemory(ctx_->device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));

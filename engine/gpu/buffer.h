@@ -56,6 +56,7 @@ class Buffer {
   Context* ctx_ = nullptr;
   std::string name_;
   uint64_t size_ = 0;
+  uint64_t allocated_ = 0;  // the memory behind it (counted in Context::device_bytes)
   VkBuffer buffer_ = VK_NULL_HANDLE;
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
   void* mapped_ = nullptr;

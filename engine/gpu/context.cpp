@@ -385,6 +385,12 @@ size_t Context::validation_message_count() const {
   return message_total_;
 }
 
+void Context::count_allocation(int64_t bytes) {
+  const uint64_t now = device_bytes_.fetch_add(uint64_t(bytes)) + uint64_t(bytes);
+  uint64_t peak = peak_device_bytes_.load();
+  while (now > peak && !peak_device_bytes_.compare_exchange_weak(peak, now)) {}
+}
+
 void Context::check_binding_size(uint64_t bytes, const std::string& what) const {
   if (bytes > caps_.max_storage_buffer_range)
     throw Error(what + " needs a " + std::to_string(bytes) +

@@ -4,6 +4,7 @@
 #pragma once
 #include <vulkan/vulkan.h>
 
+#include <atomic>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -114,6 +115,12 @@ class Context {
   size_t validation_message_count() const;
   void report_validation(const std::string& msg);
 
+  // Device memory held by this context's buffers (bytes), now and at most so far. Buffers report
+  // their allocations here; the transient staging copies of non-unified devices are not counted.
+  void count_allocation(int64_t bytes);
+  uint64_t device_bytes() const { return device_bytes_.load(); }
+  uint64_t peak_device_bytes() const { return peak_device_bytes_.load(); }
+
   // Throws a clear error when a binding of `bytes` would exceed the device's storage range.
   void check_binding_size(uint64_t bytes, const std::string& what) const;
 
@@ -139,6 +146,7 @@ class Context {
   mutable std::mutex msg_mutex_;
   std::vector<std::string> messages_;
   size_t message_total_ = 0;
+  std::atomic<uint64_t> device_bytes_{0}, peak_device_bytes_{0};
 };
 
 }  // namespace evflow::gpu

@@ -1,0 +1,27 @@
+// evflow bench train: the step's split and the run's peak memory as JSON.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "cli_helpers.h"
+
+using namespace evflow::test;
+namespace fs = std::filesystem;
+
+TEST_CASE("bench train: JSON with it/s, the split of a step and the peak host and device memory", "[cli]") {
+  REQUIRE(fs::exists(evflow_binary()));
+  const fs::path dir = fresh_dir("evflow_bench_train");
+  std::string out;
+  REQUIRE(run_evflow(dir, "bench train --width 64 --height 48 --gaussians 2000 --steps 2 --views 2 --json", out) == 0);
+  const nlohmann::json b = nlohmann::json::parse(out.substr(out.find('{')));
+  CHECK(b["gaussians"] == 2000);
+  CHECK(b["it_per_s"].get<double>() > 0);
+  CHECK(b["ms"]["step"].get<double>() > 0);
+  // The Gaussians' parameters, gradients and Adam moments alone need 2000 x 59 floats x 4 x 4 bytes.
+  const double device = b["peak_device_mib"].get<double>(), host = b["peak_host_mib"].get<double>();
+  CHECK(device > 2000.0 * 59 * 4 * 4 / (1 << 20));
+  CHECK(device < 512);
+  // On a CPU driver the buffers live in the process's memory.
+  if (b["device"].get<std::string>().find("llvmpipe") != std::string::npos) CHECK(host > device);
+}
