@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <unistd.h>
+
 #include "cli.h"
 #include "gpu/context.h"
 #include "io/atomic_file.h"
@@ -49,6 +51,48 @@ static const char* kSimulateHelp =
     "                            or every sub-frame interval gt/flow/<view>_<k>.npy (large) (default: mid)\n"
     "  --device N|name           Vulkan device (default: automatic)\n"
     "  --verbose                 per-view statistics\n";
+
+// Progress while the training views are simulated: on a terminal one line rewritten at every
+// sub-frame interval (view, interval, ETA), else a line per finished view. The ETA assumes the
+// views left take the mean time of those done (their sub-frame counts are chosen as they run).
+class SimProgress {
+ public:
+  explicit SimProgress(int views) : views_(views), tty_(isatty(fileno(stdout))) {}
+  void interval(const sim::Interval& iv) {
+    if (iv.view != view_) {
+      if (view_ >= 0) view_done();
+      view_ = iv.view;
+    }
+    intervals_ = iv.index + 1;
+    if (!tty_) return;
+    std::printf("\r  view %d/%d  sub-frame interval %d  ETA %s ", iv.view + 1, views_, intervals_,
+                eta(iv.view).c_str());
+    std::fflush(stdout);
+  }
+  void end() {
+    if (view_ >= 0) view_done();
+    view_ = -1;
+  }
+
+ private:
+  double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  std::string eta(int views_done) const {
+    if (views_done == 0) return "-";
+    char b[32];
+    std::snprintf(b, sizeof b, "%.0fs", elapsed() / views_done * (views_ - views_done));
+    return b;
+  }
+  void view_done() {
+    if (tty_) std::printf("\r%60s\r", "");
+    std::printf("  view %d/%d simulated (%d sub-frame intervals), %.1f s so far, ETA %s\n", view_ + 1, views_,
+                intervals_, elapsed(), eta(view_ + 1).c_str());
+    std::fflush(stdout);
+  }
+  const int views_;
+  const bool tty_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  int view_ = -1, intervals_ = 0;
+};
 
 static int run_simulate(const Args& a) {
   ArgParser p(a);
@@ -126,16 +170,18 @@ static int run_simulate(const Args& a) {
   sim::SimResult res;
   // Written into a fresh folder that replaces DIR at the end: a failure leaves the old DIR whole.
   io::write_folder_atomic(dir, "dataset.json", [&](const std::filesystem::path& stage) {
-    sim::IntervalCallback cb;
-    if (flow == "all") {
-      std::filesystem::create_directories(stage / "gt" / "flow");
-      cb = [&](const sim::Interval& iv) {
+    if (flow == "all") std::filesystem::create_directories(stage / "gt" / "flow");
+    SimProgress progress(sp.train_views);
+    sim::IntervalCallback cb = [&](const sim::Interval& iv) {
+      if (flow == "all") {
         char name[64];
         std::snprintf(name, sizeof name, "%03d_%04d.npy", iv.view, iv.index);
         io::write_npy<float>(stage / "gt" / "flow" / name, {sp.height, sp.width, 2}, iv.flow);
-      };
-    }
+      }
+      progress.interval(iv);
+    };
     res = simulator.run(cb, verbose);
+    progress.end();
     res.scene_source = scene.source;
     res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     sim::write_simulation(res, stage);
