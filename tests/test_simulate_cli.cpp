@@ -9,7 +9,8 @@
 using namespace evflow::test;
 namespace fs = std::filesystem;
 
-TEST_CASE("simulate: a progress line per training view with the sub-frames and an ETA, then the summary", "[cli][sim]") {
+TEST_CASE("simulate: a progress line per training view with the sub-frames and an ETA, then the summary",
+          "[cli][sim]") {
   REQUIRE(fs::exists(evflow_binary()));
   const fs::path dir = fresh_dir("evflow_simulate_cli");
   std::string out;
