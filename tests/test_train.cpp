@@ -12,6 +12,7 @@
 #include "metrics/srgb_metrics.h"
 #include "splat/synthetic.h"
 #include "train/checkpoint.h"
+#include "train/direction_check.h"
 #include "train/synthetic_dataset.h"
 #include "train/trainer.h"
 
@@ -435,4 +436,18 @@ TEST_CASE("blur mode: trajectories alone recover the true mid-exposure pose from
   CHECK(end.sh == truth.sh);
   CHECK(end.opacity_logits == truth.opacity_logits);
   test::require_no_validation_messages();
+}
+
+TEST_CASE("direction check: the reversed order must win by a margin relative to the forward order's value", "[train]") {
+  // Near 2, where a half-formed trajectory's two orders score alike, 5 % is 0.1 (the weakest flip
+  // of a measured run, a wrong one, won by 0.081).
+  CHECK_FALSE(DirectionCheck::prefers(2.056, 1.975, 0.05));
+  CHECK(DirectionCheck::prefers(2.184, 1.800, 0.05));
+  // Late in a run the values are small and so is the margin.
+  CHECK(DirectionCheck::prefers(0.40, 0.37, 0.05));
+  CHECK_FALSE(DirectionCheck::prefers(0.40, 0.385, 0.05));
+  CHECK_FALSE(DirectionCheck::prefers(1.0, 1.0, 0.0));
+  CHECK(DirectionCheck::prefers(1.0, 0.999, 0.0));
+  CHECK_FALSE(DirectionCheck::prefers(1.0, std::nan(""), 0.05));
+  CHECK_FALSE(DirectionCheck::prefers(std::nan(""), 0.5, 0.05));
 }

@@ -19,7 +19,11 @@ void DirectionCheck::score_reversed(gpu::Commands& cmd, ExposureFrames frames) {
 
 bool DirectionCheck::prefers_reversed(gpu::Commands& cmd) const {
   cmd.submit();
-  return std::isfinite(reversed_) && reversed_ + margin_ < events_.value();
+  return prefers(events_.value(), reversed_, margin_);
+}
+
+bool DirectionCheck::prefers(double forward, double reversed, double margin) {
+  return std::isfinite(forward) && std::isfinite(reversed) && reversed < forward * (1.0 - margin);
 }
 
 }  // namespace evflow

@@ -1,6 +1,8 @@
 // The time direction of an exposure trajectory. The blur loss cannot tell a trajectory from its
 // time reversal; the events can. Until `until_step`, each step also scores the time-reversed
-// frame order with the event loss; when that scores lower by `margin` than the forward order,
+// frame order with the event loss; when that scores lower than the forward order by the fraction
+// `margin` of the forward order's value (a relative margin: the normalised loss starts near 2,
+// where both orders of a half-formed trajectory score alike, and falls as the model fits),
 // the view's trajectory is to be flipped (and the step's gradients, which belong to the other
 // direction, are not applied).
 #pragma once
@@ -19,6 +21,8 @@ class DirectionCheck {
   void score_reversed(gpu::Commands& cmd, ExposureFrames frames);
   // After the event loss recorded the forward order into `cmd`: submits and compares.
   bool prefers_reversed(gpu::Commands& cmd) const;
+  // The rule: the reversed order's value is below (1 - margin) times the forward order's.
+  static bool prefers(double forward, double reversed, double margin);
 
  private:
   EventLoss& events_;

@@ -260,7 +260,9 @@ std::vector<Setting> event_settings() {
             "Until this fraction of the run, each blur+events step also scores the time-reversed frame order "
             "with the event loss and reverses the view's trajectory (knots and their Adam moments) when that "
             "is lower by `event_flip_margin`; that step's update is the flip"),
-      field("event_flip_margin", &TrainConfig::event_flip_margin, "the margin of the direction check"),
+      field("event_flip_margin", &TrainConfig::event_flip_margin,
+            "the margin of the direction check, relative: the reversed order must score below (1 - margin) times "
+            "the forward order's value"),
       field("event_norm_floor", &TrainConfig::event_norm_floor,
             "per-pixel RMS below which the event loss holds a norm at its floor (static frame pairs)"),
       field("event_pool", &TrainConfig::event_pool,
