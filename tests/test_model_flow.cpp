@@ -1,14 +1,19 @@
 // The model's flow (engine/train/model_flow.h, flow=model): the host maths against the
-// simulator's ground-truth flow, and the rendered depth of a plane of splats against the
-// analytic flow of a known camera translation.
+// simulator's ground-truth flow, the rendered depth of a plane of splats against the analytic
+// flow of a known camera translation, and the trainer's use of it (each view's own poses).
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <random>
 
+#include "camera/trajectory.h"
 #include "gpu_fixture.h"
 #include "sim/simulator.h"
+#include "splat/synthetic.h"
+#include "train/checkpoint.h"
 #include "train/model_flow.h"
+#include "train/synthetic_dataset.h"
+#include "train/trainer.h"
 
 using namespace evflow;
 
@@ -119,5 +124,87 @@ TEST_CASE("model flow: a rendered plane of splats moved past by a known translat
   CHECK(hole_nan == hole);
   CHECK(valid > size_t(0.8 * double(rim)));
   CHECK(err / double(valid) < 0.05);  // the flow is 1.4 to 2.9 px long
+  test::require_no_validation_messages();
+}
+
+namespace {
+
+// Mean |F_a(x) - F_b(x + d(x))| over the pixels with a flow whose moved position lies inside the
+// image (F planar, 3 x H x W; F_b sampled bilinearly). `sign` scales d (-1: the reversed flow).
+double warp_error(const std::vector<float>& fa, const std::vector<float>& fb, const std::vector<float>& d, uint32_t W,
+                  uint32_t H, double sign) {
+  double sum = 0;
+  size_t n = 0;
+  for (uint32_t y = 0; y < H; ++y)
+    for (uint32_t x = 0; x < W; ++x) {
+      const size_t p = size_t(y) * W + x;
+      if (!std::isfinite(d[2 * p]) || !std::isfinite(d[2 * p + 1])) continue;
+      const double sx = x + sign * d[2 * p], sy = y + sign * d[2 * p + 1];
+      if (sx < 0 || sy < 0 || sx > W - 1.001 || sy > H - 1.001) continue;
+      const uint32_t x0 = uint32_t(sx), y0 = uint32_t(sy);
+      const double ax = sx - x0, ay = sy - y0;
+      for (int c = 0; c < 3; ++c) {
+        const float* b = &fb[size_t(c) * W * H];
+        const double v = (1 - ay) * ((1 - ax) * b[y0 * W + x0] + ax * b[y0 * W + x0 + 1]) +
+                         ay * ((1 - ax) * b[(y0 + 1) * W + x0] + ax * b[(y0 + 1) * W + x0 + 1]);
+        sum += std::abs(fa[size_t(c) * W * H + p] - v);
+      }
+      ++n;
+    }
+  REQUIRE(n > W * H / 4);
+  return sum / (3.0 * n);
+}
+
+}  // namespace
+
+// The trainer's wiring of flow=model: each view's interval i flow must come from that view's own
+// trajectory poses at t_i and t_{i+1}, in that order. Three views move differently during their
+// exposures (sideways drift, vertical drift, yaw) over a frozen scene, so only the right poses
+// carry the view's render at t_i onto its render at t_{i+1}; another view's flow, or the flow
+// of the swapped pair, does not.
+TEST_CASE("flow=model in training: each view's interval flow carries its render at t_i onto t_i+1",
+          "[gpu][train][flow]") {
+  auto& ctx = test::gpu_context();
+  const uint32_t W = 96, H = 72;
+  io::Dataset data = render_synthetic_dataset(ctx, W, H, 3, 0, 3000);
+  TrainConfig cfg;
+  cfg.mode = TrainMode::Blur;
+  cfg.blur_upsample = 4;  // uses the flow at every step
+  cfg.flow = FlowSource::Model;
+  cfg.init_gaussians = 3000;
+  cfg.sh_degree = 0;
+  cfg.densify = false;
+  cfg.iterations = 4;
+  Checkpoint start;
+  const Camera c0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
+  start.cloud = synthetic_cloud(42, 3000, 0, c0);  // the scene the views were rendered from
+  const int axis[3] = {0, 1, 4};                   // drift x, drift y, yaw
+  const double amp[3] = {0.5, 0.4, 0.1};
+  for (int v = 0; v < 3; ++v) {
+    TrajectoryState s;
+    s.knots.assign(ExposureTrajectory::kSize, 0.0);
+    for (int j = 0; j < ExposureTrajectory::kKnots; ++j) s.knots[j * 6 + axis[v]] = amp[v] * (j - 4) / 4.0;
+    start.trajectories.push_back(s);
+  }
+  Trainer t(ctx, data, cfg, start);
+  t.step();
+  REQUIRE(t.model_flow_step() == 1);
+  const uint32_t intervals = t.flow_intervals();
+  REQUIRE(intervals == 6);
+  for (uint32_t v = 0; v < 3; ++v)
+    for (uint32_t i : {0u, 2u, 5u}) {
+      const ViewSnapshot s = t.snapshot(v, int(i));
+      const auto fa = s.frames[i]->read<float>(size_t(W) * H * 3), fb = s.frames[i + 1]->read<float>(size_t(W) * H * 3);
+      const std::vector<float>& d = s.flow.flow;
+      const std::vector<float> other = t.snapshot((v + 1) % 3, int(i)).flow.flow;
+      const std::vector<float> zero(d.size(), 0.f);
+      const double e = warp_error(fa, fb, d, W, H, 1), e0 = warp_error(fa, fb, zero, W, H, 1),
+                   e_rev = warp_error(fa, fb, d, W, H, -1), e_other = warp_error(fa, fb, other, W, H, 1);
+      INFO("view " << v << " interval " << i << ": warp error " << e << ", no flow " << e0 << ", reversed " << e_rev
+                   << ", the next view's flow " << e_other);
+      CHECK(e < 0.4 * e0);
+      CHECK(e < 0.5 * e_rev);
+      CHECK(e < 0.5 * e_other);
+    }
   test::require_no_validation_messages();
 }
