@@ -24,7 +24,8 @@ static const char* kSimulateHelp =
     "  --out DIR                 output folder (default: sim_dataset)\n"
     "  --scene FILE|NAME         .gltf/.glb scene, or a built-in scene: {scenes}\n"
     "                            (default: default)\n"
-    "  --write-default-scene F   write the default scene as glTF (.glb or .gltf) and exit\n"
+    "  --subdivide K             split every triangle into K x K (the same surfaces as a heavier mesh)\n"
+    "  --write-scene F           write the scene (after --subdivide) as glTF (.glb or .gltf) and exit\n"
     "  --width N --height N      image and sensor size (default: 346 x 260)\n"
     "  --fov DEG                 vertical field of view (default: 50)\n"
     "  --train-views N           blurry training views (default: 16)\n"
@@ -102,16 +103,12 @@ static int run_simulate(const Args& a) {
     std::printf("%s", help.c_str());
     return 0;
   }
-  const std::string export_path = p.value("--write-default-scene");
-  if (!export_path.empty()) {
-    p.reject_unknown();
-    sim::write_gltf(sim::make_default_scene(), export_path);
-    std::printf("wrote the default scene to %s\n", export_path.c_str());
-    return 0;
-  }
   sim::SimParams sp;
   const std::string out = p.value("--out", "sim_dataset");
   const std::string scene_path = p.value("--scene");
+  const long long subdivide = p.integer("--subdivide", 1);
+  if (subdivide < 1 || subdivide > 1024) throw std::invalid_argument("--subdivide must be between 1 and 1024");
+  const std::string write_scene = p.value("--write-scene");
   sp.width = uint32_t(p.integer("--width", sp.width));
   sp.height = uint32_t(p.integer("--height", sp.height));
   sp.fov_y_deg = p.number("--fov", sp.fov_y_deg);
@@ -161,6 +158,13 @@ static int run_simulate(const Args& a) {
   const bool is_builtin = scene_path.empty() || std::find(builtin.begin(), builtin.end(), scene_path) != builtin.end();
   sim::Scene scene =
       is_builtin ? sim::make_builtin_scene(scene_path.empty() ? "default" : scene_path) : sim::load_gltf(scene_path);
+  if (subdivide > 1) scene = sim::subdivide(scene, int(subdivide));
+  if (!write_scene.empty()) {
+    sim::write_gltf(scene, write_scene);
+    std::printf("wrote scene %s (%zu triangles) to %s\n", scene.source.c_str(), scene.triangle_count(),
+                write_scene.c_str());
+    return 0;
+  }
   gpu::Context ctx(o);
   std::printf("simulate: scene %s (%zu triangles, %zu textures), %ux%u, %d training + %d novel views, device %s\n",
               scene.source.c_str(), scene.triangle_count(), scene.textures.size(), sp.width, sp.height, sp.train_views,

@@ -261,6 +261,11 @@ TEST_CASE("sim glTF: a user glTF with a texture loads and renders, bad files giv
   const sim::Scene back = sim::load_gltf(glb);
   REQUIRE(back.triangle_count() == def.triangle_count());
   REQUIRE(back.textures.size() == def.textures.size());
+  // The camera-rig hint travels in the scene's extras, so the file simulates from the same cameras.
+  REQUIRE(back.has_view_hint);
+  CHECK(back.view_target == def.view_target);
+  CHECK(back.view_radius == def.view_radius);
+  CHECK(back.view_height == def.view_height);
   const Camera cam = Camera::look_at(96, 72, 50, {1.0, 1.0, 3.0}, {0, 0, -1.5});
   sim::MeshRenderer r1(ctx, def), r2(ctx, back);
   const auto f1 = r1.render(cam), f2 = r2.render(cam);
@@ -293,7 +298,48 @@ TEST_CASE("sim glTF: a user glTF with a texture loads and renders, bad files giv
     REQUIRE(w.WriteGltfSceneToFile(&m2, noidx.string(), true, true, true, false));
   }
   CHECK_THAT(message(noidx), Catch::Contains(noidx.string()));
+  const fs::path badview = dir / "badview.gltf";
+  {
+    tinygltf::Model m2 = m;
+    tinygltf::Value::Object view{{"target", tinygltf::Value(tinygltf::Value::Array(3, tinygltf::Value(0.0)))},
+                                 {"radius", tinygltf::Value(-1.0)},
+                                 {"height", tinygltf::Value(1.0)}};
+    m2.scenes.at(0).extras = tinygltf::Value(tinygltf::Value::Object{{"evflow_view", tinygltf::Value(view)}});
+    REQUIRE(w.WriteGltfSceneToFile(&m2, badview.string(), true, true, true, false));
+  }
+  CHECK_THAT(message(badview), Catch::Contains(badview.string()) && Catch::Contains("'radius' must be positive"));
   fs::remove_all(dir);
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("sim renderer: a subdivided scene renders the original's image, small triangles as the tiles do",
+          "[sim][gpu]") {
+  auto& ctx = test::gpu_context();
+  const sim::Scene def = sim::make_default_scene();
+  const sim::Scene sub = sim::subdivide(def, 16);
+  REQUIRE(sub.triangle_count() == def.triangle_count() * 256);
+  REQUIRE(sim::subdivide(def, 1).positions == def.positions);
+  const Camera cam = Camera::look_at(96, 72, 50, {1.0, 1.0, 3.0}, {0, 0, -1.5});
+  sim::MeshRenderer orig(ctx, def), small(ctx, sub), tiles(ctx, sub);
+  tiles.set_small_triangle_box(0);
+  const sim::Frame fo = orig.render(cam), fs_ = small.render(cam), ft = tiles.render(cam);
+  // One invocation per small triangle and a workgroup per tile find the same nearest triangle.
+  CHECK(fs_.rgb == ft.rgb);
+  CHECK(fs_.depth == ft.depth);
+  // The same surfaces: coverage, depth and colour as the 72-triangle original.
+  size_t covered_differently = 0, depth_off = 0, colour_off = 0;
+  for (size_t i = 0; i < fo.depth.size(); ++i) {
+    if ((fo.depth[i] > 0) != (fs_.depth[i] > 0)) ++covered_differently;
+    if (std::abs(fo.depth[i] - fs_.depth[i]) > 1e-4f * std::max(1.f, fo.depth[i])) ++depth_off;
+    for (int c = 0; c < 3; ++c)
+      if (std::abs(fo.rgb[i * 3 + c] - fs_.rgb[i * 3 + c]) > 1e-3f) ++colour_off;
+  }
+  INFO("pixels covered differently " << covered_differently << ", depth off " << depth_off << ", colour values off "
+                                     << colour_off);
+  CHECK(covered_differently == 0);
+  CHECK(depth_off <= fo.depth.size() / 1000);
+  CHECK(colour_off <= fo.rgb.size() / 1000);
+  CHECK_THROWS_WITH(sim::subdivide(def, 0), Catch::Contains("at least 1"));
   test::require_no_validation_messages();
 }
 

@@ -7,6 +7,8 @@
 
 #include <tiny_gltf.h>
 
+#include "io/atomic_file.h"
+
 namespace evflow::sim {
 
 namespace fs = std::filesystem;
@@ -440,6 +442,37 @@ tinygltf::Mesh add_geometry(tinygltf::Model& m, tinygltf::Buffer& buf, const Sce
   return mesh;
 }
 
+// The camera-rig hint of a built-in scene, kept in the glTF scene's extras so that an exported
+// scene simulates from the same cameras: {"evflow_view": {"target": [x, y, z], "radius": r,
+// "height": h}}.
+constexpr const char* kViewExtra = "evflow_view";
+
+tinygltf::Value view_hint_value(const Scene& scene) {
+  tinygltf::Value::Array target;
+  for (float v : scene.view_target) target.push_back(tinygltf::Value(double(v)));
+  tinygltf::Value::Object view{{"target", tinygltf::Value(target)},
+                               {"radius", tinygltf::Value(double(scene.view_radius))},
+                               {"height", tinygltf::Value(double(scene.view_height))}};
+  return tinygltf::Value(tinygltf::Value::Object{{kViewExtra, tinygltf::Value(view)}});
+}
+
+void read_view_hint(const Reader& rd, const tinygltf::Value& extras, Scene& s) {
+  if (!extras.IsObject() || !extras.Has(kViewExtra)) return;
+  const tinygltf::Value& v = extras.Get(kViewExtra);
+  auto number = [&](const tinygltf::Value& x, const std::string& what) {
+    if (!x.IsNumber() || !std::isfinite(x.GetNumberAsDouble()))
+      rd.fail(std::string("scene extras '") + kViewExtra + "': '" + what + "' is not a finite number");
+    return float(x.GetNumberAsDouble());
+  };
+  if (!v.IsObject() || !v.Get("target").IsArray() || v.Get("target").ArrayLen() != 3)
+    rd.fail(std::string("scene extras '") + kViewExtra + "' needs 'target' [x, y, z], 'radius' and 'height'");
+  for (int k = 0; k < 3; ++k) s.view_target[k] = number(v.Get("target").Get(k), "target");
+  s.view_radius = number(v.Get("radius"), "radius");
+  s.view_height = number(v.Get("height"), "height");
+  if (!(s.view_radius > 0)) rd.fail(std::string("scene extras '") + kViewExtra + "': 'radius' must be positive");
+  s.has_view_hint = true;
+}
+
 }  // namespace
 
 Scene load_gltf(const fs::path& path) {
@@ -451,6 +484,8 @@ Scene load_gltf(const fs::path& path) {
   SceneBuilder b{rd, s, {}};
   b.materials();
   b.visit_roots();
+  const int sc = model.defaultScene >= 0 && model.defaultScene < int(model.scenes.size()) ? model.defaultScene : 0;
+  if (sc < int(model.scenes.size())) read_view_hint(rd, model.scenes[sc].extras, s);
   if (b.used_default) s.materials.push_back(Material{"default", {1, 1, 1, 1}, -1});
   if (s.triangle_count() == 0) rd.fail("the scene has no triangles");
   s.validate();
@@ -473,13 +508,16 @@ void write_gltf(const Scene& scene, const fs::path& path) {
   m.nodes.push_back(node);
   tinygltf::Scene sc;
   sc.nodes = {0};
+  if (scene.has_view_hint) sc.extras = view_hint_value(scene);
   m.scenes.push_back(sc);
   m.defaultScene = 0;
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  tinygltf::TinyGLTF w;
-  if (!w.WriteGltfSceneToFile(&m, path.string(), true, true, ext != ".glb", ext == ".glb"))
-    throw std::runtime_error(path.string() + ": cannot write glTF");
+  io::write_file_atomic(path, [&](const fs::path& tmp) {
+    tinygltf::TinyGLTF w;
+    if (!w.WriteGltfSceneToFile(&m, tmp.string(), true, true, ext != ".glb", ext == ".glb"))
+      throw std::runtime_error(path.string() + ": cannot write glTF");
+  });
 }
 
 }  // namespace evflow::sim

@@ -12,7 +12,7 @@ namespace evflow::sim {
 using namespace shaderio;
 
 MeshRenderer::MeshRenderer(gpu::Context& ctx, const Scene& scene, const ShadingParams& shading)
-    : ctx_(ctx), shading_(shading), cmd_(ctx), scan_(ctx) {
+    : ctx_(ctx), shading_(shading), small_box_(kSimSmallBox), cmd_(ctx), scan_(ctx) {
   scene.validate();
   const size_t T = scene.triangle_count();
   if (T == 0) throw std::runtime_error(scene.source + ": no triangles to render");
@@ -112,7 +112,8 @@ Frame MeshRenderer::render(const Camera& c) {
   pc.light = glm::vec4(L[0] / ln, L[1] / ln, L[2] / ln, shading_.ambient);
   pc.background = glm::vec4(shading_.background[0], shading_.background[1], shading_.background[2], 0.f);
   pc.dims = glm::uvec4(W, H, n_tris_, 0);
-  pc.misc = glm::vec4(float(std::max(c.near_plane, 1e-6)), float(shading_.texture_samples >= 4 ? 4 : 1), 0.f, 0.f);
+  pc.misc = glm::vec4(float(std::max(c.near_plane, 1e-6)), float(shading_.texture_samples >= 4 ? 4 : 1),
+                      float(small_box_), 0.f);
 
   cmd_.dispatch("sim/tri_setup",
                 {{kSimTriSetupBindTris, tris_},
@@ -125,10 +126,17 @@ Frame MeshRenderer::render(const Camera& c) {
   cmd_.fill(ids_, kSimNoTriangle, 0, P * 4);
   cmd_.submit();
   const uint32_t items = offsets_.read_one<uint32_t>(n_tris_);
-  if (items > 0) {
-    // Pass 0 keeps each pixel's nearest depth, pass 1 the triangle at that depth.
-    for (uint32_t pass = 0; pass < 2; ++pass) {
-      pc.dims.w = pass;
+  // Pass 0 keeps each pixel's nearest depth, pass 1 the triangle at that depth.
+  for (uint32_t pass = 0; pass < 2; ++pass) {
+    pc.dims.w = pass;
+    if (small_box_ > 0)
+      cmd_.dispatch("sim/raster_small",
+                    {{kSimRasterBindCamVerts, cam_},
+                     {kSimRasterBindBoxes, boxes_},
+                     {kSimRasterBindDepth, depth_},
+                     {kSimRasterBindIds, ids_}},
+                    pc, cmd_.linear_groups(gpu::Commands::div_up(n_tris_, kSimSmallGroupSize)));
+    if (items > 0)
       cmd_.dispatch("sim/raster",
                     {{kSimRasterBindCamVerts, cam_},
                      {kSimRasterBindBoxes, boxes_},
@@ -136,7 +144,6 @@ Frame MeshRenderer::render(const Camera& c) {
                      {kSimRasterBindDepth, depth_},
                      {kSimRasterBindIds, ids_}},
                     pc, cmd_.linear_groups(items));
-    }
   }
   cmd_.dispatch("sim/shade",
                 {{kSimShadeBindTris, tris_},

@@ -33,12 +33,17 @@ class MeshRenderer {
   MeshRenderer(gpu::Context& ctx, const Scene& scene, const ShadingParams& shading = {});
   Frame render(const Camera& cam);
   gpu::Context& context() const { return ctx_; }
+  // Triangles whose pixel box spans at most `px` pixels each way are rasterized by one invocation
+  // each (the default, 8, suits heavy meshes); the others by a workgroup per 16x16 tile. 0 sends
+  // every triangle to the tiles. The image is the same either way.
+  void set_small_triangle_box(uint32_t px) { small_box_ = px; }
   const ShadingParams& shading() const { return shading_; }
 
  private:
   gpu::Context& ctx_;
   ShadingParams shading_;
   uint32_t n_tris_ = 0;
+  uint32_t small_box_;
   gpu::Commands cmd_;
   PrefixSum scan_;
   gpu::Buffer tris_, materials_, texels_, cam_, boxes_, counts_, offsets_, depth_, ids_, image_;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 namespace evflow::sim {
 
@@ -59,6 +61,48 @@ void Scene::validate() const {
   for (auto& tx : textures)
     if (tx.width == 0 || tx.height == 0 || tx.rgba.size() != size_t(tx.width) * tx.height)
       throw std::runtime_error(source + ": texture '" + tx.name + "' has inconsistent size");
+}
+
+namespace {
+
+// The point of barycentric grid coordinates (i, j) of triangle (a, b, c), `dims` floats per vertex.
+// (wa*a + wb*b) + wc*c: on an edge one weight is zero and the sum is one of two terms, which float
+// addition gives identically in either order, so both triangles of a shared edge agree bit for bit.
+void grid_point(const float* v, int dims, int k, int i, int j, std::vector<float>& out) {
+  const float wa = float(k - i - j), wb = float(i), wc = float(j);
+  for (int d = 0; d < dims; ++d) out.push_back(((wa * v[d] + wb * v[dims + d]) + wc * v[2 * dims + d]) / float(k));
+}
+
+}  // namespace
+
+Scene subdivide(const Scene& scene, int k) {
+  if (k < 1) throw std::invalid_argument("subdivide: k must be at least 1, got " + std::to_string(k));
+  Scene out = scene;
+  out.positions.clear();
+  out.uvs.clear();
+  out.material.clear();
+  const size_t T = scene.triangle_count();
+  out.positions.reserve(T * k * k * 9);
+  out.uvs.reserve(T * k * k * 6);
+  out.material.reserve(T * k * k);
+  for (size_t t = 0; t < T; ++t) {
+    const float* p = &scene.positions[t * 9];
+    const float* uv = &scene.uvs[t * 6];
+    auto emit = [&](int i0, int j0, int i1, int j1, int i2, int j2) {
+      for (auto [i, j] : {std::pair{i0, j0}, std::pair{i1, j1}, std::pair{i2, j2}}) {
+        grid_point(p, 3, k, i, j, out.positions);
+        grid_point(uv, 2, k, i, j, out.uvs);
+      }
+      out.material.push_back(scene.material[t]);
+    };
+    // Same winding as (a, b, c): upward cells, then the downward ones between them.
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i + j < k; ++i) {
+        emit(i, j, i + 1, j, i, j + 1);
+        if (i + j + 2 <= k) emit(i + 1, j, i + 1, j + 1, i, j + 1);
+      }
+  }
+  return out;
 }
 
 }  // namespace evflow::sim

@@ -50,4 +50,10 @@ struct Scene {
   void validate() const;
 };
 
+// The same surfaces as `scene` with every triangle split into k x k triangles (a regular grid in
+// barycentric coordinates; UVs interpolated alike): a heavier mesh of the same images. The points
+// on an edge are computed the same way from both triangles that share it (float-exact), so a
+// watertight mesh stays watertight. k >= 1; k = 1 returns a copy.
+Scene subdivide(const Scene& scene, int k);
+
 }  // namespace evflow::sim

@@ -1,18 +1,13 @@
 #version 450
 // One workgroup = one 16x16 tile of one triangle's pixel range (work items are enumerated by the
-// prefix sum of the per-triangle tile counts). Mode 0: atomicMin of the depth bits (positive
-// floats order like uints). Mode 1: atomicMin of the triangle id where the depth is the minimum.
+// prefix sum of the per-triangle tile counts; small triangles have none: sim/raster_small).
 #extension GL_GOOGLE_include_directive : require
 #include "sim/sim_layout.h"
 #include "common/dispatch.glsl"
 #include "sim/raster_common.glsl"
 layout(local_size_x = kSimTile, local_size_y = kSimTile) in;
-layout(std430, binding = kSimRasterBindCamVerts) readonly buffer CamVerts { vec4 cam[]; };
-layout(std430, binding = kSimRasterBindBoxes) readonly buffer Boxes { uvec4 boxes[]; };
+#include "sim/raster_pixel.glsl"
 layout(std430, binding = kSimRasterBindOffsets) readonly buffer Offsets { uint offsets[]; };  // n + 1 (exclusive scan)
-layout(std430, binding = kSimRasterBindDepth) buffer Depth { uint depth[]; };
-layout(std430, binding = kSimRasterBindIds) buffer Ids { uint ids[]; };
-layout(push_constant) uniform PC { SimPC pc; };
 shared uint s_tri;
 
 void main() {
@@ -36,12 +31,5 @@ void main() {
   uint tx = tx0 + local % ntx, ty = box.y / kSimTile + local / ntx;
   uint x = tx * kSimTile + gl_LocalInvocationID.x, y = ty * kSimTile + gl_LocalInvocationID.y;
   if (x < box.x || x > box.z || y < box.y || y > box.w) return;
-  vec3 lambda;
-  float z;
-  vec3 d = sim_ray(pc, vec2(x, y) + 0.5);
-  if (!sim_hit(d, cam[3u * tri].xyz, cam[3u * tri + 1u].xyz, cam[3u * tri + 2u].xyz, pc.misc.x, lambda, z)) return;
-  uint p = y * pc.dims.x + x;
-  uint bits = floatBitsToUint(z);
-  if (pc.dims.w == 0u) atomicMin(depth[p], bits);
-  else if (depth[p] == bits) atomicMin(ids[p], tri);
+  sim_raster_pixel(tri, cam[3u * tri].xyz, cam[3u * tri + 1u].xyz, cam[3u * tri + 2u].xyz, x, y);
 }

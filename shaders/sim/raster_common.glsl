@@ -26,3 +26,8 @@ vec3 sim_plane_lambda(vec3 d, vec3 v0, vec3 v1, vec3 v2) {
   float s = e.x + e.y + e.z;
   return s != 0.0 ? e / s : vec3(1.0 / 3.0);
 }
+// A triangle whose pixel box (x0 y0 x1 y1, inclusive) spans at most `limit` pixels each way
+// (pc.misc.z) is rasterized by sim/raster_small and gets no 16x16 tiles. An empty box is not small.
+bool sim_small_box(uvec4 box, float limit) {
+  return box.x <= box.z && box.y <= box.w && float(box.z - box.x) < limit && float(box.w - box.y) < limit;
+}

@@ -3,9 +3,10 @@
 // Triangles are rendered by ray casting through pixel centres: a pixel (x, y) is covered when the
 // ray through (x + 0.5, y + 0.5) meets the triangle (watertight: shared edges use the same scalar
 // triple products with opposite signs). Passes: tri_setup (camera-space vertices, clipped screen
-// bounding box in 16x16 tiles, tile count) -> prefix sum of the counts -> raster (mode 0: atomicMin
-// of the depth bits; mode 1: atomicMin of the triangle id where the depth equals the minimum; one
-// workgroup = one (triangle, tile) pair) -> shade (per pixel: perspective-correct UVs, trilinear
+// bounding box in 16x16 tiles, tile count; none for a small triangle) -> prefix sum of the counts ->
+// raster_small and raster (mode 0: atomicMin of the depth bits; mode 1: atomicMin of the triangle id
+// where the depth equals the minimum; raster_small: one invocation per small triangle, raster: one
+// workgroup per (triangle, tile) pair) -> shade (per pixel: perspective-correct UVs, trilinear
 // mip-mapped sRGB RGBA8 texture, ambient + Lambert, depth).
 #ifndef EVF_SIM_LAYOUT_H
 #define EVF_SIM_LAYOUT_H
@@ -14,6 +15,10 @@ EVF_NAMESPACE_BEGIN
 EVF_CONST(uint, kSimSetupGroupSize, 64u)
 EVF_CONST(uint, kSimTile, 16u)              // raster tile edge (pixels); one workgroup per tile
 EVF_CONST(uint, kSimShadeGroupSize, 64u)
+EVF_CONST(uint, kSimSmallGroupSize, 64u)
+// Default of SimPC.misc.z: triangles whose pixel box is at most this many pixels wide and high get
+// one invocation each (sim/raster_small) instead of a workgroup per tile.
+EVF_CONST(uint, kSimSmallBox, 8u)
 EVF_CONST(uint, kSimNoTriangle, 0xFFFFFFFFu)
 EVF_CONST(uint, kSimNoTexture, 0xFFFFFFFFu)
 
@@ -42,7 +47,8 @@ struct SimPC {
   vec4 light;   // xyz: unit direction towards the light (world), w: ambient fraction
   vec4 background;  // linear RGB, a: unused
   uvec4 dims;   // width, height, triangle count, raster mode (0 depth, 1 id)
-  vec4 misc;    // x: near plane, y: texture supersampling (1 or 4 samples per pixel)
+  vec4 misc;    // x: near plane, y: texture supersampling (1 or 4 samples per pixel), z: small-triangle box
+                // limit in pixels (0: every triangle takes the tiles)
 };
 
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).

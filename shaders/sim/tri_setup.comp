@@ -1,9 +1,10 @@
 #version 450
 // Per triangle: camera-space vertices, the pixel range its (near-clipped) projection can cover,
-// and the number of 16x16 raster tiles over that range.
+// and the number of 16x16 raster tiles over that range (none for a small triangle).
 #extension GL_GOOGLE_include_directive : require
 #include "sim/sim_layout.h"
 #include "common/dispatch.glsl"
+#include "sim/raster_common.glsl"
 layout(local_size_x = kSimSetupGroupSize) in;
 layout(std430, binding = kSimTriSetupBindTris) readonly buffer Tris { SimTriangle tris[]; };
 layout(std430, binding = kSimTriSetupBindCamVerts) writeonly buffer CamVerts { vec4 cam[]; };  // 3 per triangle
@@ -46,17 +47,20 @@ void main() {
   uvec4 box = uvec4(1u, 1u, 0u, 0u);
   float W = float(pc.dims.x), H = float(pc.dims.y);
   if (kept > 0u && hi.x >= -1.0 && hi.y >= -1.0 && lo.x <= W + 1.0 && lo.y <= H + 1.0) {
-    // Pixel centres x + 0.5 in [lo, hi], widened by one pixel against rounding (the exact test
-    // runs per pixel).
+    // Pixel centres x + 0.5 in [lo, hi], widened by 1/16 pixel against the rounding of the
+    // projections (about 1e-4 pixel; the exact test runs per pixel). A wider margin costs the
+    // small triangles of heavy meshes: a 1-pixel margin made a sub-pixel triangle's box 3 x 3.
+    const float margin = 0.0625;
     lo = clamp(lo, vec2(-2.0), vec2(W + 2.0, H + 2.0));
     hi = clamp(hi, vec2(-2.0), vec2(W + 2.0, H + 2.0));
-    int x0 = max(int(ceil(lo.x - 0.5)) - 1, 0), y0 = max(int(ceil(lo.y - 0.5)) - 1, 0);
-    int x1 = min(int(floor(hi.x - 0.5)) + 1, int(pc.dims.x) - 1), y1 = min(int(floor(hi.y - 0.5)) + 1, int(pc.dims.y) - 1);
+    int x0 = max(int(ceil(lo.x - 0.5 - margin)), 0), y0 = max(int(ceil(lo.y - 0.5 - margin)), 0);
+    int x1 = min(int(floor(hi.x - 0.5 + margin)), int(pc.dims.x) - 1);
+    int y1 = min(int(floor(hi.y - 0.5 + margin)), int(pc.dims.y) - 1);
     if (x0 <= x1 && y0 <= y1) {
       box = uvec4(x0, y0, x1, y1);
       count = (uint(x1) / kSimTile - uint(x0) / kSimTile + 1u) * (uint(y1) / kSimTile - uint(y0) / kSimTile + 1u);
     }
   }
   boxes[i] = box;
-  counts[i] = count;
+  counts[i] = sim_small_box(box, pc.misc.z) ? 0u : count;  // small ones: sim/raster_small
 }
