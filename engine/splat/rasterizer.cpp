@@ -120,12 +120,14 @@ Rasterizer::Rasterizer(gpu::Context& ctx, const RasterKernels& kernels)
       cmd_(ctx),
       scan_(ctx),
       sort_(ctx),
-      isect_grad_(ctx, 16, "isect_grad"),
       grad2d_norm_(ctx, 16, "grad2d_norm"),
       pose_partial_(ctx, 16, "pose_partial"),
       pose_(ctx, 32, "pose_gradient"),
       subgroup_reduce_(kernels.subgroup_reduce),
-      block_suffix_(kernels.block ? "_block" : "") {}
+      block_suffix_(kernels.block ? "_block" : "") {
+  for (const char* q : {"mean_x", "mean_y", "conic_x", "conic_y", "conic_z", "opacity", "red", "green", "blue"})
+    isect_grad_.emplace_back(ctx, 16, std::string("isect_grad_") + q);
+}
 
 // SH band l of a set of buffers, or band 0 standing in for a band above its degree (the
 // shaders never read it, but every binding needs a buffer).
@@ -291,13 +293,11 @@ void Rasterizer::backward(const RenderState& st, const GaussianBuffers& params, 
   if (v_rgb.size() < pixels * 12 || v_alpha.size() < pixels * 4)
     throw gpu::Error("Rasterizer::backward: v_rgb / v_alpha are smaller than the image");
   const size_t n = params.count;
-  const uint64_t align = std::max<uint64_t>(256, ctx_.caps().min_storage_offset_alignment);
-  const uint64_t stride = ((std::max<uint64_t>(st.num_isects_, 1) * 4 + align - 1) / align) * align;
-  isect_grad_.ensure(stride * 9);
+  for (gpu::Buffer& g : isect_grad_) g.ensure(std::max<uint64_t>(st.num_isects_, 1) * 4);
   grad2d_norm_.ensure(n * 4);
   const uint32_t groups = gpu::Commands::div_up(n, kProjectGroupSize);
   pose_partial_.ensure(uint64_t(std::max<uint32_t>(groups, 1)) * 24);
-  auto plane = [&](int k) { return gpu::BufferRef(isect_grad_, stride * k, stride); };
+  auto plane = [&](int k) { return gpu::BufferRef(isect_grad_[k]); };
   stage_ms_.erase(std::remove_if(stage_ms_.begin(), stage_ms_.end(),
                                  [](auto& s) { return s.first.find("backward") != std::string::npos; }),
                   stage_ms_.end());

@@ -104,7 +104,9 @@ class Rasterizer {
   gpu::Commands cmd_;
   PrefixSum scan_;
   RadixSort sort_;
-  gpu::Buffer isect_grad_;  // per-intersection gradient planes of the backward pass
+  // Per-intersection gradient planes of the backward pass (mean x, y, conic x, y, z, opacity, red,
+  // green, blue), a buffer each: GPU-assisted validation checks accesses against whole buffers.
+  std::vector<gpu::Buffer> isect_grad_;
   gpu::Buffer grad2d_norm_, pose_partial_, pose_;
   bool subgroup_reduce_ = false;  // backward: subgroupAdd before the shared add
   std::string block_suffix_;      // "" (one pixel per invocation) or "_block" (RasterKernels::block)
