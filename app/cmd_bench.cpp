@@ -13,6 +13,9 @@
 #include "gpu/commands.h"
 #include "io/camera_json.h"
 #include "run_files.h"
+#include "sim/builtin_scenes.h"
+#include "sim/mesh_renderer.h"
+#include "sim/simulator.h"
 #include "splat/rasterizer.h"
 #include "splat/synthetic.h"
 #include "train/synthetic_dataset.h"
@@ -239,6 +242,61 @@ static int bench_flow(ArgParser& p) {
   return 0;
 }
 
+// The simulator's renderer on its own: each training view's mid-exposure camera of the rig, per
+// stage (GPU timestamps), medians over every frame rendered.
+static int bench_sim(ArgParser& p) {
+  sim::SimParams sp;
+  sp.width = uint32_t(p.integer("--width", sp.width));
+  sp.height = uint32_t(p.integer("--height", sp.height));
+  const std::string scene_arg = p.value("--scene");
+  const long long subdivide = p.integer("--subdivide", 1);
+  const int repeats = int(p.integer("--repeats", 3)), warmup = int(p.integer("--warmup", 1));
+  const bool json = p.flag("--json");
+  gpu::ContextOptions o = context_options(p);
+  p.reject_unknown();
+  if (subdivide < 1 || subdivide > 1024) throw std::invalid_argument("--subdivide must be between 1 and 1024");
+  sim::Scene scene = sim::builtin_or_gltf_scene(scene_arg);
+  if (subdivide > 1) scene = sim::subdivide(scene, int(subdivide));
+  gpu::Context ctx(o);
+  const sim::Simulator rig(ctx, scene, sp);  // its cameras
+  sim::MeshRenderer r(ctx, scene, sp.shading);
+  std::map<std::string, std::vector<double>> stages;
+  std::vector<std::string> order;
+  std::vector<double> totals, walls;
+  for (int it = 0; it < warmup + repeats; ++it)
+    for (int v = 0; v < sp.train_views; ++v) {
+      const auto t0 = std::chrono::steady_clock::now();
+      r.render(rig.shake_pose(v, 0.5, 1.0));
+      const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      if (it < warmup) continue;
+      double total = 0;
+      for (auto& [name, ms] : r.stage_ms()) {
+        if (!stages.count(name)) order.push_back(name);
+        stages[name].push_back(ms);
+        total += ms;
+      }
+      totals.push_back(total);
+      walls.push_back(wall);
+    }
+  const size_t frames = totals.size();
+  if (json) {
+    std::printf(
+        "{\"bench\": \"sim\", \"device\": \"%s\", \"scene\": \"%s\", \"triangles\": %zu, \"width\": %u, "
+        "\"height\": %u, \"frames\": %zu, \"stages_ms\": {",
+        ctx.caps().name.c_str(), scene.source.c_str(), scene.triangle_count(), sp.width, sp.height, frames);
+    for (size_t i = 0; i < order.size(); ++i)
+      std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
+    std::printf("}, \"gpu_total_ms\": %.3f, \"wall_ms\": %.3f}\n", median(totals), median(walls));
+  } else {
+    std::printf("sim bench on %s: scene %s (%zu triangles), %ux%u, median of %zu frames\n", ctx.caps().name.c_str(),
+                scene.source.c_str(), scene.triangle_count(), sp.width, sp.height, frames);
+    for (auto& name : order) std::printf("  %-22s %9.2f ms\n", name.c_str(), median(stages[name]));
+    std::printf("  %-22s %9.2f ms\n  %-22s %9.2f ms\n", "total (GPU)", median(totals), "wall (with host)",
+                median(walls));
+  }
+  return 0;
+}
+
 static int run_bench(const Args& a) {
   ArgParser p(a);
   auto pos = p.positional();
@@ -263,7 +321,11 @@ static int run_bench(const Args& a) {
         "                         [--repeats 5] [--json]\n"
         "  Forward and backward of a stack of 3x3 convolutions with ReLU between (the LDI network's\n"
         "  layers; --widths: input channels, then each layer's) over a batch of images, one dispatch\n"
-        "  per layer: ms and GFLOP/s per layer.\n");
+        "  per layer: ms and GFLOP/s per layer.\n"
+        "       evflow bench sim [--scene NAME|F.glb] [--subdivide K] [--width 346] [--height 260]\n"
+        "                        [--repeats 3] [--warmup 1] [--json]\n"
+        "  The simulator's mesh renderer per stage (GPU timestamps, medians over frames) at the\n"
+        "  mid-exposure camera of each training view of the rig (--subdivide: as evflow simulate).\n");
     return pos.empty() ? 2 : 0;
   }
   p.args.erase(std::find(p.args.begin(), p.args.end(), pos[0]));
@@ -271,9 +333,11 @@ static int run_bench(const Args& a) {
   if (pos[0] == "train") return bench_train(p);
   if (pos[0] == "flow") return bench_flow(p);
   if (pos[0] == "conv") return bench_conv(p);
-  throw std::invalid_argument("unknown benchmark '" + pos[0] + "' (available: raster, train, flow, conv)");
+  if (pos[0] == "sim") return bench_sim(p);
+  throw std::invalid_argument("unknown benchmark '" + pos[0] + "' (available: raster, train, flow, conv, sim)");
 }
 
-static Command reg("bench", "time the stages of a pipeline (raster, train, flow, conv), as a table or JSON", run_bench);
+static Command reg("bench", "time the stages of a pipeline (raster, train, flow, conv, sim), as a table or JSON",
+                   run_bench);
 
 }  // namespace evflow::app

@@ -154,10 +154,7 @@ static int run_simulate(const Args& a) {
   if (!p.positional().empty()) throw std::invalid_argument("unexpected argument '" + p.positional()[0] + "'");
 
   const auto start = std::chrono::steady_clock::now();
-  auto builtin = sim::builtin_scene_names();
-  const bool is_builtin = scene_path.empty() || std::find(builtin.begin(), builtin.end(), scene_path) != builtin.end();
-  sim::Scene scene =
-      is_builtin ? sim::make_builtin_scene(scene_path.empty() ? "default" : scene_path) : sim::load_gltf(scene_path);
+  sim::Scene scene = sim::builtin_or_gltf_scene(scene_path);
   if (subdivide > 1) scene = sim::subdivide(scene, int(subdivide));
   if (!write_scene.empty()) {
     sim::write_gltf(scene, write_scene);

@@ -1,4 +1,5 @@
-// evflow simulate on the command line: progress per training view, then the summary.
+// evflow simulate on the command line: progress per training view, then the summary; heavier
+// meshes by --subdivide, scenes written as glTF; evflow bench sim.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -56,4 +57,22 @@ TEST_CASE("simulate: --subdivide makes a heavier mesh of the same scene, --write
   CHECK(run_evflow(dir, "simulate --subdivide 0 --write-scene x.glb", out) != 0);
   CHECK(out.find("--subdivide must be between 1 and 1024") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "x.glb"));
+}
+
+TEST_CASE("bench sim: the mesh renderer's stages per frame, as a table or JSON", "[cli][sim]") {
+  REQUIRE(fs::exists(evflow_binary()));
+  const fs::path dir = fresh_dir("evflow_bench_sim");
+  std::string out;
+  REQUIRE(run_evflow(dir, "bench sim --width 64 --height 48 --subdivide 4 --repeats 1 --warmup 0 --json", out) == 0);
+  INFO(out);
+  CHECK(out.find("\"bench\": \"sim\"") != std::string::npos);
+  CHECK(out.find("\"triangles\": 1152") != std::string::npos);
+  CHECK(out.find("\"frames\": 16") != std::string::npos);  // the rig's 16 training views, once
+  for (const char* stage : {"setup", "scan", "raster small (depth)", "raster tiles (depth)", "raster small (id)",
+                            "raster tiles (id)", "shade"})
+    CHECK(out.find(std::string("\"") + stage + "\": ") != std::string::npos);
+  REQUIRE(run_evflow(dir, "bench sim --width 64 --height 48 --repeats 1 --warmup 0", out) == 0);
+  CHECK(out.find("scene default (72 triangles), 64x48, median of 16 frames") != std::string::npos);
+  CHECK(run_evflow(dir, "bench sim --scene missing.glb", out) != 0);
+  CHECK(out.find("missing.glb") != std::string::npos);
 }

@@ -1,7 +1,9 @@
 #include "sim/builtin_scenes.h"
 
+#include <algorithm>
 #include <stdexcept>
 
+#include "sim/gltf_scene.h"
 #include "sim/textures.h"
 
 namespace evflow::sim {
@@ -104,6 +106,13 @@ Scene make_builtin_scene(const std::string& name) {
                                   checker_texture(), brick_texture(), noise_texture(31)});
   if (name == "objects") return make_objects_scene();
   throw std::invalid_argument("unknown built-in scene '" + name + "' (default, gallery, workshop, objects)");
+}
+
+Scene builtin_or_gltf_scene(const std::string& name_or_path) {
+  if (name_or_path.empty()) return make_default_scene();
+  const std::vector<std::string> names = builtin_scene_names();
+  if (std::find(names.begin(), names.end(), name_or_path) != names.end()) return make_builtin_scene(name_or_path);
+  return load_gltf(name_or_path);
 }
 
 }  // namespace evflow::sim

@@ -17,6 +17,8 @@ Scene make_default_scene();
 // floor and walls.
 Scene make_builtin_scene(const std::string& name);
 std::vector<std::string> builtin_scene_names();
+// A built-in scene by name, else a glTF file by path (sim/gltf_scene.h); empty: "default".
+Scene builtin_or_gltf_scene(const std::string& name_or_path);
 // The mean blur (pixels per exposure at 173 x 130) `evflow experiment` simulates a built-in scene
 // with unless told otherwise: default 6, gallery 4 (its fine print is unreadable beyond), workshop
 // 9 (coarse textures stay legible), objects 8; throws for another name.

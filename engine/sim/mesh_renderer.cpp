@@ -115,16 +115,22 @@ Frame MeshRenderer::render(const Camera& c) {
   pc.misc = glm::vec4(float(std::max(c.near_plane, 1e-6)), float(shading_.texture_samples >= 4 ? 4 : 1),
                       float(small_box_), 0.f);
 
+  stage_ms_.clear();
+  auto keep_stages = [&] { stage_ms_.insert(stage_ms_.end(), cmd_.stage_ms().begin(), cmd_.stage_ms().end()); };
   cmd_.dispatch("sim/tri_setup",
                 {{kSimTriSetupBindTris, tris_},
                  {kSimTriSetupBindCamVerts, cam_},
                  {kSimTriSetupBindBoxes, boxes_},
                  {kSimTriSetupBindCounts, counts_}},
                 pc, cmd_.linear_groups(gpu::Commands::div_up(n_tris_, kSimSetupGroupSize)));
+  cmd_.mark("setup");
   scan_.record(cmd_, counts_, offsets_, n_tris_, n_tris_ + 1);
+  cmd_.mark("scan");
   cmd_.fill(depth_, 0xFFFFFFFFu, 0, P * 4);
   cmd_.fill(ids_, kSimNoTriangle, 0, P * 4);
+  cmd_.mark("clear");
   cmd_.submit();
+  keep_stages();
   const uint32_t items = offsets_.read_one<uint32_t>(n_tris_);
   // Pass 0 keeps each pixel's nearest depth, pass 1 the triangle at that depth.
   for (uint32_t pass = 0; pass < 2; ++pass) {
@@ -136,6 +142,7 @@ Frame MeshRenderer::render(const Camera& c) {
                      {kSimRasterBindDepth, depth_},
                      {kSimRasterBindIds, ids_}},
                     pc, cmd_.linear_groups(gpu::Commands::div_up(n_tris_, kSimSmallGroupSize)));
+    cmd_.mark(pass == 0 ? "raster small (depth)" : "raster small (id)");
     if (items > 0)
       cmd_.dispatch("sim/raster",
                     {{kSimRasterBindCamVerts, cam_},
@@ -144,6 +151,7 @@ Frame MeshRenderer::render(const Camera& c) {
                      {kSimRasterBindDepth, depth_},
                      {kSimRasterBindIds, ids_}},
                     pc, cmd_.linear_groups(items));
+    cmd_.mark(pass == 0 ? "raster tiles (depth)" : "raster tiles (id)");
   }
   cmd_.dispatch("sim/shade",
                 {{kSimShadeBindTris, tris_},
@@ -153,7 +161,9 @@ Frame MeshRenderer::render(const Camera& c) {
                  {kSimShadeBindTexels, texels_},
                  {kSimShadeBindOut, image_}},
                 pc, cmd_.linear_groups(gpu::Commands::div_up(P, kSimShadeGroupSize)));
+  cmd_.mark("shade");
   cmd_.submit();
+  keep_stages();
   std::vector<float> px = image_.read<float>(P * 4);
   Frame f;
   f.width = W;

@@ -6,6 +6,8 @@
 #pragma once
 #include <array>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "camera/camera.h"
@@ -37,6 +39,9 @@ class MeshRenderer {
   // each (the default, 8, suits heavy meshes); the others by a workgroup per 16x16 tile. 0 sends
   // every triangle to the tiles. The image is the same either way.
   void set_small_triangle_box(uint32_t px) { small_box_ = px; }
+  // GPU time per stage (ms) of the last render, in order (setup, scan, clear, raster small /
+  // tiles per pass, shade).
+  const std::vector<std::pair<std::string, double>>& stage_ms() const { return stage_ms_; }
   const ShadingParams& shading() const { return shading_; }
 
  private:
@@ -46,6 +51,7 @@ class MeshRenderer {
   uint32_t small_box_;
   gpu::Commands cmd_;
   PrefixSum scan_;
+  std::vector<std::pair<std::string, double>> stage_ms_;
   gpu::Buffer tris_, materials_, texels_, cam_, boxes_, counts_, offsets_, depth_, ids_, image_;
 };
 
