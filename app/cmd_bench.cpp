@@ -28,6 +28,24 @@ static double median(std::vector<double> v) {
   return v.empty() ? 0 : v[v.size() / 2];
 }
 
+// Stage times (GPU timestamps) of repeated runs: each stage's samples in first-seen order, and
+// each run's GPU total and wall time.
+struct StageSamples {
+  std::map<std::string, std::vector<double>> stages;
+  std::vector<std::string> order;
+  std::vector<double> totals, walls;
+  void add(const std::vector<std::pair<std::string, double>>& stage_ms, double wall) {
+    double total = 0;
+    for (auto& [name, ms] : stage_ms) {
+      if (!stages.count(name)) order.push_back(name);
+      stages[name].push_back(ms);
+      total += ms;
+    }
+    totals.push_back(total);
+    walls.push_back(wall);
+  }
+};
+
 // The bench scene: the first camera of --camera (its size and intrinsics) or a 60-degree camera
 // of --width x --height; the splats of --splats (a run, .ply or .glb) or N synthetic Gaussians in
 // front of that camera.
@@ -67,24 +85,15 @@ static int bench_raster(ArgParser& p) {
   s.antialiased = aa;
   Rasterizer r(ctx);
   RenderState rs(ctx);
-  std::map<std::string, std::vector<double>> stages;
-  std::vector<std::string> order;
-  std::vector<double> totals, walls;
+  StageSamples samples;
   for (int it = 0; it < warmup + repeats; ++it) {
     auto t0 = std::chrono::steady_clock::now();
     r.forward(params, cam, s, rs);
     r.backward(rs, params, v_rgb, v_alpha, grads);
     double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    if (it < warmup) continue;
-    double total = 0;
-    for (auto& [name, ms] : r.stage_ms()) {
-      if (!stages.count(name)) order.push_back(name);
-      stages[name].push_back(ms);
-      total += ms;
-    }
-    totals.push_back(total);
-    walls.push_back(wall);
+    if (it >= warmup) samples.add(r.stage_ms(), wall);
   }
+  auto& [stages, order, totals, walls] = samples;
   if (json) {
     std::printf(
         "{\"bench\": \"raster\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": %zu, "
@@ -260,24 +269,15 @@ static int bench_sim(ArgParser& p) {
   gpu::Context ctx(o);
   const sim::Simulator rig(ctx, scene, sp);  // its cameras
   sim::MeshRenderer r(ctx, scene, sp.shading);
-  std::map<std::string, std::vector<double>> stages;
-  std::vector<std::string> order;
-  std::vector<double> totals, walls;
+  StageSamples samples;
   for (int it = 0; it < warmup + repeats; ++it)
     for (int v = 0; v < sp.train_views; ++v) {
       const auto t0 = std::chrono::steady_clock::now();
       r.render(rig.shake_pose(v, 0.5, 1.0));
       const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      if (it < warmup) continue;
-      double total = 0;
-      for (auto& [name, ms] : r.stage_ms()) {
-        if (!stages.count(name)) order.push_back(name);
-        stages[name].push_back(ms);
-        total += ms;
-      }
-      totals.push_back(total);
-      walls.push_back(wall);
+      if (it >= warmup) samples.add(r.stage_ms(), wall);
     }
+  auto& [stages, order, totals, walls] = samples;
   const size_t frames = totals.size();
   if (json) {
     std::printf(
