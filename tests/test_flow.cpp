@@ -136,11 +136,18 @@ TEST_CASE("flow: the GPU contrast and its node gradients match the double refere
   const std::vector<double> scale = {-0.3, -0.5, 0.2};
   flow::FlowEstimator est(test::gpu_context());
   est.set_events(ev);
-  const flow::ContrastEval gpu = est.evaluate(frame_u, grids, std::vector<float>(scale.begin(), scale.end()), true);
+  // The sensor's images with every event, and the coarse levels' settings: half-size images
+  // from every third event.
+  const auto [image_scale, stride] = GENERATE(std::pair<int, uint32_t>{1, 1}, std::pair<int, uint32_t>{2, 3});
+  INFO("image scale " << image_scale << ", event stride " << stride);
+  auto reference = [&](const std::vector<flow::FlowGrid>& g) {
+    return reference::flow_contrast(ev, frame_u, g, scale, image_scale, stride);
+  };
+  const flow::ContrastEval gpu =
+      est.evaluate(frame_u, grids, std::vector<float>(scale.begin(), scale.end()), true, image_scale, stride);
   double value = 0;
   for (size_t i = 0; i < scale.size(); ++i) value += scale[i] * gpu.g[i];
-  const double ref = reference::flow_contrast(ev, frame_u, grids, scale);
-  REQUIRE(value == Approx(ref).epsilon(1e-4));
+  REQUIRE(value == Approx(reference(grids)).epsilon(1e-4));
   double max_grad = 0;
   for (auto& g : gpu.node_grad)
     for (double v : g) max_grad = std::max(max_grad, std::abs(v));
@@ -151,9 +158,7 @@ TEST_CASE("flow: the GPU contrast and its node gradients match the double refere
       auto plus = grids, minus = grids;
       plus[j].nodes[k] += float(h);
       minus[j].nodes[k] -= float(h);
-      const double fd =
-          (reference::flow_contrast(ev, frame_u, plus, scale) - reference::flow_contrast(ev, frame_u, minus, scale)) /
-          double(plus[j].nodes[k] - minus[j].nodes[k]);
+      const double fd = (reference(plus) - reference(minus)) / double(plus[j].nodes[k] - minus[j].nodes[k]);
       INFO("interval " << j << " node value " << k);
       CHECK(gpu.node_grad[j][k] == Approx(fd).margin(0.02 * max_grad));
     }

@@ -27,6 +27,7 @@ void FlowOptions::validate() const {
     throw std::invalid_argument("flow: one image scale and one event stride per level of the tile pyramid");
   for (uint32_t st : event_stride)
     if (st == 0) throw std::invalid_argument("flow: event strides must be >= 1");
+  if (interval_event_stride == 0) throw std::invalid_argument("flow: interval_event_stride must be >= 1");
   for (uint32_t sc : image_scale)
     if (sc == 0 || sc > 64) throw std::invalid_argument("flow: image scales must be 1..64");
   if (!(lr > 0) || !(lr_level > 0)) throw std::invalid_argument("flow: learning rates must be > 0");
@@ -36,6 +37,8 @@ void FlowOptions::validate() const {
 double flow_ref_weight(uint32_t r) { return kRefWeight[r]; }
 
 namespace {
+uint32_t div_up_u32(uint32_t a, uint32_t b) { return (a + b - 1) / b; }
+
 // The intervals between consecutive frame times as the shaders read them.
 std::vector<float> interval_table(const std::vector<double>& frame_u) {
   if (frame_u.size() < 2 || frame_u.size() > shaderio::kFlowMaxIntervals + 1)
@@ -58,6 +61,7 @@ FlowEstimator::FlowEstimator(gpu::Context& ctx, FlowOptions options)
       pixel_first_(ctx, 16, "flow_pixel_first"),
       pixel_order_(ctx, 16, "flow_pixel_order"),
       event_time_(ctx, 16, "flow_event_time"),
+      event_slot_(ctx, 16, "flow_event_slot"),
       intervals_(ctx, 16, "flow_intervals"),
       nodes_(ctx, 16, "flow_nodes"),
       iwe_(ctx, 16, "flow_iwe"),
@@ -66,6 +70,8 @@ FlowEstimator::FlowEstimator(gpu::Context& ctx, FlowOptions options)
       adjoint_(ctx, 16, "flow_adjoint"),
       scale_(ctx, 16, "flow_scale"),
       partials_(ctx, 16, "flow_partials"),
+      quads_(ctx, 16, "flow_adjoint_quads"),
+      positions_(ctx, 16, "flow_positions"),
       grad_field_(ctx, 16, "flow_grad_field"),
       node_grad_(ctx, 16, "flow_node_grad") {
   options_.validate();
@@ -87,6 +93,16 @@ void FlowEstimator::set_events(const PixelEvents& ev) {
   pixel_order_.ensure(std::max<uint64_t>(ev.order.size() * 4, 16));
   pixel_order_.write(ev.order);
   busy_pixels_ = uint32_t(ev.order.size());
+  grad_field_zeroed_ = 0;
+  events_ = uint32_t(ev.size());
+  std::vector<uint32_t> slot(std::max<size_t>(ev.size(), 1), 0);  // each event's pixel's index in order
+  for (uint32_t k = 0; k < busy_pixels_; ++k)
+    for (uint32_t e = ev.first[ev.order[k]]; e < ev.first[ev.order[k] + 1]; ++e) slot[e] = k;
+  event_slot_.ensure(slot.size() * 4);
+  event_slot_.write(slot);
+  const uint64_t positions = std::max<uint64_t>(busy_pixels_, 1) * shaderio::kFlowPositionsPerPixel * 8;
+  ctx_.check_binding_size(positions, "flow: the positions of the pixels with events");
+  positions_.ensure(positions);
 }
 
 void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint32_t tiles, uint32_t image_scale,
@@ -94,19 +110,28 @@ void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint
   using namespace shaderio;
   const uint32_t iw = (width_ + image_scale - 1) / image_scale, ih = (height_ + image_scale - 1) / image_scale;
   const uint64_t hw = uint64_t(iw) * ih;
-  const FlowEventsPC epc{width_, height_, intervals, tiles, iw, ih, float(image_scale), busy_pixels_, stride, 0, 0, 0};
+  const FlowEventsPC epc{width_,       height_, intervals, tiles, iw, ih, float(image_scale),
+                         busy_pixels_, stride,  events_,   0,     0};
   const gpu::Groups pixel_groups = cmd.linear_groups(std::max(1u, gpu::Commands::div_up(busy_pixels_, kFlowGroupSize)));
   const gpu::Groups image_groups = cmd.linear_groups(gpu::Commands::div_up(hw * kFlowRefs, kFlowGroupSize));
   const uint32_t per_image = gpu::Commands::div_up(hw, kFlowGroupSize);
+  cmd.dispatch("flow/positions",
+               {{kFlowPositionsBindPixelOrder, pixel_order_},
+                {kFlowPositionsBindIntervals, intervals_},
+                {kFlowPositionsBindNodes, nodes_},
+                {kFlowPositionsBindPositions, positions_}},
+               epc, pixel_groups);
+  cmd.mark("positions");
   cmd.fill(iwe_, 0u, 0, hw * kFlowRefs * 4);
   cmd.dispatch("flow/vote",
                {{kFlowVoteBindPixelOrder, pixel_order_},
-                {kFlowVoteBindPixelFirst, pixel_first_},
+                {kFlowVoteBindEventSlot, event_slot_},
                 {kFlowVoteBindEventTime, event_time_},
                 {kFlowVoteBindIntervals, intervals_},
-                {kFlowVoteBindNodes, nodes_},
+                {kFlowVoteBindPositions, positions_},
                 {kFlowVoteBindIwe, iwe_}},
-               epc, pixel_groups);
+               epc,
+               cmd.linear_groups(std::max(1u, gpu::Commands::div_up(div_up_u32(events_, stride), kFlowGroupSize))));
   cmd.mark("vote");
   auto blur = [&](const gpu::Buffer& src, const gpu::Buffer& dst, uint32_t axis, uint32_t fixed) {
     const FlowBlurPC bpc{iw, ih, kFlowRefs, axis, fixed, 0, 0, 0};
@@ -127,14 +152,21 @@ void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint
   blur(adjoint_, blur_tmp_, 0, 0);  // the blur is its own adjoint
   blur(blur_tmp_, adjoint_, 1, 0);
   cmd.mark("blur");
-  cmd.fill(grad_field_, 0u, 0, uint64_t(width_) * height_ * intervals * 8);  // pixels without events
+  const FlowQuadsPC qpc{iw, ih, kFlowRefs, 0};
+  cmd.dispatch("flow/adjoint_quads", {{kFlowQuadsBindAdjoint, adjoint_}, {kFlowQuadsBindQuads, quads_}}, qpc,
+               cmd.linear_groups(gpu::Commands::div_up(uint64_t(iw + 1) * (ih + 1) * kFlowRefs, kFlowGroupSize)));
+  cmd.mark("adjoint quads");
+  if (grad_field_zeroed_ != intervals) {  // pixels without events: zero until the events change
+    cmd.fill(grad_field_, 0u, 0, uint64_t(width_) * height_ * intervals * 8);
+    grad_field_zeroed_ = intervals;
+  }
   cmd.dispatch("flow/flow_grad",
                {{kFlowGradBindPixelOrder, pixel_order_},
                 {kFlowGradBindPixelFirst, pixel_first_},
                 {kFlowGradBindEventTime, event_time_},
                 {kFlowGradBindIntervals, intervals_},
-                {kFlowGradBindNodes, nodes_},
-                {kFlowGradBindAdjoint, adjoint_},
+                {kFlowGradBindPositions, positions_},
+                {kFlowGradBindQuads, quads_},
                 {kFlowGradBindGradField, grad_field_}},
                epc, pixel_groups);
   cmd.mark("flow gradient");
@@ -174,6 +206,9 @@ ContrastEval FlowEstimator::evaluate(const std::vector<double>& frame_u, const s
   scale_.write(scale);
   for (gpu::Buffer* b : {&iwe_, &blur_tmp_, &blurred_, &adjoint_}) b->ensure(hw * kFlowRefs * 4);
   partials_.ensure(uint64_t(per_image) * kFlowRefs * 4);
+  const uint64_t quads = uint64_t(width_ + 1) * (height_ + 1) * kFlowRefs * 16;
+  ctx_.check_binding_size(quads, "flow: the adjoint footprints");
+  quads_.ensure(quads);
   grad_field_.ensure(hw * J * 8);
   node_grad_.ensure(nodes.size() * 4);
 
@@ -273,15 +308,18 @@ ExposureFlow FlowEstimator::estimate(const PixelEvents& events, const std::vecto
     const std::vector<float> scale = normalisation(frame_u, options_.tiles[l], sc, stride);
     optimise_level(frame_u, grids, scale, options_.iterations[l], lr, true, sc, stride);
   }
-  const std::vector<float> scale = normalisation(frame_u, options_.tiles.back(), 1, 1);
-  optimise_level(frame_u, grids, scale, options_.interval_iterations, options_.lr_intervals, false, 1, 1);
-  const ContrastEval final_eval = evaluate(frame_u, grids, scale, false);
+  const std::vector<float> scale = normalisation(frame_u, options_.tiles.back(), 1, options_.interval_event_stride);
+  optimise_level(frame_u, grids, scale, options_.interval_iterations, options_.lr_intervals, false, 1,
+                 options_.interval_event_stride);
+  // The contrast reported counts every event, against zero flow on every event.
+  const std::vector<float> full = normalisation(frame_u, options_.tiles.back(), 1, 1);
+  const ContrastEval final_eval = evaluate(frame_u, grids, full, false);
   ExposureFlow out;
   out.width = events.width;
   out.height = events.height;
   out.frame_u = frame_u;
   out.contrast = 0;
-  for (uint32_t r = 0; r < kFlowRefs; ++r) out.contrast += scale[r] == 0 ? kRefWeight[r] : -scale[r] * final_eval.g[r];
+  for (uint32_t r = 0; r < kFlowRefs; ++r) out.contrast += full[r] == 0 ? kRefWeight[r] : -full[r] * final_eval.g[r];
   for (size_t j = 0; j < J; ++j) {
     IntervalFlow f;
     f.grid = grids[j];

@@ -35,9 +35,10 @@ namespace evflow::flow {
 struct FlowOptions {
   std::vector<uint32_t> tiles = {1, 2, 4, 8};           // the pyramid of the exposure's flow
   std::vector<uint32_t> image_scale = {4, 2, 1, 1};     // each level's IWE is this much coarser
-  std::vector<uint32_t> event_stride = {4, 2, 1, 1};    // each level uses every stride-th event of a pixel
-  std::vector<uint32_t> iterations = {60, 30, 25, 20};  // its Adam steps per level
+  std::vector<uint32_t> event_stride = {4, 2, 2, 2};    // each level uses every stride-th event
+  std::vector<uint32_t> iterations = {40, 30, 25, 20};  // its Adam steps per level
   uint32_t interval_iterations = 40;                    // then the intervals' own flows
+  uint32_t interval_event_stride = 2;                   // from every stride-th event
   double lr = 0.1;                // Adam step (pixels per interval) at the first level, decaying to a tenth
   double lr_level = 0.6;          // each finer level's step, relative to the one before
   double lr_intervals = 0.08;     // the intervals' own flows' step
@@ -72,8 +73,8 @@ class FlowEstimator {
   // Uploads one exposure's events; evaluate() and iwe() use them.
   void set_events(const PixelEvents& events);
   // Scores one grid per interval between consecutive `frame_u` (same tile count) on the events.
-  // The IWEs are `image_scale` times coarser than the sensor; every `stride`-th event of a pixel
-  // takes part.
+  // The IWEs are `image_scale` times coarser than the sensor; every `stride`-th event (by index in
+  // the pixel-by-pixel order) takes part.
   ContrastEval evaluate(const std::vector<double>& frame_u, const std::vector<FlowGrid>& grids,
                         const std::vector<float>& scale, bool gradient, uint32_t image_scale = 1, uint32_t stride = 1);
   // The IWE (H * W, events per pixel, unblurred) at reference r of the last evaluate (at image
@@ -104,9 +105,10 @@ class FlowEstimator {
   uint64_t last_image_pixels_ = 0;
   std::vector<std::pair<std::string, double>> stage_ms_;
   uint64_t evaluations_ = 0;
-  uint32_t busy_pixels_ = 0;
-  gpu::Buffer pixel_first_, pixel_order_, event_time_, intervals_, nodes_, iwe_, blur_tmp_, blurred_, adjoint_, scale_,
-      partials_, grad_field_, node_grad_;
+  uint32_t busy_pixels_ = 0, events_ = 0;
+  uint32_t grad_field_zeroed_ = 0;  // intervals of grad_field_ cleared for the current events (0: none)
+  gpu::Buffer pixel_first_, pixel_order_, event_time_, event_slot_, intervals_, nodes_, iwe_, blur_tmp_, blurred_,
+      adjoint_, scale_, partials_, quads_, positions_, grad_field_, node_grad_;
 };
 
 // The weight of reference r (start, middle, end) in the loss.

@@ -1,19 +1,22 @@
 #version 450
 // Contrast of each blurred IWE B: G = sum over pixels of gx^2 + gy^2 with central differences
 // gx(x) = (B(x+1) - B(x-1)) / 2 (B = 0 outside the image). Writes one partial sum of G per
-// workgroup (workgroups never straddle two images; a fixed-order tree: reproducible) and the
+// workgroup (workgroups never straddle two images; common/group_sum.glsl: reproducible) and the
 // adjoint scale[image] * dG/dB, where dG/dB(x) = gx(x-1) - gx(x+1) + gy(x-1) - gy(x+1) over the
 // differences that exist.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "flow/flow_layout.h"
 #include "common/dispatch.glsl"
+#define EVF_GROUP_SUM_SIZE kFlowGroupSize
+#include "common/group_sum.glsl"
 layout(local_size_x = kFlowGroupSize) in;
 layout(std430, binding = kFlowContrastBindBlurred) readonly buffer Blurred { float blurred[]; };
 layout(std430, binding = kFlowContrastBindScale) readonly buffer Scale { float scale[]; };
 layout(std430, binding = kFlowContrastBindAdjoint) writeonly buffer Adjoint { float adjoint[]; };
 layout(std430, binding = kFlowContrastBindPartials) writeonly buffer Partials { float partials[]; };
 layout(push_constant) uniform PC { FlowContrastPC pc; };
-shared float sums[kFlowGroupSize];
 
 uint g_base;
 float b_at(ivec2 q) {
@@ -38,11 +41,6 @@ void main() {
     float d = diff(q - sx, sx) - diff(q + sx, sx) + diff(q - sy, sy) - diff(q + sy, sy);
     adjoint[g_base + pixel] = scale[image] * d;
   }
-  sums[gl_LocalInvocationIndex] = g;
-  barrier();
-  for (uint s = kFlowGroupSize / 2u; s > 0u; s >>= 1u) {
-    if (gl_LocalInvocationIndex < s) sums[gl_LocalInvocationIndex] += sums[gl_LocalInvocationIndex + s];
-    barrier();
-  }
-  if (gl_LocalInvocationIndex == 0u && image < pc.images) partials[group] = sums[0];
+  const float total = evf_group_sum(vec2(g, 0.0)).x;
+  if (gl_LocalInvocationIndex == 0u && image < pc.images) partials[group] = total;
 }

@@ -28,8 +28,9 @@ EVF_CONST(float, kFlowBlurSigma, 0.7f)      // its standard deviation, pixels
 // normalised exposure time. Reference r's time is r / 2.
 
 // Pixels with events, the busiest first: pixel_order[busy].
-// flow/vote: one invocation per pixel with events; adds each event's bilinear vote (scaled by
-// kFlowVoteScale) to iwe[r * image_height * image_width + pixel'] for r = 0..2.
+// flow/vote: one invocation per event (event_slot[e]: the index k of its pixel in pixel_order);
+// adds its bilinear vote (scaled by kFlowVoteScale) to iwe[r * image_height * image_width +
+// pixel'] for r = 0..2.
 // flow/flow_grad: the same grid; grad_field[(j * H * W + pixel) * 2 + c] = dLoss / du_j(pixel).
 // The IWEs may be coarser than the sensor (coarse to fine in image scale): pixel centre c of the
 // sensor lands at c / scale in an image_width x image_height IWE.
@@ -42,9 +43,14 @@ struct FlowEventsPC {
   uint image_height;
   float scale;
   uint busy;    // pixels with events: pixel_order[0 .. busy)
-  uint stride;  // every stride-th event of a pixel (coarse levels need fewer)
-  uint pad0, pad1, pad2;
+  uint stride;  // every stride-th event (coarse levels need fewer)
+  uint events;  // of the exposure
+  uint pad1, pad2;
 };
+
+// flow/positions: the same grid; positions[m * busy + k] = C_m+1 (m < intervals) and P(t_r)
+// (m = intervals + r) of pixel pixel_order[k], read by flow/vote and flow/flow_grad.
+EVF_CONST(uint, kFlowPositionsPerPixel, kFlowMaxIntervals + kFlowRefs)
 
 // flow/blur: one invocation per pixel of `images` images; the 7-tap Gaussian along x (axis 0) or
 // y (axis 1), zero outside the image. fixed_input = 1 reads the IWE's fixed-point votes.
@@ -67,6 +73,17 @@ struct FlowContrastPC {
   uint groups;  // workgroups per image
 };
 
+// flow/adjoint_quads: one invocation per footprint position of `images` width x height adjoint
+// images: quads[(image * (height + 1) + qy) * (width + 1) + qx] = the four adjoint values of the
+// bilinear footprint whose top-left pixel is (qx - 1, qy - 1), zero outside. flow/flow_grad reads
+// these instead of the adjoint images.
+struct FlowQuadsPC {
+  uint width;
+  uint height;
+  uint images;
+  uint pad0;
+};
+
 // flow/node_reduce: one workgroup per (node, interval): node_grad[(j * nodes + node) * 2 + c] =
 // sum over the pixels of the node's support of its bilinear weight times grad_field.
 struct FlowNodeReducePC {
@@ -78,12 +95,18 @@ struct FlowNodeReducePC {
 
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
 // flow/vote
-EVF_BIND(kFlowVoteBindPixelFirst, 0u, PixelFirst)
+EVF_BIND(kFlowVoteBindEventSlot, 0u, EventSlot)
 EVF_BIND(kFlowVoteBindEventTime, 1u, EventTime)
 EVF_BIND(kFlowVoteBindIntervals, 2u, Intervals)
 EVF_BIND(kFlowVoteBindNodes, 3u, Nodes)
 EVF_BIND(kFlowVoteBindIwe, 4u, Iwe)
 EVF_BIND(kFlowVoteBindPixelOrder, 5u, PixelOrder)
+EVF_BIND(kFlowVoteBindPositions, 6u, Positions)
+// flow/positions
+EVF_BIND(kFlowPositionsBindPixelOrder, 0u, PixelOrder)
+EVF_BIND(kFlowPositionsBindIntervals, 1u, Intervals)
+EVF_BIND(kFlowPositionsBindNodes, 2u, Nodes)
+EVF_BIND(kFlowPositionsBindPositions, 3u, Positions)
 // flow/blur
 EVF_BIND(kFlowBlurBindSrc, 0u, Src)
 EVF_BIND(kFlowBlurBindDst, 1u, Dst)
@@ -97,9 +120,13 @@ EVF_BIND(kFlowGradBindPixelFirst, 0u, PixelFirst)
 EVF_BIND(kFlowGradBindEventTime, 1u, EventTime)
 EVF_BIND(kFlowGradBindIntervals, 2u, Intervals)
 EVF_BIND(kFlowGradBindNodes, 3u, Nodes)
-EVF_BIND(kFlowGradBindAdjoint, 4u, Adjoint)
+EVF_BIND(kFlowGradBindQuads, 4u, Quads)
 EVF_BIND(kFlowGradBindGradField, 5u, GradField)
 EVF_BIND(kFlowGradBindPixelOrder, 6u, PixelOrder)
+EVF_BIND(kFlowGradBindPositions, 7u, Positions)
+// flow/adjoint_quads
+EVF_BIND(kFlowQuadsBindAdjoint, 0u, Adjoint)
+EVF_BIND(kFlowQuadsBindQuads, 1u, Quads)
 // flow/node_reduce
 EVF_BIND(kFlowReduceBindGradField, 0u, GradField)
 EVF_BIND(kFlowReduceBindNodeGrad, 1u, NodeGrad)

@@ -41,6 +41,18 @@ float flow_interval_fraction(float t, uint count, inout uint i) {
   while (i + 1u < count && t >= intervals[i].y) ++i;
   return clamp((t - intervals[i].x) * intervals[i].z, 0.0, 1.0);
 }
+// The event kernels walk a pixel's events in time order; interval j of `count` takes the events
+// before this time (the last takes the rest), as flow_interval_fraction assigns them. They keep
+// the current interval's cumulative flows in registers (read from flow/positions' output): no
+// array indexed by a per-invocation interval (the CPU driver turns those into chains of selects).
+// The interval of time t, as flow_interval_fraction finds it, by a loop every invocation runs alike.
+uint flow_event_interval(float t, uint count) {
+  uint i = 0u;
+  for (uint j = 0u; j + 1u < count; ++j) i += t >= intervals[j].y ? 1u : 0u;
+  return i;
+}
+float flow_interval_end(uint j, uint count) { return j + 1u < count ? intervals[j].y : 3.0e38; }
+
 #endif
 
 // Bilinear footprint of a point q (pixel coordinates, centres at +0.5): the top-left pixel and

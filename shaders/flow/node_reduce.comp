@@ -1,17 +1,20 @@
 #version 450
 // The chain from per-pixel flow gradients to the node grid: one workgroup per (node, interval)
 // sums, over the pixels of the node's support, the node's bilinear weight times the pixel's
-// gradient (a fixed-order tree: reproducible).
+// gradient (common/group_sum.glsl: reproducible).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "flow/flow_layout.h"
 #include "common/dispatch.glsl"
+#define EVF_GROUP_SUM_SIZE kFlowGroupSize
+#include "common/group_sum.glsl"
 layout(local_size_x = kFlowGroupSize) in;
 layout(std430, binding = kFlowReduceBindGradField) readonly buffer GradField { vec2 grad_field[]; };
 layout(std430, binding = kFlowReduceBindNodeGrad) writeonly buffer NodeGrad { vec2 node_grad[]; };
 layout(push_constant) uniform PC { FlowNodeReducePC pc; };
 vec2 flow_node(uint i) { return vec2(0.0); }
 #include "flow/flow_math.glsl"
-shared vec2 sums[kFlowGroupSize];
 
 // Weight of node index `a` at pixel coordinate `pix` along an axis of `size` pixels.
 float axis_weight(uint pix, uint size, uint a) {
@@ -42,11 +45,6 @@ void main() {
       g += weight * grad_field[(p * pc.height + y) * pc.width + x];
     }
   }
-  sums[gl_LocalInvocationIndex] = g;
-  barrier();
-  for (uint k = kFlowGroupSize / 2u; k > 0u; k >>= 1u) {
-    if (gl_LocalInvocationIndex < k) sums[gl_LocalInvocationIndex] += sums[gl_LocalInvocationIndex + k];
-    barrier();
-  }
-  if (gl_LocalInvocationIndex == 0u && p < pc.intervals) node_grad[p * nodes + node] = sums[0];
+  const vec2 total = evf_group_sum(g);
+  if (gl_LocalInvocationIndex == 0u && p < pc.intervals) node_grad[p * nodes + node] = total;
 }

@@ -1,20 +1,21 @@
 #version 450
-// Images of warped events: one invocation per pixel with events (busiest first, so that the
-// invocations of a SIMD group loop about as long) votes each of the pixel's events, warped along
-// the piecewise-constant flow to the three reference times, bilinearly into the three IWEs (fixed
-// point, integer atomics: exact and order-independent).
+// Images of warped events: one invocation per event (every stride-th of the exposure's, in their
+// pixel-by-pixel order) votes it, warped along the piecewise-constant flow to the three reference
+// times, bilinearly into the three IWEs (fixed point, integer atomics: exact and
+// order-independent). Its pixel's cumulative flows and reference positions come from
+// flow/positions.
 #extension GL_GOOGLE_include_directive : require
 #include "flow/flow_layout.h"
 #include "common/dispatch.glsl"
 layout(local_size_x = kFlowGroupSize) in;
 layout(std430, binding = kFlowVoteBindPixelOrder) readonly buffer PixelOrder { uint pixel_order[]; };
-layout(std430, binding = kFlowVoteBindPixelFirst) readonly buffer PixelFirst { uint pixel_first[]; };
+layout(std430, binding = kFlowVoteBindEventSlot) readonly buffer EventSlot { uint event_slot[]; };
 layout(std430, binding = kFlowVoteBindEventTime) readonly buffer EventTime { float event_time[]; };
 layout(std430, binding = kFlowVoteBindIntervals) readonly buffer Intervals { vec4 intervals[]; };
-layout(std430, binding = kFlowVoteBindNodes) readonly buffer Nodes { vec2 nodes[]; };
+layout(std430, binding = kFlowVoteBindPositions) readonly buffer Positions { vec2 positions[]; };
 layout(std430, binding = kFlowVoteBindIwe) buffer Iwe { uint iwe[]; };
 layout(push_constant) uniform PC { FlowEventsPC pc; };
-vec2 flow_node(uint i) { return nodes[i]; }
+vec2 flow_node(uint i) { return vec2(0.0); }
 #define FLOW_INTERVALS 1
 #include "flow/flow_math.glsl"
 
@@ -30,30 +31,18 @@ void vote(uint image, ivec2 i0, vec2 f) {
 }
 
 void main() {
-  uint k = evf_linear_invocation(kFlowGroupSize);
-  if (k >= pc.busy) return;
-  uint pixel = pixel_order[k];
-  uint first = pixel_first[pixel], last = pixel_first[pixel + 1u];
-  uint x = pixel % pc.width, y = pixel / pc.width;
-  vec2 C[kFlowMaxIntervals + 1u];
-  C[0] = vec2(0.0);
-  for (uint j = 0u; j < pc.intervals; ++j) C[j + 1u] = C[j] + flow_at(j, pc.tiles, pc.width, pc.height, x, y);
-  vec2 ref[kFlowRefs];
+  uint e = evf_linear_invocation(kFlowGroupSize) * pc.stride;
+  if (e >= pc.events) return;
+  const uint k = event_slot[e], pixel = pixel_order[k];
+  const float t = event_time[e];
+  const uint i = flow_event_interval(t, pc.intervals);
+  const vec4 iv = intervals[i];
+  const vec2 c0 = i > 0u ? positions[(i - 1u) * pc.busy + k] : vec2(0.0), c1 = positions[i * pc.busy + k];
+  const vec2 at = vec2(pixel % pc.width, pixel / pc.width) + 0.5 - mix(c0, c1, clamp((t - iv.x) * iv.z, 0.0, 1.0));
   for (uint r = 0u; r < kFlowRefs; ++r) {
-    uint i = 0u;
-    float f = flow_interval_fraction(flow_ref_time(r), pc.intervals, i);
-    ref[r] = mix(C[i], C[i + 1u], f);
-  }
-  vec2 c = vec2(x, y) + 0.5;
-  uint i = 0u;
-  for (uint e = first; e < last; e += pc.stride) {
-    float f = flow_interval_fraction(event_time[e], pc.intervals, i);
-    vec2 at = c - mix(C[i], C[i + 1u], f);
-    for (uint r = 0u; r < kFlowRefs; ++r) {
-      ivec2 i0;
-      vec2 fr;
-      flow_footprint((at + ref[r]) / pc.scale, i0, fr);
-      vote(r, i0, fr);
-    }
+    ivec2 i0;
+    vec2 f;
+    flow_footprint((at + positions[(pc.intervals + r) * pc.busy + k]) / pc.scale, i0, f);
+    vote(r, i0, f);
   }
 }

@@ -66,28 +66,31 @@ double flow_image_contrast(const std::vector<double>& iwe, int W, int H) {
 }
 
 double flow_contrast(const flow::PixelEvents& ev, const std::vector<double>& frame_u,
-                     const std::vector<flow::FlowGrid>& grids, const std::vector<double>& scale) {
+                     const std::vector<flow::FlowGrid>& grids, const std::vector<double>& scale, int image_scale,
+                     uint32_t stride) {
   const int W = int(ev.width), H = int(ev.height);
+  const int IW = (W + image_scale - 1) / image_scale, IH = (H + image_scale - 1) / image_scale;
   double total = 0;
   for (int r = 0; r < 3; ++r) {
     const double tr = 0.5 * r;
-    std::vector<double> img(size_t(W) * H, 0.0);
+    std::vector<double> img(size_t(IW) * IH, 0.0);
     for (int y = 0; y < H; ++y)
       for (int x = 0; x < W; ++x) {
         std::vector<double> u(grids.size()), v(grids.size());
         for (size_t j = 0; j < grids.size(); ++j) flow_at(grids[j], W, H, x, y, u[j], v[j]);
         const size_t pix = size_t(y) * W + x;
         for (uint32_t e = ev.first[pix]; e < ev.first[pix + 1]; ++e) {
+          if (e % stride != 0) continue;
           double dx = 0, dy = 0;
           for (size_t j = 0; j < grids.size(); ++j) {  // the signed part of [t, tr] in interval j
             const double a = frame_u[j], b = frame_u[j + 1];
             const double lever = (std::clamp(tr, a, b) - std::clamp(double(ev.time[e]), a, b)) / (b - a);
             dx += lever * u[j], dy += lever * v[j];
           }
-          vote(img, W, H, x + 0.5 + dx, y + 0.5 + dy);
+          vote(img, IW, IH, (x + 0.5 + dx) / image_scale, (y + 0.5 + dy) / image_scale);
         }
       }
-    total += scale[r] * flow_image_contrast(img, W, H);
+    total += scale[r] * flow_image_contrast(img, IW, IH);
   }
   return total;
 }

@@ -9,9 +9,11 @@
 namespace evflow::reference {
 
 // sum over references r of scale[r] * G_r(grids), one grid per interval between consecutive
-// frame_u.
+// frame_u; the IWEs `image_scale` times coarser than the sensor, from the events whose index (in
+// the pixel-by-pixel order) is a multiple of `stride`.
 double flow_contrast(const flow::PixelEvents& ev, const std::vector<double>& frame_u,
-                     const std::vector<flow::FlowGrid>& grids, const std::vector<double>& scale);
+                     const std::vector<flow::FlowGrid>& grids, const std::vector<double>& scale, int image_scale = 1,
+                     uint32_t stride = 1);
 
 // G of one image: sum of squared central differences of its 7-tap Gaussian blur (zero outside).
 double flow_image_contrast(const std::vector<double>& iwe, int width, int height);
