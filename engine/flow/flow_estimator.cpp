@@ -73,7 +73,7 @@ FlowEstimator::FlowEstimator(gpu::Context& ctx, FlowOptions options)
       quads_(ctx, 16, "flow_adjoint_quads"),
       positions_(ctx, 16, "flow_positions"),
       grad_field_(ctx, 16, "flow_grad_field"),
-      node_grad_(ctx, 16, "flow_node_grad") {
+      tile_grad_(ctx, 16, "flow_tile_grad") {
   options_.validate();
 }
 
@@ -170,10 +170,9 @@ void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint
                 {kFlowGradBindGradField, grad_field_}},
                epc, pixel_groups);
   cmd.mark("flow gradient");
-  const uint32_t nodes = (tiles + 1) * (tiles + 1);
   const FlowNodeReducePC rpc{width_, height_, intervals, tiles};
-  cmd.dispatch("flow/node_reduce", {{kFlowReduceBindGradField, grad_field_}, {kFlowReduceBindNodeGrad, node_grad_}},
-               rpc, cmd.linear_groups(uint64_t(nodes) * intervals));
+  cmd.dispatch("flow/node_reduce", {{kFlowReduceBindGradField, grad_field_}, {kFlowReduceBindTileGrad, tile_grad_}},
+               rpc, cmd.linear_groups(uint64_t(tiles) * tiles * intervals));
   cmd.mark("node reduce");
 }
 
@@ -210,7 +209,7 @@ ContrastEval FlowEstimator::evaluate(const std::vector<double>& frame_u, const s
   ctx_.check_binding_size(quads, "flow: the adjoint footprints");
   quads_.ensure(quads);
   grad_field_.ensure(hw * J * 8);
-  node_grad_.ensure(nodes.size() * 4);
+  tile_grad_.ensure(uint64_t(tiles) * tiles * J * 4 * 8);
 
   gpu::Commands cmd(ctx_);
   if (stride == 0) throw std::invalid_argument("flow: event stride must be >= 1");
@@ -231,9 +230,20 @@ ContrastEval FlowEstimator::evaluate(const std::vector<double>& frame_u, const s
   for (uint32_t r = 0; r < kFlowRefs; ++r)
     for (uint32_t k = 0; k < per_image; ++k) out.g[r] += partials[r * per_image + k];
   if (gradient) {
-    const std::vector<float> g = node_grad_.read<float>(nodes.size());
-    const size_t per = grids[0].nodes.size();
-    for (uint32_t j = 0; j < J; ++j) out.node_grad.emplace_back(g.begin() + j * per, g.begin() + (j + 1) * per);
+    // Each tile's four corner sums onto its nodes, tile by tile in index order.
+    const std::vector<float> t = tile_grad_.read<float>(size_t(tiles) * tiles * J * 8);
+    const uint32_t side = tiles + 1;
+    for (uint32_t j = 0; j < J; ++j) {
+      std::vector<double> g(grids[0].nodes.size(), 0.0);
+      for (uint32_t cell = 0; cell < tiles * tiles; ++cell) {
+        const uint32_t a = cell % tiles, b = cell / tiles;
+        const uint32_t corner[4] = {b * side + a, b * side + a + 1, (b + 1) * side + a, (b + 1) * side + a + 1};
+        for (uint32_t c = 0; c < 4; ++c)
+          for (uint32_t d = 0; d < 2; ++d)
+            g[corner[c] * 2 + d] += t[((size_t(j) * tiles * tiles + cell) * 4 + c) * 2 + d];
+      }
+      out.node_grad.push_back(std::move(g));
+    }
   }
   return out;
 }

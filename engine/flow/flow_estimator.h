@@ -108,7 +108,7 @@ class FlowEstimator {
   uint32_t busy_pixels_ = 0, events_ = 0;
   uint32_t grad_field_zeroed_ = 0;  // intervals of grad_field_ cleared for the current events (0: none)
   gpu::Buffer pixel_first_, pixel_order_, event_time_, event_slot_, intervals_, nodes_, iwe_, blur_tmp_, blurred_,
-      adjoint_, scale_, partials_, quads_, positions_, grad_field_, node_grad_;
+      adjoint_, scale_, partials_, quads_, positions_, grad_field_, tile_grad_;
 };
 
 // The weight of reference r (start, middle, end) in the loss.

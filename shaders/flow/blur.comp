@@ -1,5 +1,5 @@
 #version 450
-// Gaussian blur (flow_gauss: kFlowBlurSigma, 7 taps, zero outside the image) of `images` images along one
+// Gaussian blur (flow_gauss: kFlowBlurSigma, kFlowBlurRadius, zero outside the image) of `images` images along one
 // axis. The blur is symmetric, so the same kernel is its own adjoint.
 #extension GL_GOOGLE_include_directive : require
 #include "flow/flow_layout.h"

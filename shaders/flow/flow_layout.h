@@ -21,7 +21,7 @@ EVF_CONST(uint, kFlowGroupSize, 256u)
 EVF_CONST(uint, kFlowRefs, 3u)          // reference times per problem: window start, middle, end
 EVF_CONST(uint, kFlowMaxIntervals, 16u)  // intervals per exposure
 EVF_CONST(float, kFlowVoteScale, 65536.0f)  // IWE votes are fixed point (exact integer atomics)
-EVF_CONST(int, kFlowBlurRadius, 3)          // Gaussian blur of the IWE: 7 taps
+EVF_CONST(int, kFlowBlurRadius, 2)          // Gaussian blur of the IWE: 5 taps (the next: 1e-4)
 EVF_CONST(float, kFlowBlurSigma, 0.7f)      // its standard deviation, pixels
 
 // Per interval j (a vec4 in the Intervals buffer): (start, end, 1 / (end - start), unused), in
@@ -52,7 +52,7 @@ struct FlowEventsPC {
 // (m = intervals + r) of pixel pixel_order[k], read by flow/vote and flow/flow_grad.
 EVF_CONST(uint, kFlowPositionsPerPixel, kFlowMaxIntervals + kFlowRefs)
 
-// flow/blur: one invocation per pixel of `images` images; the 7-tap Gaussian along x (axis 0) or
+// flow/blur: one invocation per pixel of `images` images; the (2 kFlowBlurRadius + 1)-tap Gaussian along x (axis 0) or
 // y (axis 1), zero outside the image. fixed_input = 1 reads the IWE's fixed-point votes.
 struct FlowBlurPC {
   uint width;
@@ -84,8 +84,9 @@ struct FlowQuadsPC {
   uint pad0;
 };
 
-// flow/node_reduce: one workgroup per (node, interval): node_grad[(j * nodes + node) * 2 + c] =
-// sum over the pixels of the node's support of its bilinear weight times grad_field.
+// flow/node_reduce: one workgroup per (tile, interval): tile_grad[((j * tiles^2 + tile) * 4 + c)]
+// = the sum over the tile's pixels of the bilinear weight of its corner c (0: (a, b), 1: (a+1, b),
+// 2: (a, b+1), 3: (a+1, b+1)) times grad_field; the host adds them onto the nodes.
 struct FlowNodeReducePC {
   uint width;
   uint height;
@@ -119,7 +120,6 @@ EVF_BIND(kFlowContrastBindPartials, 3u, Partials)
 EVF_BIND(kFlowGradBindPixelFirst, 0u, PixelFirst)
 EVF_BIND(kFlowGradBindEventTime, 1u, EventTime)
 EVF_BIND(kFlowGradBindIntervals, 2u, Intervals)
-EVF_BIND(kFlowGradBindNodes, 3u, Nodes)
 EVF_BIND(kFlowGradBindQuads, 4u, Quads)
 EVF_BIND(kFlowGradBindGradField, 5u, GradField)
 EVF_BIND(kFlowGradBindPixelOrder, 6u, PixelOrder)
@@ -129,7 +129,7 @@ EVF_BIND(kFlowQuadsBindAdjoint, 0u, Adjoint)
 EVF_BIND(kFlowQuadsBindQuads, 1u, Quads)
 // flow/node_reduce
 EVF_BIND(kFlowReduceBindGradField, 0u, GradField)
-EVF_BIND(kFlowReduceBindNodeGrad, 1u, NodeGrad)
+EVF_BIND(kFlowReduceBindTileGrad, 1u, TileGrad)
 
 EVF_NAMESPACE_END
 #endif

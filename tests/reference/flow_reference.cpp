@@ -12,7 +12,8 @@ namespace {
 double gauss(int d) {
   const double sigma = shaderio::kFlowBlurSigma;
   double s = 0;
-  for (int k = -3; k <= 3; ++k) s += std::exp(-0.5 * k * k / (sigma * sigma));
+  for (int k = -shaderio::kFlowBlurRadius; k <= shaderio::kFlowBlurRadius; ++k)
+    s += std::exp(-0.5 * k * k / (sigma * sigma));
   return std::exp(-0.5 * d * d / (sigma * sigma)) / s;
 }
 
@@ -20,7 +21,7 @@ std::vector<double> blur(const std::vector<double>& img, int W, int H, int dx, i
   std::vector<double> out(img.size(), 0.0);
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x)
-      for (int d = -3; d <= 3; ++d) {
+      for (int d = -shaderio::kFlowBlurRadius; d <= shaderio::kFlowBlurRadius; ++d) {
         const int qx = x + d * dx, qy = y + d * dy;
         if (qx >= 0 && qy >= 0 && qx < W && qy < H) out[size_t(y) * W + x] += gauss(d) * img[size_t(qy) * W + qx];
       }

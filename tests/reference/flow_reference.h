@@ -15,7 +15,7 @@ double flow_contrast(const flow::PixelEvents& ev, const std::vector<double>& fra
                      const std::vector<flow::FlowGrid>& grids, const std::vector<double>& scale, int image_scale = 1,
                      uint32_t stride = 1);
 
-// G of one image: sum of squared central differences of its 7-tap Gaussian blur (zero outside).
+// G of one image: sum of squared central differences of its Gaussian blur (kFlowBlurRadius) (zero outside).
 double flow_image_contrast(const std::vector<double>& iwe, int width, int height);
 
 }  // namespace evflow::reference
