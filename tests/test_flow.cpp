@@ -204,3 +204,28 @@ TEST_CASE("flow: a rotating texture's flow is recovered within 0.1 px", "[flow][
   CHECK(aee < 0.1);
   test::require_no_validation_messages();
 }
+
+TEST_CASE("flow: an exposure without events keeps zero flow; one event moves it at most a pixel", "[flow][gpu]") {
+  EventStream s;
+  s.width = 24, s.height = 16;
+  flow::FlowEstimator est(test::gpu_context(), small_options());
+  for (int events : {0, 1}) {
+    INFO(events << " events");
+    if (events) s.push(5, 7, 0.5, 1);
+    const flow::PixelEvents ev = flow::pixel_events(s, 0.0, 1.0, "sim");
+    REQUIRE(ev.size() == size_t(events));
+    const flow::ExposureFlow f = est.estimate(ev, uniform_frames(6));
+    REQUIRE(f.intervals.size() == 6);
+    // No events: nothing to sharpen, the flow stays zero and the contrast 1. One event: its
+    // sharpness depends only on where its bilinear vote lands, so the flow may move it towards a
+    // pixel centre, no further.
+    CHECK(std::isfinite(f.contrast));
+    if (events == 0) CHECK(f.contrast == 1.0);
+    for (const auto& i : f.intervals)
+      for (float v : i.grid.nodes) {
+        REQUIRE(std::isfinite(v));
+        CHECK(std::abs(v) <= (events == 0 ? 0.0f : 1.0f));
+      }
+  }
+  test::require_no_validation_messages();
+}
