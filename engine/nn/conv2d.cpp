@@ -15,7 +15,11 @@ namespace {
 // Output pixels per split of the weight gradient's reduction over pixels.
 constexpr uint32_t kPixelsPerSplit = 2048;
 
+// The GEMM's tile by its row count m (nn_layout.h): tiny, narrow or wide.
+bool tiny(uint32_t m) { return m <= kGemmTinyTileM; }
 bool narrow(uint32_t m) { return m <= 16; }
+uint32_t tile_m(uint32_t m) { return tiny(m) ? kGemmTinyTileM : narrow(m) ? kGemmNarrowTileM : kGemmTileM; }
+uint32_t tile_n(uint32_t m) { return tiny(m) ? kGemmTinyTileN : narrow(m) ? kGemmNarrowTileN : kGemmTileN; }
 
 // The GEMM's push constants for a convolution of x (in) to y (out), with m, n, k and the tiling.
 ConvPC conv_pc(const ConvSpec& s, const Shape& in, const Shape& out, uint32_t m, uint32_t n, uint32_t k) {
@@ -24,16 +28,17 @@ ConvPC conv_pc(const ConvSpec& s, const Shape& in, const Shape& out, uint32_t m,
   pc.out_c = out.c, pc.out_h = out.h, pc.out_w = out.w;
   pc.ksize = s.ksize, pc.stride = s.stride, pc.pad = s.ksize / 2;
   pc.gemm_m = m, pc.gemm_n = n, pc.gemm_k = k;
-  pc.tiles_n = gpu::Commands::div_up(n, narrow(m) ? kGemmNarrowTileN : kGemmTileN);
+  pc.tiles_n = gpu::Commands::div_up(n, tile_n(m));
   return pc;
 }
 
 gpu::Groups tile_groups(gpu::Commands& cmd, const ConvPC& pc) {
-  const uint32_t tile_m = narrow(pc.gemm_m) ? kGemmNarrowTileM : kGemmTileM;
-  return cmd.linear_groups(uint64_t(gpu::Commands::div_up(pc.gemm_m, tile_m)) * pc.tiles_n);
+  return cmd.linear_groups(uint64_t(gpu::Commands::div_up(pc.gemm_m, tile_m(pc.gemm_m))) * pc.tiles_n);
 }
 
-std::string kernel(const char* base, uint32_t m) { return std::string("nn/") + base + (narrow(m) ? "_narrow" : ""); }
+std::string kernel(const char* base, uint32_t m) {
+  return std::string("nn/") + base + (tiny(m) ? "_tiny" : narrow(m) ? "_narrow" : "");
+}
 
 }  // namespace
 

@@ -8,7 +8,9 @@
 // and updates its kThreadM x kThreadN sums, in the same order for every run (no atomics).
 #extension GL_EXT_control_flow_attributes : require
 
-#ifdef EVF_GEMM_NARROW
+#if defined(EVF_GEMM_TINY)
+const uint kThreadM = kGemmTinyThreadM, kTileM = kGemmTinyTileM, kTileN = kGemmTinyTileN;
+#elif defined(EVF_GEMM_NARROW)
 const uint kThreadM = kGemmNarrowThreadM, kTileM = kGemmNarrowTileM, kTileN = kGemmNarrowTileN;
 #else
 const uint kThreadM = kGemmThreadM, kTileM = kGemmTileM, kTileN = kGemmTileN;

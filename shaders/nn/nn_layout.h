@@ -23,7 +23,10 @@ EVF_NAMESPACE_BEGIN
 // A workgroup computes a kGemmTileM x kGemmTileN tile of C, each invocation kGemmThreadM x
 // kGemmThreadN of it, through shared-memory tiles of kGemmTileK values of k. The narrow
 // variants (kernel names ending in _narrow) have a tile of kGemmNarrowTileM rows, each invocation
-// kGemmNarrowThreadM of them, for layers with few output channels.
+// kGemmNarrowThreadM of them, for layers with few output channels; the tiny ones (_tiny) one row
+// of four per invocation and a single SIMD group per workgroup (kGemmTinyTileN / kGemmThreadN
+// invocations), for at most kGemmTinyTileM rows (the LDI's last layer has one): the narrow tile
+// spends 15 of its 16 rows on nothing there, and its barriers stop 32 groups of lanes, not one.
 EVF_CONST(uint, kGemmThreadM, 8u)
 EVF_CONST(uint, kGemmThreadN, 16u)
 EVF_CONST(uint, kGemmTileM, 64u)
@@ -32,6 +35,9 @@ EVF_CONST(uint, kGemmTileK, 32u)
 EVF_CONST(uint, kGemmNarrowThreadM, 4u)
 EVF_CONST(uint, kGemmNarrowTileM, 16u)
 EVF_CONST(uint, kGemmNarrowTileN, 128u)
+EVF_CONST(uint, kGemmTinyThreadM, 4u)
+EVF_CONST(uint, kGemmTinyTileM, 4u)
+EVF_CONST(uint, kGemmTinyTileN, 128u)
 // Shared memory of a GEMM workgroup: the A and B tiles, kGemmTileK rows each.
 EVF_CONST(uint, kGemmSharedBytes, kGemmTileK * (kGemmTileM + kGemmTileN) * 4u)
 EVF_CONST(uint, kGemmNarrowSharedBytes, kGemmTileK * (kGemmNarrowTileM + kGemmNarrowTileN) * 4u)
