@@ -205,7 +205,7 @@ TEST_CASE("flow: a rotating texture's flow is recovered within 0.1 px", "[flow][
   test::require_no_validation_messages();
 }
 
-TEST_CASE("flow: an exposure without events keeps zero flow; one event moves it at most a pixel", "[flow][gpu]") {
+TEST_CASE("flow: an exposure without events keeps zero flow and one event moves it at most a pixel", "[flow][gpu]") {
   EventStream s;
   s.width = 24, s.height = 16;
   flow::FlowEstimator est(test::gpu_context(), small_options());
