@@ -7,7 +7,7 @@
 //        interval j, in interval lengths (within one interval: x_k + (t_r - t_k) u_j(x_k)),
 //
 // stack into the sharpest images of warped events (IWE). The references are the exposure's
-// start, middle and end (weights 1/4, 1/2, 1/4); each IWE is blurred (Gaussian, sigma 1 px) and
+// start, middle and end (weights 1/4, 1/2, 1/4); each IWE is blurred (Gaussian, kFlowBlurSigma) and
 // scored by its summed squared gradient G, normalised by its value with zero flow (Shiba's
 // normalised gradient magnitude: collapsing the events into a few pixels at one reference spreads
 // them at the others, so it does not pay):
