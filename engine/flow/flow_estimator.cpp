@@ -37,8 +37,6 @@ void FlowOptions::validate() const {
 double flow_ref_weight(uint32_t r) { return kRefWeight[r]; }
 
 namespace {
-uint32_t div_up_u32(uint32_t a, uint32_t b) { return (a + b - 1) / b; }
-
 // The intervals between consecutive frame times as the shaders read them.
 std::vector<float> interval_table(const std::vector<double>& frame_u) {
   if (frame_u.size() < 2 || frame_u.size() > shaderio::kFlowMaxIntervals + 1)
@@ -123,15 +121,16 @@ void FlowEstimator::record_contrast(gpu::Commands& cmd, uint32_t intervals, uint
                epc, pixel_groups);
   cmd.mark("positions");
   cmd.fill(iwe_, 0u, 0, hw * kFlowRefs * 4);
-  cmd.dispatch("flow/vote",
-               {{kFlowVoteBindPixelOrder, pixel_order_},
-                {kFlowVoteBindEventSlot, event_slot_},
-                {kFlowVoteBindEventTime, event_time_},
-                {kFlowVoteBindIntervals, intervals_},
-                {kFlowVoteBindPositions, positions_},
-                {kFlowVoteBindIwe, iwe_}},
-               epc,
-               cmd.linear_groups(std::max(1u, gpu::Commands::div_up(div_up_u32(events_, stride), kFlowGroupSize))));
+  cmd.dispatch(
+      "flow/vote",
+      {{kFlowVoteBindPixelOrder, pixel_order_},
+       {kFlowVoteBindEventSlot, event_slot_},
+       {kFlowVoteBindEventTime, event_time_},
+       {kFlowVoteBindIntervals, intervals_},
+       {kFlowVoteBindPositions, positions_},
+       {kFlowVoteBindIwe, iwe_}},
+      epc,
+      cmd.linear_groups(std::max(1u, gpu::Commands::div_up(gpu::Commands::div_up(events_, stride), kFlowGroupSize))));
   cmd.mark("vote");
   auto blur = [&](const gpu::Buffer& src, const gpu::Buffer& dst, uint32_t axis, uint32_t fixed) {
     const FlowBlurPC bpc{iw, ih, kFlowRefs, axis, fixed, 0, 0, 0};
