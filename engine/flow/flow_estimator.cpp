@@ -14,7 +14,7 @@ using shaderio::kFlowGroupSize;
 using shaderio::kFlowRefs;
 
 namespace {
-constexpr double kRefWeight[kFlowRefs] = {0.25, 0.5, 0.25};  // flow_ref_weight in flow_math.glsl
+constexpr double kRefWeight[kFlowRefs] = {0.25, 0.5, 0.25};  // flow_ref_weight() gives them out
 }
 
 void FlowOptions::validate() const {
@@ -27,6 +27,10 @@ void FlowOptions::validate() const {
     throw std::invalid_argument("flow: one image scale and one event stride per level of the tile pyramid");
   for (uint32_t st : event_stride)
     if (st == 0) throw std::invalid_argument("flow: event strides must be >= 1");
+  if (time_groups.size() != time_iterations.size())
+    throw std::invalid_argument("flow: one iteration count per grouping of the intervals");
+  for (uint32_t g : time_groups)
+    if (g == 0) throw std::invalid_argument("flow: interval groups must be >= 1");
   if (interval_event_stride == 0) throw std::invalid_argument("flow: interval_event_stride must be >= 1");
   for (uint32_t sc : image_scale)
     if (sc == 0 || sc > 64) throw std::invalid_argument("flow: image scales must be 1..64");
@@ -273,25 +277,35 @@ void add_temporal_smoothness(const std::vector<FlowGrid>& grids, double weight,
 }  // namespace
 
 void FlowEstimator::optimise_level(const std::vector<double>& frame_u, std::vector<FlowGrid>& grids,
-                                   const std::vector<float>& scale, uint32_t iterations, double lr, bool tied,
+                                   const std::vector<float>& scale, uint32_t iterations, double lr, uint32_t groups,
                                    uint32_t image_scale, uint32_t stride) {
-  const size_t J = grids.size(), n = grids[0].nodes.size(), groups = tied ? 1 : J;
-  std::vector<std::vector<double>> x(groups), m(groups, std::vector<double>(n, 0.0)),
-      v(groups, std::vector<double>(n, 0.0));
-  for (size_t k = 0; k < groups; ++k) x[k].assign(grids[k].nodes.begin(), grids[k].nodes.end());
+  const size_t J = grids.size(), n = grids[0].nodes.size();
+  auto group = [&](size_t j) { return j * groups / J; };  // neighbouring intervals share a group's flow
+  std::vector<std::vector<double>> x(groups, std::vector<double>(n, 0.0)), m = x, v = x, grad = x;
+  std::vector<size_t> members(groups, 0);
+  for (size_t j = 0; j < J; ++j) {  // a group starts from the mean of its intervals' flows
+    ++members[group(j)];
+    for (size_t k = 0; k < n; ++k) x[group(j)][k] += grids[j].nodes[k];
+  }
+  for (size_t g = 0; g < groups; ++g)
+    for (double& value : x[g]) value /= double(members[g]);
+  auto write_grids = [&] {
+    for (size_t j = 0; j < J; ++j)
+      for (size_t k = 0; k < n; ++k) grids[j].nodes[k] = float(x[group(j)][k]);
+  };
+  write_grids();
   for (uint32_t it = 0; it < iterations; ++it) {
     ContrastEval e = evaluate(frame_u, grids, scale, true, image_scale, stride);
     const double step = lr * (1.0 - 0.9 * it / std::max(1u, iterations));  // decays to lr / 10
-    if (tied)  // one flow for every interval: the gradients add
-      for (size_t j = 1; j < J; ++j)
-        for (size_t k = 0; k < n; ++k) e.node_grad[0][k] += e.node_grad[j][k];
-    if (!tied) add_temporal_smoothness(grids, options_.temporal_weight, e.node_grad);
-    for (size_t k = 0; k < groups; ++k) {
-      grid_tv(grids[k], options_.tv_weight * (tied ? J : 1), e.node_grad[k]);
-      host_adam_step(x[k].data(), e.node_grad[k].data(), m[k].data(), v[k].data(), n, it + 1, step);
+    if (groups > 1) add_temporal_smoothness(grids, options_.temporal_weight, e.node_grad);
+    for (auto& g : grad) std::fill(g.begin(), g.end(), 0.0);
+    for (size_t j = 0; j < J; ++j)  // the gradients of a group's intervals add
+      for (size_t k = 0; k < n; ++k) grad[group(j)][k] += e.node_grad[j][k];
+    for (size_t g = 0; g < groups; ++g) {
+      grid_tv(grids[(g * J + groups - 1) / groups], options_.tv_weight * double(members[g]), grad[g]);
+      host_adam_step(x[g].data(), grad[g].data(), m[g].data(), v[g].data(), n, it + 1, step);
     }
-    for (size_t j = 0; j < J; ++j)
-      for (size_t k = 0; k < n; ++k) grids[j].nodes[k] = float(x[tied ? 0 : j][k]);
+    write_grids();
   }
 }
 
@@ -315,11 +329,18 @@ ExposureFlow FlowEstimator::estimate(const PixelEvents& events, const std::vecto
       for (FlowGrid& g : grids) g = refine(g, options_.tiles[l], events.width, events.height);
     const uint32_t sc = options_.image_scale[l], stride = options_.event_stride[l];
     const std::vector<float> scale = normalisation(frame_u, options_.tiles[l], sc, stride);
-    optimise_level(frame_u, grids, scale, options_.iterations[l], lr, true, sc, stride);
+    optimise_level(frame_u, grids, scale, options_.iterations[l], lr, 1, sc, stride);
   }
-  const std::vector<float> scale = normalisation(frame_u, options_.tiles.back(), 1, options_.interval_event_stride);
-  optimise_level(frame_u, grids, scale, options_.interval_iterations, options_.lr_intervals, false, 1,
-                 options_.interval_event_stride);
+  // Coarse to fine in time: neighbouring intervals tied in ever smaller groups, each grouping with
+  // its own decaying step, then every interval on its own once more. The step is a fraction of the
+  // sensor's diagonal: the same motion moves twice as many pixels on a sensor twice as large.
+  const uint32_t stride = options_.interval_event_stride;
+  const std::vector<float> scale = normalisation(frame_u, options_.tiles.back(), 1, stride);
+  const double step = options_.lr_intervals * std::hypot(double(events.width), double(events.height));
+  for (size_t l = 0; l < options_.time_groups.size(); ++l)
+    optimise_level(frame_u, grids, scale, options_.time_iterations[l], step,
+                   std::min<uint32_t>(options_.time_groups[l], uint32_t(J)), 1, stride);
+  optimise_level(frame_u, grids, scale, options_.interval_iterations, step, uint32_t(J), 1, stride);
   // The contrast reported counts every event, against zero flow on every event.
   const std::vector<float> full = normalisation(frame_u, options_.tiles.back(), 1, 1);
   const ContrastEval final_eval = evaluate(frame_u, grids, full, false);

@@ -18,7 +18,8 @@
 // Coarse to fine in space, then in time: one flow for the whole exposure (every u_j the same), a
 // node grid (flow/flow_grid.h) refined 1 -> 2x2 -> ... tiles while the IWEs go from coarse images
 // (large motions of fine textures have many local optima at full resolution) to the sensor's;
-// then each interval's own flow from there. Every stage is Adam on the analytic gradients the shaders compute.
+// then neighbouring intervals tied in ever smaller groups, and each interval's own flow from there.
+// Every stage is Adam on the analytic gradients the shaders compute.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -33,17 +34,20 @@
 namespace evflow::flow {
 
 struct FlowOptions {
-  std::vector<uint32_t> tiles = {1, 2, 4, 8};           // the pyramid of the exposure's flow
-  std::vector<uint32_t> image_scale = {4, 2, 1, 1};     // each level's IWE is this much coarser
-  std::vector<uint32_t> event_stride = {4, 2, 2, 2};    // each level uses every stride-th event
-  std::vector<uint32_t> iterations = {40, 30, 25, 20};  // its Adam steps per level
-  uint32_t interval_iterations = 40;                    // then the intervals' own flows
-  uint32_t interval_event_stride = 2;                   // from every stride-th event
+  std::vector<uint32_t> tiles = {1, 2, 4, 8};            // the pyramid of the exposure's flow
+  std::vector<uint32_t> image_scale = {4, 2, 1, 1};      // each level's IWE is this much coarser
+  std::vector<uint32_t> event_stride = {4, 2, 2, 2};     // each level uses every stride-th event
+  std::vector<uint32_t> iterations = {30, 20, 15, 10};   // its Adam steps per level
+  std::vector<uint32_t> time_groups = {2, 3, 6};         // then neighbouring intervals tied in groups
+  std::vector<uint32_t> time_iterations = {20, 20, 20};  // Adam steps per grouping
+  uint32_t interval_iterations = 20;                     // then the intervals' own flows
+  uint32_t interval_event_stride = 2;                    // from every stride-th event
   double lr = 0.1;                // Adam step (pixels per interval) at the first level, decaying to a tenth
   double lr_level = 0.6;          // each finer level's step, relative to the one before
-  double lr_intervals = 0.08;     // the intervals' own flows' step
+  double lr_intervals = 1e-3;     // the groupings' and the intervals' own flows' step, as a fraction
+                                  // of the sensor's diagonal (0.43 px at 346x260)
   double tv_weight = 0.01;        // weight of each grid's total variation
-  double temporal_weight = 0.05;  // weight of the mean squared change of the flow between intervals
+  double temporal_weight = 0.01;  // weight of the mean squared change of the flow between intervals
   void validate() const;          // throws std::invalid_argument naming the bad setting
 };
 
@@ -97,7 +101,7 @@ class FlowEstimator {
   std::vector<float> normalisation(const std::vector<double>& frame_u, uint32_t tiles, uint32_t image_scale,
                                    uint32_t stride);
   void optimise_level(const std::vector<double>& frame_u, std::vector<FlowGrid>& grids, const std::vector<float>& scale,
-                      uint32_t iterations, double lr, bool tied, uint32_t image_scale, uint32_t stride);
+                      uint32_t iterations, double lr, uint32_t groups, uint32_t image_scale, uint32_t stride);
 
   gpu::Context& ctx_;
   FlowOptions options_;

@@ -35,6 +35,7 @@ class Hash64 {
 
 void add_options(Hash64& h, const flow::FlowOptions& o) {
   h.add_all(o.tiles), h.add_all(o.image_scale), h.add_all(o.event_stride), h.add_all(o.iterations);
+  h.add_all(o.time_groups), h.add_all(o.time_iterations);
   for (double x : {double(o.interval_iterations), double(o.interval_event_stride), o.lr, o.lr_level, o.lr_intervals,
                    o.tv_weight, o.temporal_weight})
     h.add(&x, sizeof x);
