@@ -20,6 +20,33 @@ const uint kWorkersN = kTileN / kThreadN, kThreads = (kTileM / kThreadM) * kWork
 const uint kQuadsM = kTileM / 4u, kQuadsN = kTileN / 4u;
 layout(local_size_x = kThreads) in;
 
+// An invocation's kThreadM x kThreadN sums, its first row m and column n, stored inside the matrix.
+void gemm_store_tile(uint m, uint n, vec4 acc[kThreadM][kThreadN / 4u]) {
+  [[unroll]] for (uint i = 0u; i < kThreadM; ++i)
+    [[unroll]] for (uint q = 0u; q < kThreadN / 4u; ++q)
+      [[unroll]] for (uint j = 0u; j < 4u; ++j)
+        if (m + i < pc.gemm_m && n + 4u * q + j < pc.gemm_n) gemm_store(m + i, n + 4u * q + j, acc[i][q][j]);
+}
+
+#if defined(EVF_GEMM_TINY)
+// At most four rows: each value of B is used by one invocation only, so staging it in shared
+// memory would buy nothing and cost two barriers per step of k. Every invocation reads its A and
+// B values straight from the buffers, k by k.
+void gemm_tile(uint m0, uint n0, uint k_begin, uint k_end) {
+  uint tn = gl_LocalInvocationIndex % kWorkersN;
+  vec4 acc[kThreadM][kThreadN / 4u];
+  [[unroll]] for (uint i = 0u; i < kThreadM; ++i)
+    [[unroll]] for (uint q = 0u; q < kThreadN / 4u; ++q) acc[i][q] = vec4(0.0);
+  for (uint k = k_begin; k < min(k_end, pc.gemm_k); ++k) {
+    vec4 a = gemm_load_a(m0, k);
+    [[unroll]] for (uint q = 0u; q < kThreadN / 4u; ++q) {
+      vec4 b = gemm_load_b(k, n0 + tn * kThreadN + 4u * q);
+      [[unroll]] for (uint i = 0u; i < kThreadM; ++i) acc[i][q] = fma(vec4(a[i]), b, acc[i][q]);
+    }
+  }
+  gemm_store_tile(m0, n0 + tn * kThreadN, acc);
+}
+#else
 shared vec4 a_tile[kTileK * kQuadsM];  // [k][m / 4]
 shared vec4 b_tile[kTileK * kQuadsN];  // [k][n / 4]
 
@@ -47,15 +74,10 @@ void gemm_tile(uint m0, uint n0, uint k_begin, uint k_end) {
     }
     barrier();
   }
-  [[unroll]] for (uint i = 0u; i < kThreadM; ++i) {
-    uint m = m0 + tm * kThreadM + i;
-    [[unroll]] for (uint q = 0u; q < kThreadN / 4u; ++q)
-      [[unroll]] for (uint j = 0u; j < 4u; ++j) {
-        uint n = n0 + tn * kThreadN + 4u * q + j;
-        if (m < pc.gemm_m && n < pc.gemm_n) gemm_store(m, n, acc[i][q][j]);
-      }
-  }
+  gemm_store_tile(m0 + tm * kThreadM, n0 + tn * kThreadN, acc);
 }
+
+#endif
 
 // The tile of this workgroup (the linear group index over tiles_m x tiles_n); false past the last.
 bool gemm_tile_origin(out uint m0, out uint n0) {

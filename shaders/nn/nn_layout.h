@@ -27,6 +27,7 @@ EVF_NAMESPACE_BEGIN
 // of four per invocation and a single SIMD group per workgroup (kGemmTinyTileN / kGemmThreadN
 // invocations), for at most kGemmTinyTileM rows (the LDI's last layer has one): the narrow tile
 // spends 15 of its 16 rows on nothing there, and its barriers stop 32 groups of lanes, not one.
+// The tiny tile stages nothing in shared memory: each value of B feeds one invocation only.
 EVF_CONST(uint, kGemmThreadM, 8u)
 EVF_CONST(uint, kGemmThreadN, 16u)
 EVF_CONST(uint, kGemmTileM, 64u)
