@@ -9,13 +9,14 @@
 #extension GL_EXT_control_flow_attributes : require
 
 #if defined(EVF_GEMM_TINY)
-const uint kThreadM = kGemmTinyThreadM, kTileM = kGemmTinyTileM, kTileN = kGemmTinyTileN;
+const uint kThreadM = kGemmTinyThreadM, kTileM = kGemmTinyTileM, kTileN = kGemmTinyTileN, kThreadN = kGemmThreadN;
 #elif defined(EVF_GEMM_NARROW)
-const uint kThreadM = kGemmNarrowThreadM, kTileM = kGemmNarrowTileM, kTileN = kGemmNarrowTileN;
+const uint kThreadM = kGemmNarrowThreadM, kTileM = kGemmNarrowTileM, kTileN = kGemmNarrowTileN,
+           kThreadN = kGemmNarrowThreadN;
 #else
-const uint kThreadM = kGemmThreadM, kTileM = kGemmTileM, kTileN = kGemmTileN;
+const uint kThreadM = kGemmThreadM, kTileM = kGemmTileM, kTileN = kGemmTileN, kThreadN = kGemmThreadN;
 #endif
-const uint kThreadN = kGemmThreadN, kTileK = kGemmTileK;
+const uint kTileK = kGemmTileK;
 const uint kWorkersN = kTileN / kThreadN, kThreads = (kTileM / kThreadM) * kWorkersN;
 const uint kQuadsM = kTileM / 4u, kQuadsN = kTileN / 4u;
 layout(local_size_x = kThreads) in;

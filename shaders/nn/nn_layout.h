@@ -27,7 +27,9 @@ EVF_NAMESPACE_BEGIN
 // of four per invocation and a single SIMD group per workgroup (kGemmTinyTileN / kGemmThreadN
 // invocations), for at most kGemmTinyTileM rows (the LDI's last layer has one): the narrow tile
 // spends 15 of its 16 rows on nothing there, and its barriers stop 32 groups of lanes, not one.
-// The tiny tile stages nothing in shared memory: each value of B feeds one invocation only.
+// The tiny tile stages nothing in shared memory: each value of B feeds one invocation only. The
+// narrow tile is 160 columns wide so that the weight gradient of a 16-channel 3x3 layer (145
+// columns: 144 weights and the bias) fits one tile, not two of 128.
 EVF_CONST(uint, kGemmThreadM, 8u)
 EVF_CONST(uint, kGemmThreadN, 16u)
 EVF_CONST(uint, kGemmTileM, 64u)
@@ -35,7 +37,8 @@ EVF_CONST(uint, kGemmTileN, 128u)
 EVF_CONST(uint, kGemmTileK, 32u)
 EVF_CONST(uint, kGemmNarrowThreadM, 4u)
 EVF_CONST(uint, kGemmNarrowTileM, 16u)
-EVF_CONST(uint, kGemmNarrowTileN, 128u)
+EVF_CONST(uint, kGemmNarrowThreadN, 20u)
+EVF_CONST(uint, kGemmNarrowTileN, 160u)
 EVF_CONST(uint, kGemmTinyThreadM, 4u)
 EVF_CONST(uint, kGemmTinyTileM, 4u)
 EVF_CONST(uint, kGemmTinyTileN, 128u)
