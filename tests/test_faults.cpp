@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "cli_helpers.h"
+#include "gpu_fixture.h"
 #include "train/checkpoint.h"
 
 using namespace evflow;
@@ -124,7 +125,15 @@ TEST_CASE("faults: kill -9 while training, then --resume: the final checkpoint e
   }
   REQUIRE(step < 150);
   REQUIRE(run_evflow(dir, "train data --out killed --resume" + kTrain, out) == 0);
-  REQUIRE(slurp(dir / "killed" / "checkpoint.ckpt") == slurp(dir / "ref" / "checkpoint.ckpt"));
+  if (test::bit_reproducible()) {
+    REQUIRE(slurp(dir / "killed" / "checkpoint.ckpt") == slurp(dir / "ref" / "checkpoint.ckpt"));
+  } else {  // a GPU's float adds come in any order: the same step, the same splats to 1e-3
+    const Checkpoint k = read_checkpoint(dir / "killed" / "checkpoint.ckpt");
+    const Checkpoint r = read_checkpoint(dir / "ref" / "checkpoint.ckpt");
+    REQUIRE(k.step == r.step);
+    REQUIRE(test::same_values(k.cloud.means, r.cloud.means, 1e-3));
+    REQUIRE(test::same_values(k.cloud.sh, r.cloud.sh, 1e-3));
+  }
   CHECK(hidden_files(dir / "killed") == 0);  // no temporary checkpoint left behind
   // curve.csv: every step once, in order, every row whole.
   std::istringstream curve(slurp(dir / "killed" / "curve.csv"));

@@ -91,8 +91,10 @@ TEST_CASE("splat forward matches the double-precision reference", "[gpu][splat]"
     std::printf("forward (antialiased %d): %u intersections, max |rgb - ref| %.3g, max |alpha - ref| %.3g\n", aa,
                 rs.num_intersections(), max_rgb, max_alpha);
     REQUIRE(rs.num_intersections() > 2000);
-    REQUIRE(max_rgb <= 1e-4);
-    REQUIRE(max_alpha <= 1e-4);
+    // GPUs compute exp and division to the few ulps Vulkan allows, not correctly rounded.
+    const double tol = ctx.caps().cpu_driver ? 1e-4 : 1e-3;
+    REQUIRE(max_rgb <= tol);
+    REQUIRE(max_alpha <= tol);
   }
   test::require_no_validation_messages();
 }
@@ -210,12 +212,19 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
   auto same = [](const Result& a, const Result& b) {
     for (size_t i = 0; i < a.rgb.size(); ++i) REQUIRE(a.rgb[i] == Approx(b.rgb[i]).margin(1e-6));
     for (size_t i = 0; i < a.alpha.size(); ++i) REQUIRE(a.alpha[i] == Approx(b.alpha[i]).margin(1e-6));
-    for (size_t i = 0; i < a.grads.means.size(); ++i)
-      REQUIRE(a.grads.means[i] == Approx(b.grads.means[i]).margin(1e-6).epsilon(1e-4));
-    for (size_t i = 0; i < a.grads.quats.size(); ++i)
-      REQUIRE(a.grads.quats[i] == Approx(b.grads.quats[i]).margin(1e-6).epsilon(1e-4));
-    for (size_t i = 0; i < a.grads.sh.size(); ++i)
-      REQUIRE(a.grads.sh[i] == Approx(b.grads.sh[i]).margin(1e-6).epsilon(1e-4));
+    // Each gradient a sum over pixels, added in another order by each path: within 1e-4 of
+    // itself, or on GPUs (whose adds come in any order) of its array's largest magnitude.
+    auto near = [](const std::vector<float>& x, const std::vector<float>& y) {
+      REQUIRE(x.size() == y.size());
+      if (!test::bit_reproducible()) {
+        REQUIRE(test::same_values(x, y));
+        return;
+      }
+      for (size_t i = 0; i < x.size(); ++i) REQUIRE(x[i] == Approx(y[i]).margin(1e-6).epsilon(1e-4));
+    };
+    near(a.grads.means, b.grads.means);
+    near(a.grads.quats, b.grads.quats);
+    near(a.grads.sh, b.grads.sh);
   };
   // The device's default kernels (CPU drivers: several pixels per invocation).
   auto& ctx = test::gpu_context();
@@ -263,9 +272,13 @@ TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][
   r.backward(rs, params, vr, va, grads, true);
   GaussianCloud twice = grads.download();
   auto norm_twice = r.grad2d_norm().read<float>(s.cloud.size());
-  for (size_t i = 0; i < once.means.size(); ++i) REQUIRE(twice.means[i] == 2.0f * once.means[i]);
-  for (size_t i = 0; i < once.sh.size(); ++i) REQUIRE(twice.sh[i] == 2.0f * once.sh[i]);
-  for (size_t i = 0; i < norm_once.size(); ++i) REQUIRE(norm_twice[i] == 2.0f * norm_once[i]);
+  auto doubled = [](std::vector<float> v) {
+    for (float& x : v) x *= 2.0f;
+    return v;
+  };
+  REQUIRE(test::same_values(twice.means, doubled(once.means)));
+  REQUIRE(test::same_values(twice.sh, doubled(once.sh)));
+  REQUIRE(test::same_values(norm_twice, doubled(norm_once)));
   test::require_no_validation_messages();
 }
 
@@ -295,20 +308,23 @@ TEST_CASE("splat render states kept side by side: each backward equals a fresh r
   auto ref_norm_sum = one.grad2d_norm().read<float>(s.cloud.size());
   // Both forwards first into their own states, then the backwards in reverse order through one
   // rasterizer (its scratch shared); the second adds its screen-gradient norms.
+  auto same_pose = [](const std::array<float, 6>& x, const std::array<float, 6>& y) {
+    return test::same_values({x.begin(), x.end()}, {y.begin(), y.end()});
+  };
   Rasterizer r(ctx);
   RenderState a = r.forward(params, s.cam, s.settings);
   RenderState b = r.forward(params, moved, s.settings);
   r.backward(b, params, vr, va, grads);
-  REQUIRE(grads.download().means == ref[1].means);
-  REQUIRE(grads.download().sh == ref[1].sh);
-  REQUIRE(r.pose_gradient() == ref_pose[1]);
+  REQUIRE(test::same_values(grads.download().means, ref[1].means));
+  REQUIRE(test::same_values(grads.download().sh, ref[1].sh));
+  REQUIRE(same_pose(r.pose_gradient(), ref_pose[1]));
   r.backward(a, params, vr, va, grads);
   const GaussianCloud ga = grads.download();
-  REQUIRE(ga.means == ref[0].means);
-  REQUIRE(ga.log_scales == ref[0].log_scales);
-  REQUIRE(ga.opacity_logits == ref[0].opacity_logits);
-  REQUIRE(r.pose_gradient() == ref_pose[0]);
+  REQUIRE(test::same_values(ga.means, ref[0].means));
+  REQUIRE(test::same_values(ga.log_scales, ref[0].log_scales));
+  REQUIRE(test::same_values(ga.opacity_logits, ref[0].opacity_logits));
+  REQUIRE(same_pose(r.pose_gradient(), ref_pose[0]));
   r.backward(b, params, vr, va, grads, true);
-  REQUIRE(r.grad2d_norm().read<float>(s.cloud.size()) == ref_norm_sum);
+  REQUIRE(test::same_values(r.grad2d_norm().read<float>(s.cloud.size()), ref_norm_sum));
   test::require_no_validation_messages();
 }

@@ -83,10 +83,13 @@ TEST_CASE("trainer: a fixed seed gives the same run twice, and resuming is bit-i
     while (t.current_step() < steps) t.step();
     return t.checkpoint();
   };
+  // Bit-identical on CPU drivers; on GPUs, whose float adds come in any order, within 1e-3 of
+  // each array's largest magnitude.
+  auto same = [](const std::vector<float>& x, const std::vector<float>& y) { return test::same_values(x, y, 1e-3); };
   Checkpoint a = run(16), b = run(16);
-  REQUIRE(a.cloud.means == b.cloud.means);
-  REQUIRE(a.cloud.sh == b.cloud.sh);
-  REQUIRE(a.cloud.opacity_logits == b.cloud.opacity_logits);
+  REQUIRE(same(a.cloud.means, b.cloud.means));
+  REQUIRE(same(a.cloud.sh, b.cloud.sh));
+  REQUIRE(same(a.cloud.opacity_logits, b.cloud.opacity_logits));
   // 8 steps, through a checkpoint file, then 8 more.
   auto path = std::filesystem::temp_directory_path() / "evf_resume_test.ckpt";
   write_checkpoint(path, run(8));
@@ -94,13 +97,27 @@ TEST_CASE("trainer: a fixed seed gives the same run twice, and resuming is bit-i
   REQUIRE(resumed.current_step() == 8);
   while (resumed.current_step() < 16) resumed.step();
   Checkpoint c = resumed.checkpoint();
-  REQUIRE(c.cloud.means == a.cloud.means);
-  REQUIRE(c.cloud.log_scales == a.cloud.log_scales);
-  REQUIRE(c.cloud.quats == a.cloud.quats);
-  REQUIRE(c.cloud.sh == a.cloud.sh);
+  // On GPUs Adam turns the sums' last-bit noise into steps of up to its learning rate wherever a
+  // gradient is near zero (a near-round Gaussian's rotation), so runs drift apart: the resumed
+  // run must stay as close to the first as the second run does (4x, at least 1e-3 of the scale).
+  auto as_close = [](const std::vector<float>& x, const std::vector<float>& y, const std::vector<float>& second) {
+    if (test::bit_reproducible()) return x == y;
+    if (x.size() != y.size() || y.size() != second.size()) return false;
+    double drift = 0, scale = 0, diff = 0;
+    for (size_t i = 0; i < y.size(); ++i) {
+      drift = std::max(drift, std::fabs(double(second[i]) - y[i]));
+      scale = std::max(scale, std::fabs(double(y[i])));
+      diff = std::max(diff, std::fabs(double(x[i]) - y[i]));
+    }
+    return diff <= std::max(4 * drift, 1e-3 * scale);
+  };
+  REQUIRE(as_close(c.cloud.means, a.cloud.means, b.cloud.means));
+  REQUIRE(as_close(c.cloud.log_scales, a.cloud.log_scales, b.cloud.log_scales));
+  REQUIRE(as_close(c.cloud.quats, a.cloud.quats, b.cloud.quats));
+  REQUIRE(as_close(c.cloud.sh, a.cloud.sh, b.cloud.sh));
   for (size_t i = 0; i < a.optimizer.size(); ++i) {
     REQUIRE(c.optimizer[i].step == a.optimizer[i].step);
-    REQUIRE(c.optimizer[i].exp_avg == a.optimizer[i].exp_avg);
+    REQUIRE(as_close(c.optimizer[i].exp_avg, a.optimizer[i].exp_avg, b.optimizer[i].exp_avg));
   }
   std::filesystem::remove(path);
   test::require_no_validation_messages();
