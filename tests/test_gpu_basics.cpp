@@ -139,3 +139,21 @@ TEST_CASE("gpu: the context counts its buffers' device memory, now and at its pe
   CHECK(ctx.device_bytes() == before);
   CHECK(ctx.peak_device_bytes() >= before + (6 << 20));
 }
+
+TEST_CASE("gpu: commands recorded on a buffer that is then grown are refused at submit, naming it", "[gpu]") {
+  auto& ctx = test::gpu_context();
+  gpu::Buffer b(ctx, 64 * 4, "scratch");
+  gpu::Commands cmd(ctx);
+  struct {
+    uint32_t n, offset;
+  } pc{64, 0};
+  cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, b}}, pc, cmd.linear_groups(1));
+  b.ensure(1 << 20);  // frees the allocation the dispatch recorded
+  REQUIRE_THROWS_WITH(cmd.submit(), Catch::Contains("'scratch'") && Catch::Contains("grown or freed"));
+  // The commands start afresh and work after the refusal.
+  pc.offset = 7;
+  cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, b}}, pc, cmd.linear_groups(1));
+  cmd.submit();
+  REQUIRE(b.read<uint32_t>(64)[63] == 70u);
+  test::require_no_validation_messages();
+}

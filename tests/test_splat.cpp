@@ -328,3 +328,66 @@ TEST_CASE("splat render states kept side by side: each backward equals a fresh r
   REQUIRE(test::same_values(r.grad2d_norm().read<float>(s.cloud.size()), ref_norm_sum));
   test::require_no_validation_messages();
 }
+
+TEST_CASE("splat batch: an exposure's frames rendered and differentiated in one submit equal one at a time",
+          "[gpu][splat]") {
+  auto& ctx = test::gpu_context();
+  const uint32_t w = 128, h = 96;
+  Scene s = make_scene(47, 3000, 1, w, h, false);
+  GaussianBuffers params(ctx, s.cloud.size(), 1, "p_"), grads(ctx, s.cloud.size(), 1, "v_");
+  params.upload(s.cloud);
+  gpu::Buffer vr(ctx, w * h * 12, "v_rgb"), va(ctx, w * h * 4, "v_alpha");
+  vr.write(reference::random_weights(94, 3 * w * h));
+  va.write(reference::random_weights(95, w * h));
+  // Frames ever nearer the scene, so each sorts more intersections than the last: the sort's
+  // scratch must be grown for the largest before any frame is recorded.
+  std::vector<Camera> cams;
+  for (int i = 0; i < 3; ++i) {
+    Camera c = s.cam;
+    c.t[2] += 3.0f - 1.5f * float(i);
+    cams.push_back(c);
+  }
+  std::vector<std::vector<float>> ref_rgb;
+  std::vector<GaussianCloud> ref_grads;
+  std::vector<std::array<float, 6>> ref_pose;
+  std::vector<uint32_t> isects;
+  Rasterizer one(ctx);
+  std::vector<RenderState> mine;
+  for (const Camera& c : cams) {
+    mine.push_back(one.forward(params, c, s.settings));
+    ref_rgb.push_back(mine.back().outputs().rgb.read<float>(3 * w * h));
+    isects.push_back(mine.back().num_intersections());
+  }
+  std::printf("splat batch: %u, %u and %u intersections\n", isects[0], isects[1], isects[2]);
+  REQUIRE(isects[0] < isects[1]);
+  REQUIRE(isects[1] < isects[2]);
+  for (size_t i = 0; i < cams.size(); ++i) {
+    one.backward(mine[i], params, vr, va, grads, i > 0);
+    ref_pose.push_back(one.pose_gradient());
+  }
+  const GaussianCloud ref = grads.download();
+  const auto ref_norm = one.grad2d_norm().read<float>(s.cloud.size());
+
+  Rasterizer batch(ctx);  // fresh: its sort's scratch starts small
+  std::vector<RenderState> states;
+  for (size_t i = 0; i < cams.size(); ++i) states.emplace_back(ctx);
+  batch.forward(params, cams, s.settings, states);
+  for (size_t i = 0; i < cams.size(); ++i) {
+    INFO("frame " << i);
+    REQUIRE(states[i].num_intersections() == isects[i]);
+    REQUIRE(test::same_values(states[i].outputs().rgb.read<float>(3 * w * h), ref_rgb[i]));
+  }
+  const std::vector<const RenderState*> ptrs{&states[0], &states[1], &states[2]};
+  const std::vector<const gpu::Buffer*> v_rgb(3, &vr);
+  const auto pose = batch.backward(ptrs, params, v_rgb, va, grads);
+  const GaussianCloud g = grads.download();
+  REQUIRE(test::same_values(g.means, ref.means));
+  REQUIRE(test::same_values(g.quats, ref.quats));
+  REQUIRE(test::same_values(g.sh, ref.sh));
+  REQUIRE(test::same_values(batch.grad2d_norm().read<float>(s.cloud.size()), ref_norm));
+  REQUIRE(pose.size() == 3);
+  for (size_t i = 0; i < 3; ++i)
+    REQUIRE(test::same_values({pose[i].begin(), pose[i].end()}, {ref_pose[i].begin(), ref_pose[i].end()}));
+  REQUIRE(batch.pose_gradient() == pose[2]);
+  test::require_no_validation_messages();
+}

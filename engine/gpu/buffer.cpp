@@ -18,6 +18,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
     name_ = std::move(o.name_);
     size_ = o.size_;
     allocated_ = std::exchange(o.allocated_, 0);
+    serial_ = std::exchange(o.serial_, 0);
     buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
     memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
     mapped_ = std::exchange(o.mapped_, nullptr);
@@ -31,6 +32,8 @@ void Buffer::release() {
   if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
   if (memory_) vkFreeMemory(ctx_->device(), memory_, nullptr);
   if (allocated_) ctx_->count_allocation(-int64_t(allocated_));
+  if (serial_) ctx_->release_allocation(serial_);
+  serial_ = 0;
   allocated_ = 0;
   buffer_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;
@@ -66,6 +69,7 @@ void Buffer::allocate(uint64_t bytes) {
   allocated_ = req.size;
   ctx_->count_allocation(int64_t(allocated_));
   EVF_VK(vkBindBufferMemory(ctx_->device(), buffer_, memory_, 0));
+  serial_ = ctx_->register_allocation();
   size_ = bytes;
   if (ctx_->caps().unified_memory) EVF_VK(vkMapMemory(ctx_->device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
   if (ctx_->options().poison) {

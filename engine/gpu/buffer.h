@@ -25,6 +25,7 @@ class Buffer {
   VkBuffer handle() const { return buffer_; }
   const std::string& name() const { return name_; }
   Context& context() const { return *ctx_; }
+  uint64_t serial() const { return serial_; }  // of the current allocation (Context::register_allocation)
 
   // Grows (reallocates, contents lost) when smaller than `bytes`; keeps 25% headroom.
   void ensure(uint64_t bytes);
@@ -57,6 +58,7 @@ class Buffer {
   std::string name_;
   uint64_t size_ = 0;
   uint64_t allocated_ = 0;  // the memory behind it (counted in Context::device_bytes)
+  uint64_t serial_ = 0;     // Context::register_allocation's, 0 when unallocated
   VkBuffer buffer_ = VK_NULL_HANDLE;
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
   void* mapped_ = nullptr;

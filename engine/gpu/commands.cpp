@@ -107,6 +107,7 @@ void Commands::dispatch(const std::string& name, std::initializer_list<Bind> bin
     uint64_t range = r.range ? r.range : r.buffer->size() - r.offset;
     ctx_.check_binding_size(range, "buffer '" + r.buffer->name() + "' in kernel '" + name + "'");
     infos.push_back({r.buffer->handle(), r.offset, range});
+    used(*r.buffer);
   }
   std::vector<VkWriteDescriptorSet> writes(infos.size());
   for (size_t i = 0; i < infos.size(); ++i) {
@@ -172,6 +173,7 @@ void Commands::fill(const Buffer& b, uint32_t value, uint64_t offset, uint64_t b
   n &= ~uint64_t(3);
   if (n == 0) return;
   vkCmdFillBuffer(cb_, b.handle(), offset, n, value);
+  used(b);
   barrier();
   empty_ = false;
 }
@@ -180,6 +182,8 @@ void Commands::copy(const Buffer& src, const Buffer& dst, uint64_t bytes, uint64
   if (!bytes) return;
   VkBufferCopy r{so, doff, bytes};
   vkCmdCopyBuffer(cb_, src.handle(), dst.handle(), 1, &r);
+  used(src);
+  used(dst);
   barrier();
   empty_ = false;
 }
@@ -191,7 +195,26 @@ void Commands::mark(const std::string& name) {
   vkCmdWriteTimestamp(cb_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries_, static_cast<uint32_t>(marks_.size()));
 }
 
+void Commands::used(const Buffer& b) { used_.emplace_back(b.serial(), b.name()); }
+
+// Every buffer the recorded commands use must still hold the allocation they recorded: a buffer
+// grown (or freed) after its commands were recorded would have them read and write freed memory.
+void Commands::check_used() {
+  for (const auto& [serial, name] : used_)
+    if (!ctx_.allocation_live(serial)) {
+      const std::string what = name;
+      used_.clear();
+      EVF_VK(vkResetCommandBuffer(cb_, 0));  // from recording back to initial: nothing ends or runs
+      begin();
+      throw Error("commands were recorded on buffer '" + what +
+                  "', which was then grown or freed before they were submitted (a scratch buffer must be sized for "
+                  "every use before the first is recorded)");
+    }
+  used_.clear();
+}
+
 void Commands::submit() {
+  check_used();
   EVF_VK(vkEndCommandBuffer(cb_));
   recording_ = false;
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};

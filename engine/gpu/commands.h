@@ -74,6 +74,9 @@ class Commands {
   uint32_t query_capacity_ = 256;
   std::vector<std::string> marks_;
   std::vector<std::pair<std::string, double>> stage_ms_;
+  std::vector<std::pair<uint64_t, std::string>> used_;  // the allocations the recorded commands use, by name
+  void used(const Buffer& b);
+  void check_used();
   bool recording_ = false;
   bool empty_ = true;
 };

@@ -391,6 +391,22 @@ void Context::count_allocation(int64_t bytes) {
   while (now > peak && !peak_device_bytes_.compare_exchange_weak(peak, now)) {}
 }
 
+uint64_t Context::register_allocation() {
+  std::lock_guard<std::mutex> lock(live_mutex_);
+  live_allocations_.insert(next_serial_);
+  return next_serial_++;
+}
+
+void Context::release_allocation(uint64_t serial) {
+  std::lock_guard<std::mutex> lock(live_mutex_);
+  live_allocations_.erase(serial);
+}
+
+bool Context::allocation_live(uint64_t serial) const {
+  std::lock_guard<std::mutex> lock(live_mutex_);
+  return live_allocations_.count(serial) != 0;
+}
+
 void Context::check_binding_size(uint64_t bytes, const std::string& what) const {
   if (bytes > caps_.max_storage_buffer_range)
     throw Error(what + " needs a " + std::to_string(bytes) +

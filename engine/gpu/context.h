@@ -11,6 +11,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 namespace evflow::gpu {
@@ -121,6 +122,12 @@ class Context {
   uint64_t device_bytes() const { return device_bytes_.load(); }
   uint64_t peak_device_bytes() const { return peak_device_bytes_.load(); }
 
+  // Every allocation of a buffer gets a serial that lives until the buffer is released or grown,
+  // so that commands can check, when submitted, that nothing they use was freed after recording.
+  uint64_t register_allocation();
+  void release_allocation(uint64_t serial);
+  bool allocation_live(uint64_t serial) const;
+
   // Throws a clear error when a binding of `bytes` would exceed the device's storage range.
   void check_binding_size(uint64_t bytes, const std::string& what) const;
 
@@ -147,6 +154,9 @@ class Context {
   std::vector<std::string> messages_;
   size_t message_total_ = 0;
   std::atomic<uint64_t> device_bytes_{0}, peak_device_bytes_{0};
+  mutable std::mutex live_mutex_;
+  std::unordered_set<uint64_t> live_allocations_;
+  uint64_t next_serial_ = 1;
 };
 
 }  // namespace evflow::gpu

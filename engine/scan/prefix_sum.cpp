@@ -12,6 +12,14 @@ void PrefixSum::record(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buf
   record_level(cmd, in, out, n_in, n_out, 0);
 }
 
+void PrefixSum::reserve(uint32_t n_out, size_t level) {
+  if (n_out == 0) return;
+  const uint32_t blocks = gpu::Commands::div_up(n_out, kScanBlock);
+  if (sums_.size() <= level) sums_.emplace_back(ctx_, 16, "scan_block_sums");
+  sums_[level].ensure(uint64_t(blocks + 1) * 4);
+  if (blocks > 1) reserve(blocks, level + 1);
+}
+
 void PrefixSum::record_level(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in,
                              uint32_t n_out, size_t level) {
   const uint32_t blocks = gpu::Commands::div_up(n_out, kScanBlock);

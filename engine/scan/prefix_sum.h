@@ -13,6 +13,9 @@ class PrefixSum {
   // out[i] = in[0] + ... + in[i-1] for i < n_out, reading in[i] for i < n_in (zero beyond), so
   // n_out = n_in + 1 leaves the total in out[n_in]. `in` and `out` may be the same buffer.
   void record(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in, uint32_t n_out);
+  // Grows the block sums for an n_out-long scan (before recording several scans of different
+  // lengths into one command buffer, so none is regrown under recorded commands).
+  void reserve(uint32_t n_out, size_t level = 0);
 
  private:
   void record_level(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in, uint32_t n_out,

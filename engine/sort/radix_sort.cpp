@@ -18,6 +18,22 @@ RadixSort::RadixSort(gpu::Context& ctx)
 
 void RadixSort::set_items(uint32_t items) { items_ = items ? std::clamp<uint32_t>(items, 1u, 256u) : 0u; }
 
+uint32_t RadixSort::items_for(uint32_t n) const {
+  if (items_) return items_;
+  uint32_t items = ctx_.caps().cpu_driver ? kSortItemsCpu : kSortItemsGpu;
+  // Short inputs: smaller blocks so that at least two workgroups share the work (a single block
+  // runs on one CPU thread). More than two made medium sizes slower (bench train's sort).
+  while (items > kSortItemsGpu && uint64_t(n) < uint64_t(2) * kSortGroupSize * items) items /= 2;
+  return items;
+}
+
+void RadixSort::reserve(uint32_t n) {
+  if (n <= 1) return;
+  const uint32_t n_counts = gpu::Commands::div_up(n, kSortGroupSize * items_for(n)) * kSortBins;
+  counts_.ensure(uint64_t(n_counts + 1) * 4);
+  scan_.reserve(n_counts);
+}
+
 std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Commands& cmd, const gpu::Buffer& keys,
                                                                     const gpu::Buffer& values, uint32_t n,
                                                                     uint32_t bits) {
@@ -31,14 +47,10 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Command
   if (n <= 1 || bits == 0) return {&keys, &values};
   keys_alt.ensure(uint64_t(n) * 4);
   values_alt.ensure(uint64_t(n) * 4);
-  uint32_t items = ctx_.caps().cpu_driver ? kSortItemsCpu : kSortItemsGpu;
-  // Short inputs: smaller blocks so that at least two workgroups share the work (a single block
-  // runs on one CPU thread). More than two made medium sizes slower (bench train's sort).
-  while (items > kSortItemsGpu && uint64_t(n) < uint64_t(2) * kSortGroupSize * items) items /= 2;
-  if (items_) items = items_;
+  const uint32_t items = items_for(n);
   const uint32_t blocks = gpu::Commands::div_up(n, kSortGroupSize * items);
   const uint32_t n_counts = blocks * kSortBins;
-  counts_.ensure(uint64_t(n_counts + 1) * 4);
+  reserve(n);
   const gpu::Buffer* kin = &keys;
   const gpu::Buffer* vin = &values;
   const gpu::Buffer* kout = &keys_alt;

@@ -24,8 +24,13 @@ class RadixSort {
   std::pair<const gpu::Buffer*, const gpu::Buffer*> record(gpu::Commands& cmd, const gpu::Buffer& keys,
                                                            const gpu::Buffer& values, gpu::Buffer& keys_alt,
                                                            gpu::Buffer& values_alt, uint32_t n, uint32_t bits);
+  // Grows the internal scratch for sorts of n keys. Recording several sorts into one command
+  // buffer must reserve for each size first: a buffer grown while recording would free one the
+  // earlier sorts' commands still use.
+  void reserve(uint32_t n);
 
  private:
+  uint32_t items_for(uint32_t n) const;
   gpu::Context& ctx_;
   PrefixSum scan_;
   gpu::Buffer keys_tmp_, values_tmp_, counts_;

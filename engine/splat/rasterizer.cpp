@@ -123,6 +123,7 @@ Rasterizer::Rasterizer(gpu::Context& ctx, const RasterKernels& kernels)
       grad2d_norm_(ctx, 16, "grad2d_norm"),
       pose_partial_(ctx, 16, "pose_partial"),
       pose_(ctx, 32, "pose_gradient"),
+      poses_(ctx, 32, "pose_gradients"),
       subgroup_reduce_(kernels.subgroup_reduce),
       block_suffix_(kernels.block ? "_block" : "") {
   for (const char* q : {"mean_x", "mean_y", "conic_x", "conic_y", "conic_z", "opacity", "red", "green", "blue"})
@@ -207,14 +208,14 @@ RenderState Rasterizer::forward(const GaussianBuffers& params, const Camera& cam
   return st;
 }
 
-void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings,
-                         RenderState& st) {
+// The projection and the prefix sum of the tiles each Gaussian touches.
+void Rasterizer::record_project(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings,
+                                RenderState& st) {
   set_pc(params, cam, settings, st);
-  stage_ms_.clear();
   st.count_ = params.count;
   const size_t n = params.count;
   ensure_forward_buffers(st);
-  ProjectPC& pp = st.project_pc_;
+  const ProjectPC& pp = st.project_pc_;
   cmd_.dispatch("splat/project",
                 {{kParamBindMeans, params.means},
                  {kParamBindLogScales, params.log_scales},
@@ -234,16 +235,26 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
   cmd_.mark("project");
   scan_.record(cmd_, st.tiles_touched_, st.isect_offset_, uint32_t(n), uint32_t(n + 1));
   cmd_.mark("scan");
-  cmd_.submit();
-  stage_ms_ = cmd_.stage_ms();
+}
+
+// The intersection count the prefix sum left, read back to size the intersection buffers.
+void Rasterizer::read_count(RenderState& st) const {
+  const size_t n = st.count_;
   const uint32_t m = st.num_isects_ = n ? st.isect_offset_.read_one<uint32_t>(n) : 0;
-  pp.num_isects = m;
+  st.project_pc_.num_isects = m;
   st.raster_pc_.num_isects = m;
 
   const uint64_t max_range = ctx_.caps().max_storage_buffer_range;
   if (uint64_t(m) * 4 > max_range)
     throw gpu::Error(std::to_string(m) + " tile intersections exceed the storage binding limit of " + ctx_.caps().name +
                      " (" + std::to_string(max_range / 4) + " at most)");
+}
+
+// Emit, sort, tile ranges and compositing.
+void Rasterizer::record_raster(RenderState& st) {
+  const size_t n = st.count_;
+  const uint32_t m = st.num_isects_;
+  const ProjectPC& pp = st.project_pc_;
   st.keys_.ensure(uint64_t(m) * 4);
   st.slot_from_isect_.ensure(uint64_t(m) * 4);
   st.gaussian_id_from_slot_.ensure(uint64_t(m) * 4);
@@ -280,28 +291,57 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
                  {kRasterizeBindOutLast, st.last_isect_}},
                 st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize");
+}
+
+void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings,
+                         RenderState& st) {
+  record_project(params, cam, settings, st);
+  cmd_.submit();
+  stage_ms_ = cmd_.stage_ms();
+  read_count(st);
+  record_raster(st);
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
 }
 
-void Rasterizer::backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
-                          const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate) {
+void Rasterizer::forward(const GaussianBuffers& params, const std::vector<Camera>& cams, const RenderSettings& settings,
+                         std::vector<RenderState>& states) {
+  if (cams.size() != states.size()) throw gpu::Error("Rasterizer::forward: one state per camera expected");
+  for (size_t i = 0; i < cams.size(); ++i) record_project(params, cams[i], settings, states[i]);
+  cmd_.submit();
+  stage_ms_ = cmd_.stage_ms();
+  for (RenderState& st : states) {
+    read_count(st);
+    sort_.reserve(st.num_isects_);  // the sort's scratch at its largest before any is recorded
+  }
+  for (RenderState& st : states) record_raster(st);
+  cmd_.submit();
+  for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
+}
+
+// A backward's inputs against its render.
+void Rasterizer::check_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
+                                const gpu::Buffer& v_alpha, const GaussianBuffers& grads) const {
   if (params.count != st.count_) throw gpu::Error("Rasterizer::backward: parameters differ from the render's");
   if (grads.count != params.count || grads.sh_degree != params.sh_degree)
     throw gpu::Error("Rasterizer::backward: gradient buffers do not match the parameters");
   const uint64_t pixels = uint64_t(st.width_) * st.height_;
   if (v_rgb.size() < pixels * 12 || v_alpha.size() < pixels * 4)
     throw gpu::Error("Rasterizer::backward: v_rgb / v_alpha are smaller than the image");
-  const size_t n = params.count;
-  for (gpu::Buffer& g : isect_grad_) g.ensure(std::max<uint64_t>(st.num_isects_, 1) * 4);
-  grad2d_norm_.ensure(n * 4);
-  const uint32_t groups = gpu::Commands::div_up(n, kProjectGroupSize);
-  pose_partial_.ensure(uint64_t(std::max<uint32_t>(groups, 1)) * 24);
-  auto plane = [&](int k) { return gpu::BufferRef(isect_grad_[k]); };
-  stage_ms_.erase(std::remove_if(stage_ms_.begin(), stage_ms_.end(),
-                                 [](auto& s) { return s.first.find("backward") != std::string::npos; }),
-                  stage_ms_.end());
+}
 
+// The backward's scratch for renders of `n` Gaussians with up to `isects` intersections.
+void Rasterizer::ensure_backward_buffers(size_t n, uint64_t isects) {
+  for (gpu::Buffer& g : isect_grad_) g.ensure(std::max<uint64_t>(isects, 1) * 4);
+  grad2d_norm_.ensure(n * 4);
+  pose_partial_.ensure(uint64_t(std::max<uint32_t>(gpu::Commands::div_up(n, kProjectGroupSize), 1)) * 24);
+}
+
+// The compositing's backward and the projection's, for one render.
+void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
+                                 const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate) {
+  const uint32_t groups = gpu::Commands::div_up(params.count, kProjectGroupSize);
+  auto plane = [&](int k) { return gpu::BufferRef(isect_grad_[k]); };
   const std::string raster_bwd =
       "splat/rasterize_bwd" + block_suffix_ + (ctx_.caps().shared_float_atomic_add ? "" : "_cas");
   cmd_.dispatch(raster_bwd,
@@ -361,8 +401,46 @@ void Rasterizer::backward(const RenderState& st, const GaussianBuffers& params, 
   cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, pose_}}, rp,
                 gpu::Groups{1, 1, 1});
   cmd_.mark("project backward");
+}
+
+void Rasterizer::drop_backward_stages() {
+  stage_ms_.erase(std::remove_if(stage_ms_.begin(), stage_ms_.end(),
+                                 [](auto& s) { return s.first.find("backward") != std::string::npos; }),
+                  stage_ms_.end());
+}
+
+void Rasterizer::backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
+                          const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate) {
+  check_backward(st, params, v_rgb, v_alpha, grads);
+  ensure_backward_buffers(params.count, st.num_isects_);
+  drop_backward_stages();
+  record_backward(st, params, v_rgb, v_alpha, grads, accumulate);
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
+}
+
+std::vector<std::array<float, 6>> Rasterizer::backward(const std::vector<const RenderState*>& states,
+                                                       const GaussianBuffers& params,
+                                                       const std::vector<const gpu::Buffer*>& v_rgb,
+                                                       const gpu::Buffer& v_alpha, GaussianBuffers& grads) {
+  if (v_rgb.size() != states.size()) throw gpu::Error("Rasterizer::backward: one v_rgb per render expected");
+  uint64_t most = 0;
+  for (size_t i = 0; i < states.size(); ++i) {
+    check_backward(*states[i], params, *v_rgb[i], v_alpha, grads);
+    most = std::max<uint64_t>(most, states[i]->num_isects_);
+  }
+  ensure_backward_buffers(params.count, most);
+  poses_.ensure(std::max<uint64_t>(states.size(), 1) * 24);
+  drop_backward_stages();
+  for (size_t i = 0; i < states.size(); ++i) {
+    record_backward(*states[i], params, *v_rgb[i], v_alpha, grads, i > 0);
+    cmd_.copy(pose_, poses_, 24, 0, i * 24);
+  }
+  cmd_.submit();
+  for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
+  std::vector<std::array<float, 6>> out(states.size());
+  if (!out.empty()) poses_.download(out.data(), out.size() * 24);
+  return out;
 }
 
 std::array<float, 6> Rasterizer::pose_gradient() const {

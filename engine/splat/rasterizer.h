@@ -83,6 +83,10 @@ class Rasterizer {
   void forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings, RenderState& state);
   // The same into a new state.
   RenderState forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings);
+  // Several renders of the same Gaussians (an exposure's virtual frames), one state per camera:
+  // what forward() does for each, in two submits and one wait for all the counts.
+  void forward(const GaussianBuffers& params, const std::vector<Camera>& cams, const RenderSettings& settings,
+               std::vector<RenderState>& states);
   // Gradients for the render in `state`: v_rgb [3][H][W] and v_alpha [H][W] in GPU buffers.
   // Writes every parameter gradient into `grads`, the pose gradient (se(3), translation first)
   // and the per-Gaussian screen-space gradient norm. With `accumulate`, gradients and the
@@ -91,7 +95,13 @@ class Rasterizer {
   void backward(const RenderState& state, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
                 const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate = false);
 
-  // Of the last backward.
+  // The backward of several renders in one submit, their gradients added into `grads` and
+  // grad2d_norm() in order (the first overwrites); returns each render's pose gradient.
+  std::vector<std::array<float, 6>> backward(const std::vector<const RenderState*>& states,
+                                             const GaussianBuffers& params,
+                                             const std::vector<const gpu::Buffer*>& v_rgb, const gpu::Buffer& v_alpha,
+                                             GaussianBuffers& grads);
+  // Of the last backward (the last render's of a batch).
   std::array<float, 6> pose_gradient() const;
   const gpu::Buffer& grad2d_norm() const { return grad2d_norm_; }
   // Stage times (ms) of the last forward and backward, in order.
@@ -100,6 +110,16 @@ class Rasterizer {
  private:
   void set_pc(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings, RenderState& st) const;
   void ensure_forward_buffers(RenderState& st) const;
+  void record_project(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings,
+                      RenderState& st);
+  void read_count(RenderState& st) const;
+  void record_raster(RenderState& st);
+  void check_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
+                      const gpu::Buffer& v_alpha, const GaussianBuffers& grads) const;
+  void ensure_backward_buffers(size_t n, uint64_t isects);
+  void record_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
+                       const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate);
+  void drop_backward_stages();
   gpu::Context& ctx_;
   gpu::Commands cmd_;
   PrefixSum scan_;
@@ -108,6 +128,7 @@ class Rasterizer {
   // green, blue), a buffer each: GPU-assisted validation checks accesses against whole buffers.
   std::vector<gpu::Buffer> isect_grad_;
   gpu::Buffer grad2d_norm_, pose_partial_, pose_;
+  gpu::Buffer poses_;             // a batched backward's pose gradients, one per render
   bool subgroup_reduce_ = false;  // backward: subgroupAdd before the shared add
   std::string block_suffix_;      // "" (one pixel per invocation) or "_block" (RasterKernels::block)
   std::vector<std::pair<std::string, double>> stage_ms_;

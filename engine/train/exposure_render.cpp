@@ -11,7 +11,7 @@ ExposureRender::ExposureRender(gpu::Context& ctx, uint32_t frames) {
 void ExposureRender::forward(Rasterizer& raster, const GaussianBuffers& params, const std::vector<Camera>& cameras,
                              const RenderSettings& settings) {
   if (cameras.size() != states_.size()) throw std::invalid_argument("ExposureRender: one camera per frame expected");
-  for (size_t i = 0; i < states_.size(); ++i) raster.forward(params, cameras[i], settings, states_[i]);
+  raster.forward(params, cameras, settings, states_);
 }
 
 std::vector<const gpu::Buffer*> ExposureRender::images() const {
@@ -23,12 +23,11 @@ std::vector<const gpu::Buffer*> ExposureRender::images() const {
 std::vector<lie::Vec6> ExposureRender::backward(Rasterizer& raster, const GaussianBuffers& params,
                                                 const std::vector<const gpu::Buffer*>& v_rgb,
                                                 const gpu::Buffer& v_alpha, GaussianBuffers& grads) const {
+  std::vector<const RenderState*> states;
+  for (const RenderState& s : states_) states.push_back(&s);
   std::vector<lie::Vec6> pose;
-  for (size_t i = 0; i < states_.size(); ++i) {
-    raster.backward(states_[i], params, *v_rgb[i], v_alpha, grads, i > 0);
-    const auto g = raster.pose_gradient();
+  for (const auto& g : raster.backward(states, params, v_rgb, v_alpha, grads))
     pose.push_back({g[0], g[1], g[2], g[3], g[4], g[5]});
-  }
   return pose;
 }
 
