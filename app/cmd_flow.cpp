@@ -37,24 +37,6 @@ const char* kUsage =
     "  --json prints {aee_px, contrast_before, contrast_after, iwe_variance_before,\n"
     "  iwe_variance_after, seconds} over the views.\n";
 
-struct Aee {
-  double sum = 0;
-  size_t n = 0;
-  double mean() const { return n ? sum / double(n) : NAN; }
-};
-
-// Endpoint error of `est` against `truth` on the pixels with events in the interval.
-Aee endpoint_error(const std::vector<float>& est, const std::vector<float>& truth,
-                   const std::vector<uint32_t>& counts) {
-  Aee a;
-  for (size_t p = 0; p < counts.size(); ++p) {
-    if (!counts[p] || !std::isfinite(truth[p * 2]) || !std::isfinite(truth[p * 2 + 1])) continue;
-    a.sum += std::hypot(est[p * 2] - truth[p * 2], est[p * 2 + 1] - truth[p * 2 + 1]);
-    ++a.n;
-  }
-  return a;
-}
-
 // The IWE at mid-exposure with zero flow and with `flow`, written as PNGs; their variances.
 std::pair<double, double> write_iwe(flow::FlowEstimator& est, const flow::ExposureFlow& f, const fs::path& dir) {
   std::vector<flow::FlowGrid> zero;
@@ -83,7 +65,7 @@ nlohmann::json flow_view(flow::FlowEstimator& est, const io::Dataset& data, size
   fs::create_directories(dir);
   const auto truth = sim::ground_truth_interval_flow(data.root, view.name, u);
   nlohmann::json j = {{"view", view.name}, {"events", ev.size()}, {"contrast_after", f.contrast}, {"seconds", seconds}};
-  Aee all;
+  sim::EndpointError all;
   std::vector<std::vector<float>> dense;
   for (size_t k = 0; k < f.intervals.size(); ++k) {
     const std::vector<float>& d = dense.emplace_back(flow::dense_flow(f.intervals[k].grid, f.width, f.height));
@@ -92,7 +74,7 @@ nlohmann::json flow_view(flow::FlowEstimator& est, const io::Dataset& data, size
     io::write_npy<float>(dir / (std::string(name) + ".npy"), {f.height, f.width, 2}, d);
     io::write_png8(dir / (std::string(name) + ".png"), f.width, f.height, 3, flow::flow_colour_wheel(d, 4.0));
     if (!truth) continue;
-    const Aee a = endpoint_error(d, (*truth)[k], flow::event_counts(ev, u[k], u[k + 1]));
+    const sim::EndpointError a = sim::endpoint_error(d, (*truth)[k], flow::event_counts(ev, u[k], u[k + 1]));
 
     j["aee_px"].push_back(a.mean());
     all.sum += a.sum, all.n += a.n;

@@ -235,19 +235,12 @@ TEST_CASE("flow: the default schedule finds each interval's flow of a simulated 
     REQUIRE(truth);
     for (size_t i = 0; i < f.intervals.size(); ++i) {
       const std::vector<float> d = flow::dense_flow(f.intervals[i].grid, f.width, f.height);
-      const std::vector<uint32_t> counts = flow::event_counts(ev, u[i], u[i + 1]);
-      double sum = 0, truth_len = 0;
-      size_t n = 0;
-      for (size_t p = 0; p < counts.size(); ++p) {
-        const float tx = (*truth)[i][p * 2], ty = (*truth)[i][p * 2 + 1];
-        if (!counts[p] || !std::isfinite(tx)) continue;
-        sum += std::hypot(d[p * 2] - tx, d[p * 2 + 1] - ty), truth_len += std::hypot(tx, ty), ++n;
-      }
-      INFO("view " << view.name << " interval " << i << ": endpoint error " << sum / n << " px, flow " << truth_len / n
-                   << " px, " << n << " pixels");
-      REQUIRE(n > 10000);
-      CHECK(sum / n < 0.9);
-      all += sum, all_n += n;
+      const sim::EndpointError e = sim::endpoint_error(d, (*truth)[i], flow::event_counts(ev, u[i], u[i + 1]));
+      INFO("view " << view.name << " interval " << i << ": endpoint error " << e.mean() << " px, flow "
+                   << e.truth_mean() << " px, " << e.n << " pixels");
+      REQUIRE(e.n > 10000);
+      CHECK(e.mean() < 0.9);
+      all += e.sum, all_n += e.n;
     }
   }
   INFO("mean endpoint error " << all / all_n << " px");

@@ -77,4 +77,17 @@ std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const 
   throw std::runtime_error(traj.string() + ": no training view '" + name + "'");
 }
 
+EndpointError endpoint_error(const std::vector<float>& estimate, const std::vector<float>& truth,
+                             const std::vector<uint32_t>& counts) {
+  EndpointError e;
+  for (size_t p = 0; p < counts.size(); ++p) {
+    const float tx = truth[p * 2], ty = truth[p * 2 + 1];
+    if (!counts[p] || !std::isfinite(tx) || !std::isfinite(ty)) continue;
+    e.sum += std::hypot(estimate[p * 2] - tx, estimate[p * 2 + 1] - ty);
+    e.truth_sum += std::hypot(tx, ty);
+    ++e.n;
+  }
+  return e;
+}
+
 }  // namespace evflow::sim

@@ -1,6 +1,8 @@
 // Ground-truth flow of a simulated exposure's intervals (evflow flow, flow=gt in training): from the simulator's
 // gt/trajectories.json (the sub-frame poses) and gt/depth/<view>.npy (depth at mid-exposure).
 #pragma once
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -16,5 +18,17 @@ namespace evflow::sim {
 std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const std::filesystem::path& data,
                                                                           const std::string& name,
                                                                           const std::vector<double>& frame_u);
+
+// A dense flow's endpoint error against the truth (each H * W * 2), over the pixels with events
+// (`counts`, H * W) where the truth is defined.
+struct EndpointError {
+  double sum = 0;        // of |estimate - truth|
+  double truth_sum = 0;  // of |truth|
+  size_t n = 0;          // pixels counted
+  double mean() const { return n ? sum / double(n) : NAN; }
+  double truth_mean() const { return n ? truth_sum / double(n) : NAN; }
+};
+EndpointError endpoint_error(const std::vector<float>& estimate, const std::vector<float>& truth,
+                             const std::vector<uint32_t>& counts);
 
 }  // namespace evflow::sim
