@@ -36,12 +36,12 @@ namespace evflow::flow {
 struct FlowOptions {
   std::vector<uint32_t> tiles = {1, 2, 4, 8};            // the pyramid of the exposure's flow
   std::vector<uint32_t> image_scale = {4, 2, 1, 1};      // each level's IWE is this much coarser
-  std::vector<uint32_t> event_stride = {4, 2, 2, 2};     // each level uses every stride-th event
-  std::vector<uint32_t> iterations = {30, 20, 15, 10};   // its Adam steps per level
+  std::vector<uint32_t> event_stride = {8, 4, 4, 4};     // each level uses every stride-th event
+  std::vector<uint32_t> iterations = {12, 8, 5, 4};      // its Adam steps per level
   std::vector<uint32_t> time_groups = {2, 3, 6};         // then neighbouring intervals tied in groups
-  std::vector<uint32_t> time_iterations = {20, 20, 20};  // Adam steps per grouping
-  uint32_t interval_iterations = 20;                     // then the intervals' own flows
-  uint32_t interval_event_stride = 2;                    // from every stride-th event
+  std::vector<uint32_t> time_iterations = {10, 10, 10};  // Adam steps per grouping
+  uint32_t interval_iterations = 16;                     // then the intervals' own flows
+  uint32_t interval_event_stride = 4;                    // from every stride-th event
   double lr = 0.1;                // Adam step (pixels per interval) at the first level, decaying to a tenth
   double lr_level = 0.6;          // each finer level's step, relative to the one before
   double lr_intervals = 1e-3;     // the groupings' and the intervals' own flows' step, as a fraction
