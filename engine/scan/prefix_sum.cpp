@@ -9,6 +9,7 @@ using shaderio::kScanBlock;
 void PrefixSum::record(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in,
                        uint32_t n_out) {
   if (n_out == 0) return;
+  reserve(n_out);
   record_level(cmd, in, out, n_in, n_out, 0);
 }
 
@@ -23,9 +24,7 @@ void PrefixSum::reserve(uint32_t n_out, size_t level) {
 void PrefixSum::record_level(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in,
                              uint32_t n_out, size_t level) {
   const uint32_t blocks = gpu::Commands::div_up(n_out, kScanBlock);
-  if (sums_.size() <= level) sums_.emplace_back(ctx_, 16, "scan_block_sums");
-  sums_[level].ensure(uint64_t(blocks + 1) * 4);
-  const gpu::Buffer& sums = sums_[level];
+  const gpu::Buffer& sums = sums_[level];  // sized by reserve()
   shaderio::ScanPC pc{n_out, n_in, 0, 0};
   cmd.dispatch(
       "scan/scan_block",
