@@ -371,7 +371,7 @@ TEST_CASE("splat batch: an exposure's frames rendered and differentiated in one 
   Rasterizer batch(ctx);  // fresh: its sort's scratch starts small
   std::vector<RenderState> states;
   for (size_t i = 0; i < cams.size(); ++i) states.emplace_back(ctx);
-  batch.forward(params, cams, s.settings, states);
+  batch.forward(params, cams, s.settings, {&states[0], &states[1], &states[2]});
   for (size_t i = 0; i < cams.size(); ++i) {
     INFO("frame " << i);
     REQUIRE(states[i].num_intersections() == isects[i]);

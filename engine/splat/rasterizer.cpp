@@ -295,26 +295,20 @@ void Rasterizer::record_raster(RenderState& st) {
 
 void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings,
                          RenderState& st) {
-  record_project(params, cam, settings, st);
-  cmd_.submit();
-  stage_ms_ = cmd_.stage_ms();
-  read_count(st);
-  record_raster(st);
-  cmd_.submit();
-  for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
+  forward(params, {cam}, settings, {&st});
 }
 
 void Rasterizer::forward(const GaussianBuffers& params, const std::vector<Camera>& cams, const RenderSettings& settings,
-                         std::vector<RenderState>& states) {
+                         const std::vector<RenderState*>& states) {
   if (cams.size() != states.size()) throw gpu::Error("Rasterizer::forward: one state per camera expected");
-  for (size_t i = 0; i < cams.size(); ++i) record_project(params, cams[i], settings, states[i]);
+  for (size_t i = 0; i < cams.size(); ++i) record_project(params, cams[i], settings, *states[i]);
   cmd_.submit();
   stage_ms_ = cmd_.stage_ms();
-  for (RenderState& st : states) {
-    read_count(st);
-    sort_.reserve(st.num_isects_);  // the sort's scratch at its largest before any is recorded
+  for (RenderState* st : states) {
+    read_count(*st);
+    sort_.reserve(st->num_isects_);  // the sort's scratch at its largest before any is recorded
   }
-  for (RenderState& st : states) record_raster(st);
+  for (RenderState* st : states) record_raster(*st);
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
 }

@@ -86,7 +86,7 @@ class Rasterizer {
   // Several renders of the same Gaussians (an exposure's virtual frames), one state per camera:
   // what forward() does for each, in two submits and one wait for all the counts.
   void forward(const GaussianBuffers& params, const std::vector<Camera>& cams, const RenderSettings& settings,
-               std::vector<RenderState>& states);
+               const std::vector<RenderState*>& states);
   // Gradients for the render in `state`: v_rgb [3][H][W] and v_alpha [H][W] in GPU buffers.
   // Writes every parameter gradient into `grads`, the pose gradient (se(3), translation first)
   // and the per-Gaussian screen-space gradient norm. With `accumulate`, gradients and the

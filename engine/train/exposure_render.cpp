@@ -11,7 +11,9 @@ ExposureRender::ExposureRender(gpu::Context& ctx, uint32_t frames) {
 void ExposureRender::forward(Rasterizer& raster, const GaussianBuffers& params, const std::vector<Camera>& cameras,
                              const RenderSettings& settings) {
   if (cameras.size() != states_.size()) throw std::invalid_argument("ExposureRender: one camera per frame expected");
-  raster.forward(params, cameras, settings, states_);
+  std::vector<RenderState*> states;
+  for (RenderState& s : states_) states.push_back(&s);
+  raster.forward(params, cameras, settings, states);
 }
 
 std::vector<const gpu::Buffer*> ExposureRender::images() const {
