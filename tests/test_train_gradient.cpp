@@ -63,30 +63,47 @@ std::vector<size_t> largest(const std::vector<double>& g, size_t n) {
   return idx;
 }
 
-}  // namespace
-
-TEST_CASE("trainer: one step's applied gradient (blur + events, 2N+1 frames) matches central differences of its loss",
-          "[gpu][train][gradient]") {
-  auto& ctx = test::gpu_context();
+// The true scene: n random Gaussians in front of the views' camera.
+GaussianCloud true_cloud(uint32_t n) {
   const Camera cam0 = Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
-  const GaussianCloud truth = synthetic_cloud(42, 300, 0, cam0);
-  const io::Dataset data = blur_event_dataset(ctx, truth);
-  REQUIRE(data.events.size() > 500);
+  return synthetic_cloud(42, n, 0, cam0);
+}
 
+// blur+events from the first step, no direction check (a step's update is its gradient), SH 0,
+// the grey background, no density control.
+TrainConfig step_config(uint32_t iterations) {
   TrainConfig cfg;
   cfg.apply_method("blur+events");
   cfg.virtual_frames = 3;
   cfg.sh_degree = 0;
   cfg.background = {kGrey, kGrey, kGrey};
   cfg.densify = false;
-  cfg.iterations = 100;
-  cfg.event_from = 0.0;        // the event term on from the first step
-  cfg.event_flip_until = 0.0;  // no direction check: the step's update is its gradient
-  // Start away from the truth: colours off, trajectories at 60% of the motion.
+  cfg.iterations = iterations;
+  cfg.event_from = 0.0;
+  cfg.event_flip_until = 0.0;
+  return cfg;
+}
+
+// A start away from the truth: colours off, trajectories at 60% of the motion.
+Checkpoint perturbed_start(const GaussianCloud& truth, size_t views) {
   Checkpoint start{0, truth, {}};
   for (size_t i = 0; i < start.cloud.sh.size(); ++i) start.cloud.sh[i] += 0.3f * float((i % 7) / 6.0 - 0.5);
-  for (size_t v = 0; v < data.train.size(); ++v)
+  for (size_t v = 0; v < views; ++v)
     start.trajectories.push_back({0, motion_knots(0.6), std::vector<double>(54, 0.0), std::vector<double>(54, 0.0)});
+  return start;
+}
+
+}  // namespace
+
+TEST_CASE("trainer: one step's applied gradient (blur + events, 2N+1 frames) matches central differences of its loss",
+          "[gpu][train][gradient]") {
+  auto& ctx = test::gpu_context();
+  const GaussianCloud truth = true_cloud(300);
+  const io::Dataset data = blur_event_dataset(ctx, truth);
+  REQUIRE(data.events.size() > 500);
+
+  const TrainConfig cfg = step_config(100);
+  const Checkpoint start = perturbed_start(truth, data.train.size());
 
   Trainer t(ctx, data, cfg, start);
   const StepStats st = t.step();
@@ -138,4 +155,70 @@ TEST_CASE("trainer: one step's applied gradient (blur + events, 2N+1 frames) mat
     check("opacity", i, go[i], 1e-2, [&](Checkpoint& c, double d) { c.cloud.opacity_logits[i] += float(d); });
   REQUIRE(checked == 9);
   test::require_no_validation_messages();
+}
+
+TEST_CASE("trainer: an EDI warm-up step is the EDI baseline's step at the trajectory's mid-exposure pose",
+          "[gpu][train][warmup]") {
+  auto& ctx = test::gpu_context();
+  const GaussianCloud truth = true_cloud(300);
+  const io::Dataset data = blur_event_dataset(ctx, truth);
+
+  TrainConfig cfg = step_config(4);
+  cfg.edi_warmup = 0.5;  // steps 1 and 2
+  const Checkpoint start = perturbed_start(truth, data.train.size());
+  Trainer warm(ctx, data, cfg, start);
+
+  // The baseline: plain mode on EDI targets, each view's camera the trajectory's mid-exposure one.
+  io::Dataset mid = data;
+  for (size_t v = 0; v < mid.train.size(); ++v) mid.train[v].camera = warm.training_camera(uint32_t(v));
+  TrainConfig edi = cfg;
+  edi.apply_method("edi");
+  edi.edi_warmup = 0;
+  Trainer baseline(ctx, mid, edi, Checkpoint{0, start.cloud, {}});
+
+  const StepStats a = warm.step(), b = baseline.step();
+  REQUIRE(a.view == b.view);
+  REQUIRE_FALSE(a.skipped);
+  CHECK(a.term_values.at(1) == 0.0);  // no event term in a warm-up step
+  const double tol = test::bit_reproducible() ? 0.0 : 1e-5 * std::abs(b.loss);
+  CHECK(std::abs(a.loss - b.loss) <= tol);
+  const GaussianCloud ga = warm.last_gradients(), gb = baseline.last_gradients();
+  CHECK(test::same_values(ga.means, gb.means));
+  CHECK(test::same_values(ga.sh, gb.sh));
+  CHECK(test::same_values(ga.opacity_logits, gb.opacity_logits));
+  // The mid-exposure pose gradient reaches the view's knots.
+  const std::vector<double>& kg = warm.last_camera_gradient();
+  REQUIRE(kg.size() == size_t(ExposureTrajectory::kSize));
+  CHECK(std::any_of(kg.begin(), kg.end(), [](double x) { return x != 0.0; }));
+
+  warm.step();
+  const StepStats c = warm.step();  // step 3: the blur model and the event term
+  CHECK(c.term_values.at(1) > 0.0);
+  test::require_no_validation_messages();
+}
+
+TEST_CASE("trainer: EDI warm-up settings that cannot work are refused, naming the conflict", "[gpu][train][warmup]") {
+  auto& ctx = test::gpu_context();
+  const io::Dataset data = blur_event_dataset(ctx, true_cloud(100));
+  auto refused = [&](const std::function<void(TrainConfig&)>& set, const std::string& says) {
+    TrainConfig cfg;
+    cfg.apply_method("blur+events");
+    cfg.iterations = 4;
+    cfg.edi_warmup = 0.5;
+    set(cfg);
+    try {
+      Trainer t(ctx, data, cfg);
+      FAIL("accepted");
+    } catch (const std::invalid_argument& e) { CHECK_THAT(e.what(), Catch::Contains(says)); }
+  };
+  refused([](TrainConfig& c) { c.edi_warmup = 1.0; }, "edi_warmup must be in [0, 1)");
+  refused([](TrainConfig& c) { c.edi_warmup = -0.1; }, "edi_warmup must be in [0, 1)");
+  refused([](TrainConfig& c) { c.apply_method("edi"), c.edi_warmup = 0.5; }, "needs mode=blur");
+  refused([](TrainConfig& c) { c.ldi = true; }, "does not combine with ldi=on");
+  io::Dataset no_events = data;
+  no_events.events = {};
+  TrainConfig cfg;
+  cfg.apply_method("blur-only");
+  cfg.edi_warmup = 0.5;
+  CHECK_THROWS_WITH(Trainer(ctx, no_events, cfg), Catch::Contains("needs an event stream"));
 }

@@ -235,6 +235,12 @@ std::vector<Setting> blur_settings() {
             "M of the flow-upsampled blur (paper Eq. 9): each interval of the virtual frames adds M−1 sub-frames, "
             "its first frame moved m/M of the way along the interval's optical flow (`flow`), and the blurry "
             "image is the mean of all 2NM+1 in linear light; 1: off (the paper: 4); > 1 needs `mode=blur`"),
+      field("edi_warmup", &TrainConfig::edi_warmup,
+            "fraction of the run's first steps that fit one render per step, the view's trajectory at "
+            "mid-exposure, to the view's EDI image (as `target=edi`), before the blur model and its terms take "
+            "over: a warm-up step costs one render instead of 2N+1, so the splats learn the scene's shape and "
+            "colours sooner ([training.md](training.md#edi-warm-up)); 0: off; in [0, 1); needs events, not "
+            "with `ldi=on`. Every other fraction (`event_from`, the direction check) counts over the whole run"),
       field("lr_trajectory_init", &TrainConfig::lr_trajectory_init,
             "the knots' Adam learning rate at the start; the fast preset's 1500 steps leave the paper's "
             "1e-3 → 1e-5 too little room to learn the exposure motion"),

@@ -47,6 +47,7 @@ struct TrainConfig {
   TrainMode mode = TrainMode::Plain;
   uint32_t virtual_frames = 3;
   uint32_t blur_upsample = 1;
+  double edi_warmup = 0.0;
   double lr_trajectory_init = 6e-3, lr_trajectory_final = 6e-4;
   double event_weight = 0.0;
   double event_theta_pos = 0.0, event_theta_neg = 0.0;

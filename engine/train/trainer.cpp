@@ -77,6 +77,7 @@ void Trainer::add_loss(std::unique_ptr<ExposureLossTerm> term) {
 void Trainer::setup(const Checkpoint& checkpoint) {
   const GaussianCloud& start = checkpoint.cloud;
   if (data_.train.empty()) throw std::invalid_argument("dataset has no training views");
+  check_edi_warmup(cfg_, data_);
   const Camera& c0 = data_.train[0].camera;
   for (auto& v : data_.train)
     if (v.camera.width != c0.width || v.camera.height != c0.height)
@@ -99,6 +100,7 @@ void Trainer::setup(const Checkpoint& checkpoint) {
   if (cfg_.res_weight > 0) add_residual_term();
   setup_flows();
   if (cfg_.ldi) add_ldi_branch(checkpoint);
+  if (cfg_.edi_warmup > 0) warmup_ = std::make_unique<EdiWarmup>(ctx_, data_, cfg_);
   optimizer_ = std::make_unique<GaussianOptimizer>(ctx_, cmd_, *params_, *grads_, cfg_, scene_extent(data_));
 }
 
@@ -115,9 +117,7 @@ void Trainer::add_ldi_branch(const Checkpoint& start) {
 // Per view, its training target in loss_space.
 void Trainer::upload_targets() {
   for (size_t v = 0; v < data_.train.size(); ++v) {
-    auto planar = io::planar_rgb(training_target(data_, v, cfg_));
-    if (cfg_.loss_space == LossSpace::Srgb)
-      for (float& x : planar) x = io::linear_to_srgb(x);
+    const std::vector<float> planar = loss_space_target(data_, v, cfg_);
     targets_.emplace_back(ctx_, planar.size() * 4, "target_" + data_.train[v].name);
     targets_.back().write(planar);
   }
@@ -259,6 +259,10 @@ StepStats Trainer::step() {
   StepStats st;
   st.step = ++step_;
   st.view = view_for_step(step_, data_.train.size(), cfg_.seed);
+  if (warmup_ && warmup_->active(step_)) {
+    warmup_step(st);
+    return st;
+  }
   const bool exposure_on = terms_.has_exposure_terms() && step_ > uint32_t(cfg_.event_from * cfg_.iterations);
   if (model_flow_due(exposure_on)) refresh_model_flows();
   render_exposure(st.view);
@@ -288,6 +292,31 @@ StepStats Trainer::step() {
   }
   st.ms = clock.total();
   return st;
+}
+
+// The mid-exposure render against the view's EDI image: the blur steps' stages with one frame
+// and no exposure terms. Its pose gradient reaches the trajectory as frame N's.
+void Trainer::warmup_step(StepStats& st) {
+  StepClock clock;
+  const uint32_t mid = exposure_->frames() / 2;
+  warmup_->forward(cmd_, raster_, *params_, cameras_->frame_camera(st.view, mid), render_settings());
+  cmd_.submit();
+  st.raster_forward_ms = clock.lap();
+  terms_.record_image_terms(cmd_, warmup_->image_model(), warmup_->target(st.view));
+  cmd_.submit();
+  st.loss_ms = clock.lap();
+  read_losses(st, false);
+  if (!st.skipped) {
+    warmup_->render_grads(cmd_);
+    cmd_.submit();
+    std::vector<lie::Vec6> pose(exposure_->frames(), lie::Vec6{});
+    pose[mid] = warmup_->backward(raster_, *params_, v_alpha_, *grads_);
+    cameras_->backward_and_step(st.view, pose, step_);
+    st.raster_backward_ms = clock.lap();
+    optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_);
+    st.optimizer_ms = clock.lap();
+  }
+  st.ms = clock.total();
 }
 
 // Every frame keeps its render state for the backward pass; the image model takes them all, in

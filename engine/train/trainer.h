@@ -20,6 +20,7 @@
 #include "train/camera_model.h"
 #include "train/checkpoint.h"
 #include "train/direction_check.h"
+#include "train/edi_warmup.h"
 #include "train/exposure_render.h"
 #include "train/gaussian_optimizer.h"
 #include "train/image_model.h"
@@ -148,6 +149,8 @@ class Trainer {
   FlowSnapshot flow_snapshot(uint32_t v, uint32_t interval);
   ResidualSnapshot residual_snapshot(uint32_t v) const;
   RenderSettings render_settings() const;
+  // A step of the EDI warm-up: one render, its image terms, its backward (edi_warmup).
+  void warmup_step(StepStats& st);
   // The stages of a step.
   void render_exposure(uint32_t view);
   void record_losses(StepStats& st, bool exposure_on);
@@ -182,8 +185,9 @@ class Trainer {
   std::unique_ptr<ModelFlow> model_flow_;  // flow=model or flow_model_from
   uint32_t model_flow_step_ = 0;
   std::unique_ptr<GaussianOptimizer> optimizer_;
-  std::unique_ptr<LdiBranch> ldi_;  // ldi=on
-  RenderState preview_;             // render()
+  std::unique_ptr<LdiBranch> ldi_;     // ldi=on
+  std::unique_ptr<EdiWarmup> warmup_;  // edi_warmup > 0
+  RenderState preview_;                // render()
   uint32_t step_ = 0;
   uint32_t flips_ = 0;
 };

@@ -85,6 +85,13 @@ io::Image training_target(const io::Dataset& data, size_t view, const TrainConfi
   return out;
 }
 
+std::vector<float> loss_space_target(const io::Dataset& data, size_t view, const TrainConfig& cfg) {
+  std::vector<float> planar = io::planar_rgb(training_target(data, view, cfg));
+  if (cfg.loss_space == LossSpace::Srgb)
+    for (float& x : planar) x = io::linear_to_srgb(x);
+  return planar;
+}
+
 std::vector<float> view_warped_event_planes(const io::Dataset& data, const TrainConfig& cfg,
                                             const std::vector<double>& frame_u, size_t v,
                                             const std::vector<std::vector<float>>& flows) {

@@ -16,6 +16,8 @@ namespace evflow {
 // The image a training view is fitted to: its blurry input, its sharp ground truth, or the EDI
 // estimate at mid-exposure (cfg.target). EDI needs the dataset's events.
 io::Image training_target(const io::Dataset& data, size_t view, const TrainConfig& cfg);
+// training_target() as the image terms compare it: planar RGB in cfg.loss_space.
+std::vector<float> loss_space_target(const io::Dataset& data, size_t view, const TrainConfig& cfg);
 // Event thresholds for the event loss / EDI: the config's, else the dataset's (simulator
 // manifest), else 0.2.
 std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainConfig& cfg);
