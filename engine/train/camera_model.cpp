@@ -1,5 +1,7 @@
 #include "train/camera_model.h"
 
+#include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 
@@ -14,7 +16,12 @@ static CameraModel::Kind kind_of(const TrainConfig& cfg) {
 }
 
 CameraModel::CameraModel(const io::Dataset& data, const TrainConfig& cfg)
-    : data_(data), kind_(kind_of(cfg)), iterations_(cfg.iterations) {
+    : data_(data),
+      kind_(kind_of(cfg)),
+      iterations_(cfg.iterations),
+      warmup_steps_(cfg.edi_warmup_steps()),
+      lr_pose_init_(cfg.lr_pose_init),
+      lr_pose_final_(cfg.lr_pose_final) {
   const size_t nv = data.train.size();
   if (kind_ == Kind::Trajectory) {
     times_ = ExposureTrajectory::virtual_times(int(cfg.virtual_frames));
@@ -67,10 +74,27 @@ void CameraModel::backward_and_step(uint32_t view, const std::vector<lie::Vec6>&
     const lie::Vec6 d = lie::mul_transposed(lie::se3_right_jacobian(deltas_[view]), g.back());
     last_grad_.assign(d.begin(), d.end());
   }
+  // After an EDI warm-up the knots' schedule runs over the blur steps: the warm-up learned no motion.
+  const uint32_t from = kind_ == Kind::Trajectory ? warmup_steps_ : 0;  // < iterations_ (check_edi_warmup)
+  const ExponentialDecay sched{lr_init_, lr_final_, iterations_ - from};
+  adam_step(view, sched(step > from ? step - from : 0));
+}
+
+void CameraModel::shift_and_step(uint32_t view, const lie::Vec6& g, uint32_t step) {
+  if (kind_ != Kind::Trajectory) throw std::logic_error("CameraModel::shift_and_step: only trajectories have knots");
+  const auto kg = trajectories_[view].backward(0.5, g);
+  std::array<double, ExposureTrajectory::kDof> sum{};
+  for (size_t k = 0; k < kg.size(); ++k) sum[k % sum.size()] += kg[k];
+  last_grad_.resize(kg.size());
+  for (size_t k = 0; k < kg.size(); ++k) last_grad_[k] = sum[k % sum.size()];
+  const ExponentialDecay sched{lr_pose_init_, lr_pose_final_, std::max(warmup_steps_, 1u)};
+  adam_step(view, sched(step));
+}
+
+void CameraModel::adam_step(uint32_t view, double lr) {
   TrajectoryState& a = adam_[view];
-  const ExponentialDecay sched{lr_init_, lr_final_, iterations_};
   host_adam_step(params(view), last_grad_.data(), a.exp_avg.data(), a.exp_avg_sq.data(), a.exp_avg.size(), ++a.step,
-                 sched(step));
+                 lr);
 }
 
 // T'(u) = T(1 - u) up to the order of the factors (exact for commuting knots, close for

@@ -32,6 +32,11 @@ class CameraModel {
   // The frames' pose gradients (se(3), translation first, one per frame in frame order) to the
   // view's parameters; one Adam step on them at training step `step`. No-op for Fixed.
   void backward_and_step(uint32_t view, const std::vector<lie::Vec6>& frame_pose_grads, uint32_t step);
+  // EDI warm-up (Trajectory only): frame u = 0.5's pose gradient applied to every knot alike, so
+  // the trajectory shifts as a whole and keeps its shape (one frame says nothing about the
+  // motion); one Adam step at the pose refinement's rate (lr_pose_init -> lr_pose_final over
+  // the warm-up).
+  void shift_and_step(uint32_t view, const lie::Vec6& mid_pose_grad, uint32_t step);
   // What the last backward_and_step applied before Adam (54 knot or 6 delta values; empty for Fixed).
   const std::vector<double>& last_gradient() const { return last_grad_; }
   // Time reversal of a view's trajectory, with its Adam moments (Trajectory only).
@@ -43,13 +48,16 @@ class CameraModel {
   void load(const std::vector<TrajectoryState>& saved, const TrainConfig& cfg);
 
  private:
+  void adam_step(uint32_t view, double lr);
   double* params(uint32_t view);
   const double* params(uint32_t view) const;
   const io::Dataset& data_;
   Kind kind_;
   std::vector<double> times_;
   uint32_t iterations_;
+  uint32_t warmup_steps_;  // the knots' schedule starts after the EDI warm-up
   double lr_init_ = 0, lr_final_ = 0;
+  double lr_pose_init_, lr_pose_final_;  // the warm-up's shifts
   std::vector<ExposureTrajectory> trajectories_;
   std::vector<lie::Vec6> deltas_;
   std::vector<TrajectoryState> adam_;  // knots unused here: the parameters live above

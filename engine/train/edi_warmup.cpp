@@ -12,11 +12,13 @@ void check_edi_warmup(const TrainConfig& cfg, const io::Dataset& data) {
     throw std::invalid_argument("edi_warmup must be in [0, 1), got " + std::to_string(cfg.edi_warmup));
   if (cfg.edi_warmup == 0) return;
   if (cfg.mode != TrainMode::Blur)
-    throw std::invalid_argument("edi_warmup > 0 needs mode=blur (plain mode fits one image per step already; "
-                                "target=edi is the EDI baseline)");
+    throw std::invalid_argument(
+        "edi_warmup > 0 needs mode=blur (plain mode fits one image per step already; "
+        "target=edi is the EDI baseline)");
   if (cfg.ldi)
-    throw std::invalid_argument("edi_warmup > 0 does not combine with ldi=on (the LDI branch trains on the "
-                                "virtual frames, which warm-up steps do not render)");
+    throw std::invalid_argument(
+        "edi_warmup > 0 does not combine with ldi=on (the LDI branch trains on the "
+        "virtual frames, which warm-up steps do not render)");
   if (data.events.size() == 0)
     throw std::invalid_argument("edi_warmup > 0 needs an event stream with times for EDI, and the dataset in '" +
                                 data.root + "' has none");
@@ -28,7 +30,7 @@ static TrainConfig edi_target(TrainConfig cfg) {
 }
 
 EdiWarmup::EdiWarmup(gpu::Context& ctx, const io::Dataset& data, const TrainConfig& cfg)
-    : last_step_(uint32_t(cfg.edi_warmup * cfg.iterations)), render_(ctx, 1) {
+    : last_step_(cfg.edi_warmup_steps()), render_(ctx, 1) {
   check_edi_warmup(cfg, data);
   const TrainConfig edi = edi_target(cfg);
   for (size_t v = 0; v < data.train.size(); ++v) {

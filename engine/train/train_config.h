@@ -92,6 +92,8 @@ struct TrainConfig {
   // (+ the flow-upsampled blur, M = 4), blur+res (blur + the residual loss), blur+events+warp+res,
   // evflow-no-ldi-events (+ the LDI branch without its event loss), evflow (the full model).
   void apply_method(const std::string& name);
+  // The last step of the EDI warm-up (edi_warmup of the run's steps; 0: none).
+  uint32_t edi_warmup_steps() const { return uint32_t(edi_warmup * iterations); }
   static std::vector<std::string> methods();
   void set(const std::string& key, const std::string& value);  // throws naming the key and what it expects
   // "preset" first, then "method", then every other key (so explicit keys win).

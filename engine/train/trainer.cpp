@@ -295,11 +295,10 @@ StepStats Trainer::step() {
 }
 
 // The mid-exposure render against the view's EDI image: the blur steps' stages with one frame
-// and no exposure terms. Its pose gradient reaches the trajectory as frame N's.
+// and no exposure terms. Its pose gradient shifts the view's whole trajectory.
 void Trainer::warmup_step(StepStats& st) {
   StepClock clock;
-  const uint32_t mid = exposure_->frames() / 2;
-  warmup_->forward(cmd_, raster_, *params_, cameras_->frame_camera(st.view, mid), render_settings());
+  warmup_->forward(cmd_, raster_, *params_, cameras_->training_camera(st.view), render_settings());
   cmd_.submit();
   st.raster_forward_ms = clock.lap();
   terms_.record_image_terms(cmd_, warmup_->image_model(), warmup_->target(st.view));
@@ -309,9 +308,7 @@ void Trainer::warmup_step(StepStats& st) {
   if (!st.skipped) {
     warmup_->render_grads(cmd_);
     cmd_.submit();
-    std::vector<lie::Vec6> pose(exposure_->frames(), lie::Vec6{});
-    pose[mid] = warmup_->backward(raster_, *params_, v_alpha_, *grads_);
-    cameras_->backward_and_step(st.view, pose, step_);
+    cameras_->shift_and_step(st.view, warmup_->backward(raster_, *params_, v_alpha_, *grads_), step_);
     st.raster_backward_ms = clock.lap();
     optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_);
     st.optimizer_ms = clock.lap();
