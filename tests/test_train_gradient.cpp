@@ -163,8 +163,9 @@ TEST_CASE("trainer: an EDI warm-up step is the EDI baseline's step at the trajec
   const GaussianCloud truth = true_cloud(300);
   const io::Dataset data = blur_event_dataset(ctx, truth);
 
-  TrainConfig cfg = step_config(4);
-  cfg.edi_warmup = 0.5;  // steps 1 and 2
+  TrainConfig cfg = step_config(6);
+  cfg.edi_warmup = 0.5;  // steps 1-3
+  cfg.event_from = 0.5;  // of the 3 blur steps: the event term from step 5
   const Checkpoint start = perturbed_start(truth, data.train.size());
   Trainer warm(ctx, data, cfg, start);
 
@@ -202,8 +203,10 @@ TEST_CASE("trainer: an EDI warm-up step is the EDI baseline's step at the trajec
   CHECK(moved > 0.0);
 
   warm.step();
-  const StepStats c = warm.step();  // step 3: the blur model and the event term
-  CHECK(c.term_values.at(1) > 0.0);
+  warm.step();
+  const StepStats c = warm.step(), d = warm.step();  // steps 4 and 5: the blur model
+  CHECK(c.term_values.at(1) == 0.0);
+  CHECK(d.term_values.at(1) > 0.0);
   test::require_no_validation_messages();
 }
 

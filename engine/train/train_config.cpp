@@ -241,8 +241,9 @@ std::vector<Setting> blur_settings() {
             "over: a warm-up step costs one render instead of 2N+1, so the splats learn the scene's shape and "
             "colours sooner ([training.md](training.md#edi-warm-up)); 0: off; in [0, 1); needs events, not "
             "with `ldi=on`. The warm-up shifts each trajectory as a whole at the pose refinement's rate "
-            "(`lr_pose_init`); the knots' schedule runs over the blur steps; every other schedule and fraction "
-            "(`event_from`, the direction check) counts over the whole run"),
+            "(`lr_pose_init`); after it, the knots' schedule and the blur terms' fractions (`event_from`, "
+            "`event_flip_until`, `flow_model_from`) count over the blur steps, as in a run of that many steps; "
+            "the Gaussians' schedules over the whole run"),
       field("lr_trajectory_init", &TrainConfig::lr_trajectory_init,
             "the knots' Adam learning rate at the start; the fast preset's 1500 steps leave the paper's "
             "1e-3 → 1e-5 too little room to learn the exposure motion"),

@@ -135,8 +135,7 @@ void Trainer::add_event_term() {
   o.theta_pos = float(pos), o.theta_neg = float(neg), o.norm_floor_rms = float(cfg_.event_norm_floor);
   o.pool = cfg_.event_pool;
   auto term = std::make_unique<EventLoss>(ctx_, *events_, float(cfg_.event_weight), o);
-  direction_ = std::make_unique<DirectionCheck>(*term, uint32_t(cfg_.event_flip_until * cfg_.iterations),
-                                                cfg_.event_flip_margin);
+  direction_ = std::make_unique<DirectionCheck>(*term, cfg_.blur_step(cfg_.event_flip_until), cfg_.event_flip_margin);
   add_loss(std::move(term));
 }
 
@@ -218,7 +217,7 @@ void Trainer::upload_view_flow(uint32_t v) {
 uint32_t Trainer::model_flow_start() const {
   if (!model_flow_) return UINT32_MAX;
   if (cfg_.flow == FlowSource::Model) return 1;
-  return uint32_t(cfg_.flow_model_from * cfg_.iterations) + 1;  // as event_from counts
+  return cfg_.blur_step(cfg_.flow_model_from) + 1;  // as event_from counts
 }
 
 // The model's flow is recomputed when this step uses flow and the last computation is
@@ -263,7 +262,7 @@ StepStats Trainer::step() {
     warmup_step(st);
     return st;
   }
-  const bool exposure_on = terms_.has_exposure_terms() && step_ > uint32_t(cfg_.event_from * cfg_.iterations);
+  const bool exposure_on = terms_.has_exposure_terms() && step_ > cfg_.blur_step(cfg_.event_from);
   if (model_flow_due(exposure_on)) refresh_model_flows();
   render_exposure(st.view);
   st.raster_forward_ms = clock.lap();
@@ -367,7 +366,7 @@ void Trainer::record_exposure_terms(StepStats& st) {
 // The event terms' weight factor at this step: 1 until the direction check ends
 // (event_flip_until), then falling linearly to event_weight_end at the last step.
 double Trainer::event_schedule() const {
-  const double from = cfg_.event_flip_until * cfg_.iterations, to = cfg_.iterations;
+  const double from = cfg_.blur_point(cfg_.event_flip_until), to = cfg_.iterations;
   if (cfg_.event_weight_end == 1.0 || double(step_) <= from || !(to > from)) return 1.0;
   const double a = std::min(1.0, (double(step_) - from) / (to - from));
   return 1.0 + a * (cfg_.event_weight_end - 1.0);
