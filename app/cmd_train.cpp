@@ -333,9 +333,6 @@ static int run_train(const Args& a) {
   check_trainable(data, data_dir, vo, view);
   const fs::path out = out_arg;
   fs::create_directories(out);
-  nlohmann::json saved = cfg.to_json();
-  saved["data"] = fs::absolute(data_dir).string();
-  write_text(out / "config.json", saved.dump(2) + "\n");
   // With --view the context comes from the window (presentation on) and outlives the trainer.
   std::unique_ptr<viewer::Display> display;
   std::unique_ptr<gpu::Context> own_ctx;
@@ -348,6 +345,10 @@ static int run_train(const Args& a) {
   std::unique_ptr<Trainer> trainer = make_trainer(ctx, data, cfg, out, resume);
   std::ofstream log(out / "train.log", resume ? std::ios::app : std::ios::trunc);
   TrainCurve curve(out_arg, *trainer, resume);
+  // Only now: a resume refused above leaves the run's own config.
+  nlohmann::json saved = cfg.to_json();
+  saved["data"] = fs::absolute(data_dir).string();
+  write_text(out / "config.json", saved.dump(2) + "\n");
   std::printf("training %zu views (%s) on %s, %u Gaussians, %u iterations, preset %s\n", data.train.size(),
               data.layout.c_str(), ctx.caps().name.c_str(), cfg.init_gaussians, cfg.iterations, cfg.preset.c_str());
   std::signal(SIGINT, on_sigint);

@@ -21,15 +21,21 @@ static std::string first_line(const fs::path& p) {
 
 TrainCurve::TrainCurve(const fs::path& run, const Trainer& trainer, bool resume)
     : csv_(run / "curve.csv"), png_(run / "curve.png") {
+  std::string columns = "step,view,loss,ms,flipped";
+  for (auto& t : trainer.losses()) columns += "," + t->name();
   if (resume && fs::exists(csv_)) {
     const std::string header = first_line(csv_);
     has_psnr_ = header.size() >= 5 && header.compare(header.size() - 5, 5, ",psnr") == 0;
+    const std::string terms = has_psnr_ ? header.substr(0, header.size() - 5) : header;
+    if (terms != columns)
+      throw std::runtime_error(csv_.string() + ": its columns (" + terms + ") are not this run's loss terms (" +
+                               columns +
+                               "): continue with the keys the run started with (its config.json), or "
+                               "train into a new folder");
     out_.open(csv_, std::ios::app);
   } else {
     out_.open(csv_, std::ios::trunc);
-    out_ << "step,view,loss,ms,flipped";
-    for (auto& t : trainer.losses()) out_ << "," << t->name();
-    out_ << ",psnr\n";
+    out_ << columns << ",psnr\n";
   }
   if (!out_) throw std::runtime_error(csv_.string() + ": cannot open for writing");
 }

@@ -12,7 +12,7 @@ namespace evflow::app {
 class TrainCurve {
  public:
   // A fresh file, or with `resume` the run's file continued (a file from before the psnr column
-  // goes on without it).
+  // goes on without it); throws naming the file when its loss columns are not the trainer's.
   TrainCurve(const std::filesystem::path& run, const Trainer& trainer, bool resume);
   // Appends the step's row; measures the PSNR (one extra render) when `with_psnr`. Returns it
   // (NaN when not measured).

@@ -182,3 +182,21 @@ TEST_CASE("faults: a full disk while saving a checkpoint, exporting or simulatin
   CHECK(snapshot(dir / "data") != dataset);
   fs::remove_all(dir);
 }
+
+TEST_CASE("faults: --resume with other loss terms than the run's is refused before a step, leaving the run as it was",
+          "[faults][gpu]") {
+  REQUIRE(fs::exists(evflow_binary()));
+  const fs::path dir = fresh_dir("evflow_fault_terms");
+  std::string out;
+  REQUIRE(run_evflow(dir, kSim + " --seed 5", out) == 0);
+  REQUIRE(run_evflow(dir, "train data --out run iterations=3" + kKeys, out) == 0);
+  const std::string config = slurp(dir / "run" / "config.json"), ckpt = slurp(dir / "run" / "checkpoint.ckpt");
+  // blur+events adds the event term's column to blur-only's.
+  REQUIRE(run_evflow(dir, "train data --out run --resume iterations=6" + kKeys + " method=blur+events", out) != 0);
+  CHECK_THAT(out, Contains("curve.csv") && Contains("are not this run's loss terms"));
+  CHECK(slurp(dir / "run" / "config.json") == config);
+  CHECK(slurp(dir / "run" / "checkpoint.ckpt") == ckpt);
+  // The run's own keys still continue it.
+  REQUIRE(run_evflow(dir, "train data --out run --resume iterations=6" + kKeys, out) == 0);
+  CHECK(checkpoint_step(dir / "run") == 6);
+}
