@@ -31,7 +31,6 @@ static TrainConfig edi_target(TrainConfig cfg) {
 
 EdiWarmup::EdiWarmup(gpu::Context& ctx, const io::Dataset& data, const TrainConfig& cfg)
     : last_step_(cfg.edi_warmup_steps()), render_(ctx, 1) {
-  check_edi_warmup(cfg, data);
   const TrainConfig edi = edi_target(cfg);
   for (size_t v = 0; v < data.train.size(); ++v) {
     const std::vector<float> planar = loss_space_target(data, v, edi);

@@ -19,12 +19,12 @@ namespace evflow {
 
 class EdiWarmup {
  public:
-  // Computes every training view's EDI target (in cfg.loss_space) once.
+  // Computes every training view's EDI target (in cfg.loss_space) once. The caller has checked
+  // the settings (check_edi_warmup).
   EdiWarmup(gpu::Context& ctx, const io::Dataset& data, const TrainConfig& cfg);
 
   // Whether training step `step` (counted from 1) is a warm-up step.
   bool active(uint32_t step) const { return step <= last_step_; }
-  uint32_t last_step() const { return last_step_; }
 
   // Records the mid-exposure render's image model; the render itself is submitted here.
   void forward(gpu::Commands& cmd, Rasterizer& raster, const GaussianBuffers& params, const Camera& camera,
