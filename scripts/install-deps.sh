@@ -3,7 +3,7 @@
 set -euo pipefail
 PKGS=(cmake g++ make pkg-config
       libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
-      libglfw3-dev libimgui-dev libglm-dev libtinygltf-dev nlohmann-json3-dev libopenimageio-dev
+      libglfw3-dev libimgui-dev libglm-dev libtinygltf-dev nlohmann-json3-dev libopenimageio-dev libstb-dev
       libhdf5-dev hdf5-filter-plugin-blosc-serial catch2 xvfb xauth clang-format git
       colmap  # camera poses (evflow poses)
       clang-14 libclang-rt-14-dev)  # the last two: libFuzzer, ASan, UBSan (scripts/fuzz.sh)

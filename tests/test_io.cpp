@@ -4,8 +4,6 @@
 #include <hdf5.h>
 #include <unistd.h>
 
-#include <OpenImageIO/imageio.h>
-
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -18,6 +16,7 @@
 #include "io/events_h5.h"
 #include "io/events_txt.h"
 #include "io/image.h"
+#include "io/image_codec.h"
 #include "io/llff.h"
 #include "io/npy.h"
 
@@ -257,6 +256,54 @@ TEST_CASE("images: PNG within 8-bit quantisation, EXR exact", "[io]") {
   REQUIRE_THROWS_WITH(read_image(dir / "trunc.png"), Contains("trunc.png"));
   REQUIRE_THROWS_WITH(write_image(dir / "a.bmp", im), Contains("a.bmp"));
 }
+
+// The stb codec (the whole codec of an EVFLOW_IMAGE_IO=stb build) against OpenImageIO's, on
+// files each writes: the same values, and the same refusals naming the file.
+#ifndef EVF_IMAGE_IO_STB
+TEST_CASE("images: the stb codec reads and writes as OpenImageIO does", "[io]") {
+  TmpDir dir;
+  for (uint32_t c : {1u, 3u, 4u}) {
+    std::vector<uint8_t> px(size_t(13) * 9 * c);
+    std::mt19937 rng(c);
+    for (auto& v : px) v = uint8_t(rng() & 255u);
+    const std::string n = std::to_string(c);
+    codec::oiio::encode(dir / ("o" + n + ".png"), dir / "o.png", 13, 9, c, false, px.data());
+    codec::stb::encode(dir / ("s" + n + ".png"), dir / "s.png", 13, 9, c, false, px.data());
+    for (const char* f : {"o", "s"}) {
+      const fs::path p = dir / (f + n + ".png");
+      const codec::Decoded a = codec::oiio::decode(p), b = codec::stb::decode(p);
+      REQUIRE(b.width == 13);
+      REQUIRE(b.height == 9);
+      REQUIRE(b.channels == int(c));
+      REQUIRE(b.eight_bit);
+      REQUIRE_FALSE(b.is_float);
+      REQUIRE(a.values == b.values);  // with alpha too: colour as stored, not times alpha
+      for (size_t i = 0; i < px.size(); ++i) REQUIRE(b.values[i] == Approx(px[i] / 255.f).margin(1e-7));
+    }
+  }
+  // JPEG: lossy, so each codec's file decoded by both agrees within a level.
+  std::vector<uint8_t> smooth(size_t(16) * 16 * 3);
+  for (size_t i = 0; i < smooth.size(); ++i) smooth[i] = uint8_t(64 + (i / 3) % 16 * 4);
+  codec::stb::encode(dir / "s.jpg", dir / "s.jpg", 16, 16, 3, false, smooth.data());
+  const codec::Decoded ja = codec::oiio::decode(dir / "s.jpg"), jb = codec::stb::decode(dir / "s.jpg");
+  REQUIRE(ja.values.size() == jb.values.size());
+  for (size_t i = 0; i < ja.values.size(); ++i) REQUIRE(std::fabs(ja.values[i] - jb.values[i]) <= 1.5f / 255.f);
+
+  // Refusals name the file: EXR, other extensions, a truncated or foreign file.
+  const float f[3] = {0.1f, 0.2f, 0.3f};
+  REQUIRE_THROWS_WITH(codec::stb::encode(dir / "x.exr", dir / "x.exr", 1, 1, 3, true, f),
+                      Contains("x.exr") && Contains("OpenImageIO"));
+  REQUIRE_THROWS_WITH(codec::stb::encode(dir / "x.bmp", dir / "x.bmp", 1, 1, 3, false, smooth.data()),
+                      Contains("x.bmp"));
+  write_exr(dir / "y.exr", Image(2, 2, 3, 0.5f));
+  REQUIRE_THROWS_WITH(codec::stb::decode(dir / "y.exr"), Contains("y.exr") && Contains("OpenImageIO"));
+  fs::copy_file(dir / "o3.png", dir / "trunc.png");
+  truncate_file(dir / "trunc.png", 0.5);
+  REQUIRE_THROWS_WITH(codec::stb::decode(dir / "trunc.png"), Contains("trunc.png"));
+  write_text(dir / "junk.png", "not a png");
+  REQUIRE_THROWS_WITH(codec::stb::decode(dir / "junk.png"), Contains("junk.png"));
+}
+#endif
 
 TEST_CASE("LLFF poses_bounds: exact rows, OpenCV cameras", "[io]") {
   TmpDir dir;
@@ -568,12 +615,7 @@ void write_jpg(const fs::path& p, const Image& im) {
   fs::create_directories(p.parent_path());
   std::vector<uint8_t> px(im.data.size());
   for (size_t i = 0; i < px.size(); ++i) px[i] = uint8_t(std::lround(linear_to_srgb(im.data[i]) * 255.f));
-  auto out = OIIO::ImageOutput::create(p.string());
-  REQUIRE(out);
-  OIIO::ImageSpec spec(int(im.width), int(im.height), 3, OIIO::TypeDesc::UINT8);
-  REQUIRE(out->open(p.string(), spec));
-  REQUIRE(out->write_image(OIIO::TypeDesc::UINT8, px.data()));
-  out->close();
+  evflow::io::codec::active::encode(p, p, im.width, im.height, 3, false, px.data());
 }
 
 }  // namespace

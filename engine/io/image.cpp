@@ -1,13 +1,12 @@
 #include "io/image.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "io/atomic_file.h"
+#include "io/image_codec.h"
 
 namespace evflow::io {
 
@@ -27,12 +26,6 @@ namespace {
   throw std::runtime_error(path.string() + ": " + what);
 }
 
-std::string oiio_error(const std::string& e) {
-  std::string s = e.empty() ? OIIO::geterror() : e;
-  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
-  return s.empty() ? "unknown OpenImageIO error" : s;
-}
-
 void check_image(const fs::path& path, const Image& im) {
   if (im.channels != 1 && im.channels != 3 && im.channels != 4)
     fail(path, "cannot write an image with " + std::to_string(im.channels) + " channels (1, 3 or 4)");
@@ -42,19 +35,10 @@ void check_image(const fs::path& path, const Image& im) {
                    std::to_string(size_t(im.width) * im.height * im.channels));
 }
 
-void write_with_oiio(const fs::path& path, uint32_t width, uint32_t height, uint32_t channels, OIIO::TypeDesc type,
-                     const void* pixels) {
-  write_file_atomic(path, [&](const fs::path& tmp) {
-    auto out = OIIO::ImageOutput::create(tmp.string());
-    if (!out) fail(path, "no image writer for this extension: " + oiio_error(""));
-    OIIO::ImageSpec spec(int(width), int(height), int(channels), type);
-    if (type == OIIO::TypeDesc::FLOAT) spec.attribute("compression", "zip");
-    if (!out->open(tmp.string(), spec)) fail(path, "cannot create image: " + oiio_error(out->geterror()));
-    bool ok = out->write_image(type, pixels);
-    std::string err = ok ? "" : out->geterror();
-    ok = out->close() && ok;
-    if (!ok) fail(path, "cannot write image: " + oiio_error(err.empty() ? out->geterror() : err));
-  });
+void write_encoded(const fs::path& path, uint32_t width, uint32_t height, uint32_t channels, bool is_float,
+                   const void* pixels) {
+  write_file_atomic(
+      path, [&](const fs::path& tmp) { codec::active::encode(tmp, path, width, height, channels, is_float, pixels); });
 }
 
 }  // namespace
@@ -62,25 +46,15 @@ void write_with_oiio(const fs::path& path, uint32_t width, uint32_t height, uint
 Image read_image(const fs::path& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) fail(path, "image file is missing");
-  auto in = OIIO::ImageInput::open(path.string());
-  if (!in) fail(path, "cannot open image: " + oiio_error(""));
-  const OIIO::ImageSpec& spec = in->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
-    fail(path, "unsupported image geometry");
-  const int nc = spec.nchannels;
-  const size_t npx = size_t(spec.width) * size_t(spec.height);
-  std::vector<float> raw(npx * nc);
-  if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, raw.data())) {
-    std::string e = in->geterror();
-    fail(path, "cannot read image (truncated or corrupt?): " + oiio_error(e));
-  }
-  in->close();
-  const bool is_float = spec.format.basetype == OIIO::TypeDesc::FLOAT || spec.format.basetype == OIIO::TypeDesc::HALF ||
-                        spec.format.basetype == OIIO::TypeDesc::DOUBLE;
-  Image im(uint32_t(spec.width), uint32_t(spec.height), 3);
+  const codec::Decoded d = codec::active::decode(path);
+  const int nc = d.channels;
+  const size_t npx = size_t(d.width) * size_t(d.height);
+  const std::vector<float>& raw = d.values;
+  const bool is_float = d.is_float;
+  Image im(uint32_t(d.width), uint32_t(d.height), 3);
   // 8-bit files: a 256-entry table; other integer depths: the formula.
   float lut[256];
-  const bool eight = spec.format.basetype == OIIO::TypeDesc::UINT8;
+  const bool eight = d.eight_bit;
   if (eight)
     for (int i = 0; i < 256; ++i) lut[i] = srgb_to_linear(float(i) / 255.f);
   for (size_t i = 0; i < npx; ++i) {
@@ -110,7 +84,7 @@ void write_png(const fs::path& path, const Image& im) {
     float e = alpha ? std::min(v, 1.f) : linear_to_srgb(std::min(v, 1.f));
     px[i] = static_cast<uint8_t>(std::lround(e * 255.f));
   }
-  write_with_oiio(path, im.width, im.height, im.channels, OIIO::TypeDesc::UINT8, px.data());
+  write_encoded(path, im.width, im.height, im.channels, false, px.data());
 }
 
 void write_png8(const fs::path& path, uint32_t width, uint32_t height, uint32_t channels,
@@ -121,12 +95,12 @@ void write_png8(const fs::path& path, uint32_t width, uint32_t height, uint32_t 
   if (interleaved.size() != size_t(width) * height * channels)
     fail(path, "image data has " + std::to_string(interleaved.size()) + " bytes, expected " +
                    std::to_string(size_t(width) * height * channels));
-  write_with_oiio(path, width, height, channels, OIIO::TypeDesc::UINT8, interleaved.data());
+  write_encoded(path, width, height, channels, false, interleaved.data());
 }
 
 void write_exr(const fs::path& path, const Image& im) {
   check_image(path, im);
-  write_with_oiio(path, im.width, im.height, im.channels, OIIO::TypeDesc::FLOAT, im.data.data());
+  write_encoded(path, im.width, im.height, im.channels, true, im.data.data());
 }
 
 void write_image(const fs::path& path, const Image& im) {

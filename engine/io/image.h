@@ -1,4 +1,4 @@
-// Images on disk <-> linear float images in memory (OpenImageIO).
+// Images on disk <-> linear float images in memory (OpenImageIO, or stb: io/image_codec.h).
 #pragma once
 #include <cstdint>
 #include <filesystem>
@@ -21,14 +21,15 @@ struct Image {
 float srgb_to_linear(float v);  // IEC 61966-2-1 decode
 float linear_to_srgb(float v);  // IEC 61966-2-1 encode
 
-// Reads any file OpenImageIO reads (PNG, JPEG, EXR, TIFF, ...) as linear float RGB (3 channels):
+// Reads any file the codec reads (OpenImageIO: PNG, JPEG, EXR, TIFF, ...; stb: PNG, JPEG, HDR) as
+// linear float RGB (3 channels):
 // integer-valued files (8/16-bit) are sRGB-decoded; float/half files (EXR, HDR) are taken as
 // linear. Grey is replicated to RGB; channels past the third (alpha) are dropped. Throws
 // std::runtime_error naming the file on a missing, unreadable, truncated or unsupported file.
 Image read_image(const std::filesystem::path& path);
 
 // Writes by extension: .png -> 8-bit sRGB-encoded (values clamped to 0..1, rounded);
-// .exr -> 32-bit float linear (exact). Accepts 1, 3 or 4 channels. Atomic (io/atomic_file.h).
+// .exr -> 32-bit float linear (exact; OpenImageIO build only). Accepts 1, 3 or 4 channels. Atomic (io/atomic_file.h).
 void write_image(const std::filesystem::path& path, const Image& image);
 void write_png(const std::filesystem::path& path, const Image& image);
 void write_exr(const std::filesystem::path& path, const Image& image);

@@ -1,5 +1,5 @@
 // A small RGB raster for plots: pixels, straight lines, filled rectangles and text in the 5 x 7
-// bitmap font (plot/bitmap_font.h), saved as an 8-bit PNG through OpenImageIO.
+// bitmap font (plot/bitmap_font.h), saved as an 8-bit PNG (io/image.h).
 #pragma once
 #include <cstdint>
 #include <filesystem>
