@@ -100,7 +100,7 @@ std::string ExperimentPlan::help() {
       "         [--pose-noise-rot 0.4] [--pose-noise-trans 0.01] [--sim-seed N] [--refine-iters 30] [--device "
       "N|name]\n"
       "         [--no-baseline-pose-refine] [--poses perturbed|colmap] [--emit-jobs FILE | --job] [key=value ...]\n"
-      "         [--sim-seeds A,B,...] [--ablation]\n"
+      "         [--sim-seeds A,B,...] [--ablation] [--shake smooth|jerk]\n"
       "       evflow experiment --collect DIR\n"
       "  Simulates each built-in scene (blur size per scene; recorded poses perturbed like poses estimated\n"
       "  from blurry images), trains every method on it with the preset\n"
@@ -113,6 +113,8 @@ std::string ExperimentPlan::help() {
       "  blur+events, blur+events+warp, blur+res, blur+events+warp+res, evflow-no-ldi-events, evflow),\n"
       "  the seeds --sim-seeds 1,2 unless given, and DIR/ablation.md holds the table (rows averaged\n"
       "  over the scenes and seeds, with each one's deblur PSNR).\n"
+      "  --shake jerk: the simulator's camera shake with a sudden change of velocity inside each exposure\n"
+      "  (evflow simulate --shake), the non-uniform motion the flow-upsampled blur is for (default: smooth).\n"
       "  A scene may be a glTF file (.glb/.gltf; needs --sim-seed): its data and runs go to DIR/<file stem>/.\n"
       "  plain and edi refine each training view's pose while they train (pose_refine=true), as the blur\n"
       "  methods do through their trajectories; --no-baseline-pose-refine turns that off.\n"
@@ -157,7 +159,10 @@ ExperimentPlan ExperimentPlan::from_args(ArgParser& p) {
   e.ablation = p.flag("--ablation");
   e.baseline_pose_refine = !p.flag("--no-baseline-pose-refine");
   e.poses = value_or("--poses", e.poses);
+  e.shake = value_or("--shake", e.shake);
   p.reject_unknown();
+  if (e.shake != "smooth" && e.shake != "jerk")
+    throw std::invalid_argument("--shake must be smooth or jerk, got '" + e.shake + "'");
   if (e.poses != "perturbed" && e.poses != "colmap")
     throw std::invalid_argument("--poses must be perturbed or colmap, got '" + e.poses + "'");
   if (!e.sim_seed.empty() && e.sim_seed.find_first_not_of("0123456789") != std::string::npos)
@@ -208,6 +213,7 @@ nlohmann::json ExperimentPlan::to_json() const {
           {"device", device},
           {"baseline_pose_refine", baseline_pose_refine},
           {"poses", poses},
+          {"shake", shake},
           {"overrides", overrides}};
 }
 
@@ -233,6 +239,7 @@ ExperimentPlan ExperimentPlan::read(const fs::path& dir) {
     e.poses = j.value("poses", std::string("perturbed"));
     e.sim_seeds = j.value("sim_seeds", std::vector<std::string>{});
     e.ablation = j.value("ablation", false);
+    e.shake = j.value("shake", std::string("smooth"));
   } catch (const std::exception& ex) { throw std::runtime_error(path.string() + ": " + ex.what()); }
   e.out = fs::absolute(dir);  // the folder it was read from (it may have moved since)
   return e;
@@ -253,7 +260,8 @@ std::string ExperimentPlan::simulate_command(const std::string& self, size_t si,
   return shell_quote(self) + " simulate --scene " + shell_quote(s.scene) + " --out " + shell_quote(data.string()) +
          " --width " + shell_quote(width) + " --height " + shell_quote(height) + " --blur-px " +
          shell_quote(s.blur_px) + " --pose-noise-rot " + shell_quote(noise_rot) + " --pose-noise-trans " +
-         shell_quote(noise_trans) + " --seed " + s.seed + device_option(device);
+         shell_quote(noise_trans) + " --seed " + s.seed + (shake == "smooth" ? "" : " --shake " + shell_quote(shake)) +
+         device_option(device);
 }
 
 std::string ExperimentPlan::poses_command(const std::string& self, size_t si, const fs::path& dest) const {
@@ -285,6 +293,7 @@ std::string ExperimentPlan::job_line(const std::string& self, size_t si, const s
   if (!sim_seeds.empty()) line += " --sim-seeds " + s.seed;  // the one seed of this scene's folder
   if (!baseline_pose_refine) line += " --no-baseline-pose-refine";
   if (poses != "perturbed") line += " --poses " + shell_quote(poses);
+  if (shake != "smooth") line += " --shake " + shell_quote(shake);
   line += device_option(device);
   for (auto& kv : overrides) line.append(" ").append(shell_quote(kv));
   return line;

@@ -29,6 +29,7 @@ struct ExperimentPlan {
   std::string sim_seed;                // "" when every scene has its own
   std::vector<std::string> sim_seeds;  // --sim-seeds: every scene once per seed, in DIR/<scene>-s<seed>/
   bool ablation = false;               // the methods are the ablation's rows; DIR/ablation.md too
+  std::string shake = "smooth";        // the simulator's --shake: smooth or jerk
   std::string device;                  // passed on to every step ("" : the default device)
   bool baseline_pose_refine = true;
   std::vector<std::string> overrides;  // key=value for every run

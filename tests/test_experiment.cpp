@@ -59,7 +59,28 @@ TEST_CASE("experiment: a scene is simulated with its own seed wherever it is lis
   REQUIRE(rc == 0);
   CHECK(data_of(dir / "exp1" / "gallery" / "data") == data_of(dir / "s1"));
 
+  // --shake jerk reaches the simulator, the plan and the emitted job lines.
+  rc = run_evflow(dir,
+                  "experiment --out exp2 --scenes gallery --blur-px 4 --methods plain --refine-iters 1 --sim-seed 1 "
+                  "--shake jerk" +
+                      size + " iterations=4 init_gaussians=200 max_gaussians=400 sh_degree=0",
+                  out);
+  INFO(out);
+  REQUIRE(rc == 0);
+  REQUIRE(run_evflow(dir, sim + " --out j1 --seed 1 --shake jerk", out) == 0);
+  CHECK(data_of(dir / "exp2" / "gallery" / "data") == data_of(dir / "j1"));
+  CHECK(data_of(dir / "j1") != data_of(dir / "s1"));
+  REQUIRE(run_evflow(dir,
+                     "experiment --out exp3 --scenes gallery --blur-px 4 --methods plain --sim-seed 1 --shake jerk "
+                     "--emit-jobs jobs.txt" +
+                         size,
+                     out) == 0);
+  CHECK(slurp(dir / "jobs.txt").find(" --shake 'jerk'") != std::string::npos);
+  CHECK(slurp(dir / "exp3" / "experiment_plan.json").find("\"shake\": \"jerk\"") != std::string::npos);
+
   // Refused before any work.
+  CHECK(run_evflow(dir, "experiment --out bad --scenes gallery --blur-px 4 --shake wobble", out) != 0);
+  CHECK(out.find("--shake") != std::string::npos);
   CHECK(run_evflow(dir, "experiment --out bad --scenes gallery --blur-px 4 --sim-seed x", out) != 0);
   CHECK(out.find("--sim-seed") != std::string::npos);
   CHECK(run_evflow(dir, "experiment --out bad --scenes nowhere --blur-px 4", out) != 0);
