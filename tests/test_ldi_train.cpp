@@ -210,3 +210,30 @@ TEST_CASE("LDI branch: L_ev^ldi trains from the first step, L_joint reaches the 
   CHECK_FALSE(test::same_values(t.cloud().sh, without.cloud().sh));
   test::require_no_validation_messages();
 }
+
+TEST_CASE("LDI branch: after an EDI warm-up, from the first blur step, L_joint from joint_from of the blur steps",
+          "[gpu][train][ldi][warmup]") {
+  auto& ctx = test::gpu_context();
+  const io::Dataset data = drift_dataset(ctx);
+  TrainConfig cfg = ldi_config();
+  cfg.iterations = 6;
+  cfg.edi_warmup = 0.5;  // steps 1-3 fit the EDI images
+  cfg.joint_from = 0.5;  // of the three blur steps: from step 5 (4.5 rounded down, then the next step)
+  Trainer t(ctx, data, cfg);
+  const std::vector<float> w0 = t.ldi()->model().network().layer(0).weight_values();
+  for (uint32_t s = 0; s < 6; ++s) {
+    INFO("step " << s + 1);
+    const StepStats st = t.step();
+    REQUIRE(st.term_values.size() == 4);  // blur, ldi_blur, ldi_events, joint
+    CHECK_FALSE(st.skipped);              // the branch's terms, not recorded in a warm-up step, read 0
+    CHECK(std::isfinite(st.loss));
+    const bool warm = s < 3;
+    CHECK((st.ldi_ms > 0.0) == !warm);
+    CHECK((st.term_values[1] > 0.0) == !warm);  // ldi_blur
+    CHECK((st.term_values[2] > 0.0) == !warm);  // ldi_events
+    CHECK((st.term_values[3] > 0.0) == (s >= 4));
+    const bool moved = t.ldi()->model().network().layer(0).weight_values() != w0;
+    CHECK(moved == !warm);  // warm-up steps leave the network as it was
+  }
+  test::require_no_validation_messages();
+}

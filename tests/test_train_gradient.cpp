@@ -227,7 +227,6 @@ TEST_CASE("trainer: EDI warm-up settings that cannot work are refused, naming th
   refused([](TrainConfig& c) { c.edi_warmup = 1.0; }, "edi_warmup must be in [0, 1)");
   refused([](TrainConfig& c) { c.edi_warmup = -0.1; }, "edi_warmup must be in [0, 1)");
   refused([](TrainConfig& c) { c.apply_method("edi"), c.edi_warmup = 0.5; }, "needs mode=blur");
-  refused([](TrainConfig& c) { c.ldi = true; }, "does not combine with ldi=on");
   io::Dataset no_events = data;
   no_events.events = {};
   TrainConfig cfg;

@@ -24,13 +24,13 @@ namespace stb {
 Decoded decode(const std::filesystem::path& path);
 void encode(const std::filesystem::path& file, const std::filesystem::path& shown, uint32_t width, uint32_t height,
             uint32_t channels, bool is_float, const void* pixels);
-}
+}  // namespace stb
 #ifndef EVF_IMAGE_IO_STB
 namespace oiio {
 Decoded decode(const std::filesystem::path& path);
 void encode(const std::filesystem::path& file, const std::filesystem::path& shown, uint32_t width, uint32_t height,
             uint32_t channels, bool is_float, const void* pixels);
-}
+}  // namespace oiio
 namespace active = oiio;  // the codec io/image.cpp uses
 inline const char* backend_name() { return "OpenImageIO"; }
 #else

@@ -15,10 +15,6 @@ void check_edi_warmup(const TrainConfig& cfg, const io::Dataset& data) {
     throw std::invalid_argument(
         "edi_warmup > 0 needs mode=blur (plain mode fits one image per step already; "
         "target=edi is the EDI baseline)");
-  if (cfg.ldi)
-    throw std::invalid_argument(
-        "edi_warmup > 0 does not combine with ldi=on (the LDI branch trains on the "
-        "virtual frames, which warm-up steps do not render)");
   if (data.events.size() == 0)
     throw std::invalid_argument("edi_warmup > 0 needs an event stream with times for EDI, and the dataset in '" +
                                 data.root + "' has none");

@@ -33,10 +33,11 @@ void LossTerms::record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& 
   for (auto& t : exposure_) t->record(cmd, frames, float(t->weight() * scale));
 }
 
-LossValues LossTerms::read(bool exposure_recorded, double exposure_scale) const {
+LossValues LossTerms::read(bool exposure_recorded, bool branches_recorded, double exposure_scale) const {
   LossValues out;
   for (size_t i = 0; i < all_.size(); ++i) {
-    if (kind_[i] == Kind::Exposure && !exposure_recorded) {
+    const bool branch = kind_[i] == Kind::Branch || kind_[i] == Kind::ScheduledBranch;
+    if ((kind_[i] == Kind::Exposure && !exposure_recorded) || (branch && !branches_recorded)) {
       out.terms.push_back(0.0);
       continue;
     }

@@ -37,8 +37,9 @@ class LossTerms {
   // `scale` (the run's schedule of the event terms; the weights themselves stay as set).
   void record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames, double scale = 1.0) const;
   // After the submit: every term's value (exposure terms only when `exposure_recorded`, counted
-  // in the total with their weight times `exposure_scale`).
-  LossValues read(bool exposure_recorded, double exposure_scale = 1.0) const;
+  // in the total with their weight times `exposure_scale`; branch terms only when
+  // `branches_recorded`). A term not recorded reads 0.
+  LossValues read(bool exposure_recorded, bool branches_recorded, double exposure_scale = 1.0) const;
 
  private:
   std::vector<std::unique_ptr<ImageLossTerm>> image_;

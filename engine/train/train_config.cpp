@@ -239,10 +239,12 @@ std::vector<Setting> blur_settings() {
             "fraction of the run's first steps that fit one render per step, the view's trajectory at "
             "mid-exposure, to the view's EDI image (as `target=edi`), before the blur model and its terms take "
             "over: a warm-up step costs one render instead of 2N+1, so the splats learn the scene's shape and "
-            "colours sooner ([training.md](training.md#edi-warm-up)); 0: off; in [0, 1); needs events, not "
-            "with `ldi=on`. The warm-up shifts each trajectory as a whole at the pose refinement's rate "
+            "colours sooner ([training.md](training.md#edi-warm-up)); 0: off; in [0, 1); needs events. With "
+            "`ldi=on` the LDI branch waits for the blur steps. The warm-up shifts each trajectory as a whole at the "
+            "pose refinement's rate "
             "(`lr_pose_init`); after it, the knots' schedule and the blur terms' fractions (`event_from`, "
-            "`event_flip_until`, `flow_model_from`) count over the blur steps, as in a run of that many steps; "
+            "`event_flip_until`, `flow_model_from`, `joint_from`) count over the blur steps, as in a run of that many "
+            "steps; "
             "the Gaussians' schedules over the whole run"),
       field("lr_trajectory_init", &TrainConfig::lr_trajectory_init,
             "the knots' Adam learning rate at the start; the fast preset's 1500 steps leave the paper's "

@@ -94,7 +94,8 @@ struct TrainConfig {
   void apply_method(const std::string& name);
   // The last step of the EDI warm-up (edi_warmup of the run's steps; 0: none).
   uint32_t edi_warmup_steps() const { return uint32_t(edi_warmup * iterations); }
-  // Where a fraction of the blur steps ends (event_from, event_flip_until, flow_model_from): the
+  // Where a fraction of the blur steps ends (event_from, event_flip_until, flow_model_from,
+  // joint_from): the
   // blur steps after an EDI warm-up keep the schedule a run of that many steps would have.
   double blur_point(double fraction) const {
     const uint32_t w = edi_warmup_steps();

@@ -269,12 +269,12 @@ StepStats Trainer::step() {
   record_losses(st, exposure_on);
   st.loss_ms = clock.lap();
   if (ldi_) {
-    ldi_->record(cmd_, st.view, step_, exposure_->images(), *image_model_,
-                 step_ > uint32_t(cfg_.joint_from * cfg_.iterations), cfg_.seed * 0x100000001B3ull + step_);
+    ldi_->record(cmd_, st.view, step_, exposure_->images(), *image_model_, step_ > cfg_.blur_step(cfg_.joint_from),
+                 cfg_.seed * 0x100000001B3ull + step_);
     cmd_.submit();
     st.ldi_ms = clock.lap();
   }
-  read_losses(st, exposure_on);
+  read_losses(st, exposure_on, true);
   if (st.flipped && model_flow_step_ > 0) refresh_model_flow(st.view);  // the reversed trajectory's flow
   if (!st.flipped && !st.skipped) {
     backward_images(exposure_on);
@@ -303,7 +303,7 @@ void Trainer::warmup_step(StepStats& st) {
   terms_.record_image_terms(cmd_, warmup_->image_model(), warmup_->target(st.view));
   cmd_.submit();
   st.loss_ms = clock.lap();
-  read_losses(st, false);
+  read_losses(st, false, false);  // no exposure terms, no branch (the LDI waits for the blur steps)
   if (!st.skipped) {
     warmup_->render_grads(cmd_);
     cmd_.submit();
@@ -372,8 +372,8 @@ double Trainer::event_schedule() const {
   return 1.0 + a * (cfg_.event_weight_end - 1.0);
 }
 
-void Trainer::read_losses(StepStats& st, bool exposure_on) const {
-  LossValues v = terms_.read(exposure_on, event_schedule());
+void Trainer::read_losses(StepStats& st, bool exposure_on, bool branches_on) const {
+  LossValues v = terms_.read(exposure_on, branches_on, event_schedule());
   st.term_values = std::move(v.terms);
   st.loss = v.total;
   if (st.flipped || std::isfinite(st.loss)) return;

@@ -155,7 +155,7 @@ class Trainer {
   void render_exposure(uint32_t view);
   void record_losses(StepStats& st, bool exposure_on);
   void record_exposure_terms(StepStats& st);
-  void read_losses(StepStats& st, bool exposure_on) const;
+  void read_losses(StepStats& st, bool exposure_on, bool branches_on) const;
   double event_schedule() const;
   // The loss gradients to every frame's render; then backward_raster() through the rasterizer
   // (the LDI branch adds the joint loss's share in between).
