@@ -4,6 +4,9 @@
 #include <stb/stb_image_write.h>
 
 #include <algorithm>
+#include <fstream>
+#include <iterator>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -40,23 +43,34 @@ void copy_scaled(Decoded& d, const T* px, float scale) {
   for (size_t i = 0; i < d.values.size(); ++i) d.values[i] = float(px[i]) * scale;
 }
 
+// The whole file, read once: the format probes and the decoder all work on these bytes.
+std::vector<stbi_uc> read_bytes(const fs::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::vector<stbi_uc> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (!f.good() && !f.eof()) fail(path, "cannot read image file");
+  if (bytes.size() > size_t(std::numeric_limits<int>::max())) fail(path, "image file too large");
+  return bytes;
+}
+
 }  // namespace
 
 Decoded decode(const fs::path& path) {
   if (lower_extension(path) == ".exr") no_exr(path);
-  const std::string p = path.string();
+  const std::vector<stbi_uc> bytes = read_bytes(path);
+  const stbi_uc* b = bytes.data();
+  const int n = int(bytes.size());
   Decoded d;
-  if (stbi_is_hdr(p.c_str())) {
-    StbPixels<float> px(stbi_loadf(p.c_str(), &d.width, &d.height, &d.channels, 0), stbi_image_free);
+  if (stbi_is_hdr_from_memory(b, n)) {
+    StbPixels<float> px(stbi_loadf_from_memory(b, n, &d.width, &d.height, &d.channels, 0), stbi_image_free);
     if (!px) fail(path, std::string("cannot read image (truncated or corrupt?): ") + stbi_failure_reason());
     d.is_float = true;
     copy_scaled(d, px.get(), 1.f);
-  } else if (stbi_is_16_bit(p.c_str())) {
-    StbPixels<stbi_us> px(stbi_load_16(p.c_str(), &d.width, &d.height, &d.channels, 0), stbi_image_free);
+  } else if (stbi_is_16_bit_from_memory(b, n)) {
+    StbPixels<stbi_us> px(stbi_load_16_from_memory(b, n, &d.width, &d.height, &d.channels, 0), stbi_image_free);
     if (!px) fail(path, std::string("cannot read image (truncated or corrupt?): ") + stbi_failure_reason());
     copy_scaled(d, px.get(), 1.f / 65535.f);
   } else {
-    StbPixels<stbi_uc> px(stbi_load(p.c_str(), &d.width, &d.height, &d.channels, 0), stbi_image_free);
+    StbPixels<stbi_uc> px(stbi_load_from_memory(b, n, &d.width, &d.height, &d.channels, 0), stbi_image_free);
     if (!px) fail(path, std::string("cannot open image: ") + stbi_failure_reason());
     d.eight_bit = true;
     copy_scaled(d, px.get(), 1.f / 255.f);
