@@ -227,10 +227,44 @@ TEST_CASE("trainer: EDI warm-up settings that cannot work are refused, naming th
   refused([](TrainConfig& c) { c.edi_warmup = 1.0; }, "edi_warmup must be in [0, 1)");
   refused([](TrainConfig& c) { c.edi_warmup = -0.1; }, "edi_warmup must be in [0, 1)");
   refused([](TrainConfig& c) { c.apply_method("edi"), c.edi_warmup = 0.5; }, "needs mode=blur");
+  refused([](TrainConfig& c) { c.edi_warmup_motion = 1.5; }, "edi_warmup_motion must be in [0, 1]");
+  refused([](TrainConfig& c) { c.edi_warmup_motion = -0.5; }, "edi_warmup_motion must be in [0, 1]");
+  refused([](TrainConfig& c) { c.edi_warmup = 0, c.edi_warmup_motion = 0.2; }, "needs edi_warmup > 0");
   io::Dataset no_events = data;
   no_events.events = {};
   TrainConfig cfg;
   cfg.apply_method("blur-only");
   cfg.edi_warmup = 0.5;
   CHECK_THROWS_WITH(Trainer(ctx, no_events, cfg), Catch::Contains("needs an event stream"));
+}
+
+TEST_CASE("trainer: with splats_from, the first blur steps train the knots alone, the later ones the Gaussians too",
+          "[gpu][train][warmup]") {
+  auto& ctx = test::gpu_context();
+  const GaussianCloud truth = true_cloud(100);
+  const io::Dataset data = blur_event_dataset(ctx, truth);
+  TrainConfig cfg = step_config(16);
+  cfg.edi_warmup = 0.25;  // steps 1-4
+  cfg.splats_from = 0.5;  // of the 12 blur steps: 5-10 the knots alone, 11-16 everything
+  const Checkpoint start = perturbed_start(truth, data.train.size());
+  Trainer t(ctx, data, cfg, start);
+  GaussianCloud before = t.cloud();
+  while (t.current_step() < 16) {
+    std::vector<double> knots_before;
+    const uint32_t view = view_for_step(t.current_step() + 1, data.train.size(), cfg.seed);
+    knots_before.assign(t.trajectories()[view].data(), t.trajectories()[view].data() + ExposureTrajectory::kSize);
+    REQUIRE_FALSE(t.step().skipped);
+    const GaussianCloud after = t.cloud();
+    const bool knots_moved = !std::equal(knots_before.begin(), knots_before.end(), t.trajectories()[view].data());
+    INFO("step " << t.current_step());
+    CHECK(knots_moved);
+    CHECK((after.sh != before.sh) == (t.current_step() <= 4 || t.current_step() > 10));
+    before = after;
+  }
+  cfg.splats_from = 1.0;
+  CHECK_THROWS_WITH(Trainer(ctx, data, cfg, start), Catch::Contains("splats_from must be in [0, 1)"));
+  cfg.splats_from = 0.5;
+  cfg.mode = TrainMode::Plain, cfg.edi_warmup = 0, cfg.event_weight = 0;
+  CHECK_THROWS_WITH(Trainer(ctx, data, cfg, start), Catch::Contains("splats_from > 0 needs mode=blur"));
+  test::require_no_validation_messages();
 }

@@ -20,6 +20,7 @@ CameraModel::CameraModel(const io::Dataset& data, const TrainConfig& cfg)
       kind_(kind_of(cfg)),
       iterations_(cfg.iterations),
       warmup_steps_(cfg.edi_warmup_steps()),
+      knots_from_(cfg.edi_motion_steps() > 0 ? 0 : warmup_steps_),  // < iterations (check_edi_warmup)
       lr_pose_init_(cfg.lr_pose_init),
       lr_pose_final_(cfg.lr_pose_final) {
   const size_t nv = data.train.size();
@@ -74,10 +75,21 @@ void CameraModel::backward_and_step(uint32_t view, const std::vector<lie::Vec6>&
     const lie::Vec6 d = lie::mul_transposed(lie::se3_right_jacobian(deltas_[view]), g.back());
     last_grad_.assign(d.begin(), d.end());
   }
-  // After an EDI warm-up the knots' schedule runs over the blur steps: the warm-up learned no motion.
-  const uint32_t from = kind_ == Kind::Trajectory ? warmup_steps_ : 0;  // < iterations_ (check_edi_warmup)
-  const ExponentialDecay sched{lr_init_, lr_final_, iterations_ - from};
-  adam_step(view, sched(step > from ? step - from : 0));
+  adam_step(view, rate(step));
+}
+
+// The parameters' rate at `step`. After an EDI warm-up that learned no motion (of the
+// mid-exposure frame alone) the knots' schedule runs over the blur steps; otherwise over the run.
+double CameraModel::rate(uint32_t step) const {
+  const ExponentialDecay sched{lr_init_, lr_final_, iterations_ - knots_from_};
+  return sched(step > knots_from_ ? step - knots_from_ : 0);
+}
+
+void CameraModel::frame_step(uint32_t view, uint32_t frame, const lie::Vec6& g, uint32_t step) {
+  if (kind_ != Kind::Trajectory) throw std::logic_error("CameraModel::frame_step: only trajectories have knots");
+  const auto kg = trajectories_[view].backward(times_.at(frame), g);
+  last_grad_.assign(kg.begin(), kg.end());
+  adam_step(view, rate(step));
 }
 
 void CameraModel::shift_and_step(uint32_t view, const lie::Vec6& g, uint32_t step) {

@@ -37,6 +37,10 @@ class CameraModel {
   // motion); one Adam step at the pose refinement's rate (lr_pose_init -> lr_pose_final over
   // the warm-up).
   void shift_and_step(uint32_t view, const lie::Vec6& mid_pose_grad, uint32_t step);
+  // EDI warm-up's virtual-frame steps (edi_warmup_motion; Trajectory only): one frame's pose
+  // gradient to every knot through the trajectory at the frame's time; one Adam step on the
+  // knots' schedule.
+  void frame_step(uint32_t view, uint32_t frame, const lie::Vec6& frame_pose_grad, uint32_t step);
   // What the last backward_and_step applied before Adam (54 knot or 6 delta values; empty for Fixed).
   const std::vector<double>& last_gradient() const { return last_grad_; }
   // Time reversal of a view's trajectory, with its Adam moments (Trajectory only).
@@ -49,13 +53,15 @@ class CameraModel {
 
  private:
   void adam_step(uint32_t view, double lr);
+  double rate(uint32_t step) const;
   double* params(uint32_t view);
   const double* params(uint32_t view) const;
   const io::Dataset& data_;
   Kind kind_;
   std::vector<double> times_;
   uint32_t iterations_;
-  uint32_t warmup_steps_;  // the knots' schedule starts after the EDI warm-up
+  uint32_t warmup_steps_;
+  uint32_t knots_from_;  // the knots' schedule starts here, where the motion is first learned
   double lr_init_ = 0, lr_final_ = 0;
   double lr_pose_init_, lr_pose_final_;  // the warm-up's shifts
   std::vector<ExposureTrajectory> trajectories_;

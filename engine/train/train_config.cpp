@@ -246,6 +246,18 @@ std::vector<Setting> blur_settings() {
             "`event_flip_until`, `flow_model_from`, `joint_from`) count over the blur steps, as in a run of that many "
             "steps; "
             "the Gaussians' schedules over the whole run"),
+      field("edi_warmup_motion", &TrainConfig::edi_warmup_motion,
+            "fraction of the EDI warm-up's steps, at its start, that fit the virtual frames: each renders one of "
+            "the trajectory's 2N+1 frames (cycling per view) against the view's EDI image at that frame's time, "
+            "and the Gaussians and every knot learn from it, so the motion and its direction are learned while the "
+            "splats are still coarse; the rest of the warm-up fits the mid-exposure frame, keeping the motion's "
+            "shape ([training.md](training.md#edi-warm-up)); the knots' schedule then runs over the whole run; 0: "
+            "off; in [0, 1]"),
+      field("splats_from", &TrainConfig::splats_from,
+            "fraction of the blur steps before which the Gaussians are frozen and only the knots learn: the blur "
+            "loss fits the exposure's motion to the splats as they are instead of blurring them to match a "
+            "trajectory that has no motion yet ([training.md](training.md#edi-warm-up)); counted over the blur steps "
+            "after an EDI warm-up; 0: off; in [0, 1)"),
       field("lr_trajectory_init", &TrainConfig::lr_trajectory_init,
             "the knots' Adam learning rate at the start; the fast preset's 1500 steps leave the paper's "
             "1e-3 → 1e-5 too little room to learn the exposure motion"),

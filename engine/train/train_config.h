@@ -48,6 +48,8 @@ struct TrainConfig {
   uint32_t virtual_frames = 3;
   uint32_t blur_upsample = 1;
   double edi_warmup = 0.0;
+  double edi_warmup_motion = 0.0;
+  double splats_from = 0.0;
   double lr_trajectory_init = 6e-3, lr_trajectory_final = 6e-4;
   double event_weight = 0.0;
   double event_theta_pos = 0.0, event_theta_neg = 0.0;
@@ -94,6 +96,8 @@ struct TrainConfig {
   void apply_method(const std::string& name);
   // The last step of the EDI warm-up (edi_warmup of the run's steps; 0: none).
   uint32_t edi_warmup_steps() const { return uint32_t(edi_warmup * iterations); }
+  // The last warm-up step that fits the virtual frames (edi_warmup_motion; 0: none).
+  uint32_t edi_motion_steps() const { return uint32_t(edi_warmup_motion * edi_warmup_steps()); }
   // Where a fraction of the blur steps ends (event_from, event_flip_until, flow_model_from,
   // joint_from): the
   // blur steps after an EDI warm-up keep the schedule a run of that many steps would have.

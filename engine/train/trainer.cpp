@@ -78,6 +78,10 @@ void Trainer::setup(const Checkpoint& checkpoint) {
   const GaussianCloud& start = checkpoint.cloud;
   if (data_.train.empty()) throw std::invalid_argument("dataset has no training views");
   check_edi_warmup(cfg_, data_);
+  if (!(cfg_.splats_from >= 0 && cfg_.splats_from < 1))
+    throw std::invalid_argument("splats_from must be in [0, 1), got " + std::to_string(cfg_.splats_from));
+  if (cfg_.splats_from > 0 && cfg_.mode != TrainMode::Blur)
+    throw std::invalid_argument("splats_from > 0 needs mode=blur (the knots learn alone in the first blur steps)");
   const Camera& c0 = data_.train[0].camera;
   for (auto& v : data_.train)
     if (v.camera.width != c0.width || v.camera.height != c0.height)
@@ -100,7 +104,7 @@ void Trainer::setup(const Checkpoint& checkpoint) {
   if (cfg_.res_weight > 0) add_residual_term();
   setup_flows();
   if (cfg_.ldi) add_ldi_branch(checkpoint);
-  if (cfg_.edi_warmup > 0) warmup_ = std::make_unique<EdiWarmup>(ctx_, data_, cfg_);
+  if (cfg_.edi_warmup > 0) warmup_ = std::make_unique<EdiWarmup>(ctx_, data_, cfg_, cameras_->frame_times());
   optimizer_ = std::make_unique<GaussianOptimizer>(ctx_, cmd_, *params_, *grads_, cfg_, scene_extent(data_));
 }
 
@@ -286,28 +290,39 @@ StepStats Trainer::step() {
     }
     backward_raster(st.view);
     st.raster_backward_ms += clock.lap();
-    optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_);
-    st.optimizer_ms = clock.lap();
+    if (step_ > cfg_.blur_step(cfg_.splats_from)) {  // else the knots learn alone (splats_from)
+      optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_);
+      st.optimizer_ms = clock.lap();
+    }
   }
   st.ms = clock.total();
   return st;
 }
 
-// The mid-exposure render against the view's EDI image: the blur steps' stages with one frame
-// and no exposure terms. Its pose gradient shifts the view's whole trajectory.
+// One render against the view's EDI image, the blur steps' stages with one frame and no exposure
+// terms: the mid-exposure frame, whose pose gradient shifts the view's whole trajectory, or in
+// the virtual-frame steps (edi_warmup_motion) a frame against EDI at its time, whose pose
+// gradient trains the knots.
 void Trainer::warmup_step(StepStats& st) {
   StepClock clock;
-  warmup_->forward(cmd_, raster_, *params_, cameras_->training_camera(st.view), render_settings());
+  const uint32_t frame = warmup_->frame(step_, st.view, data_.train.size());
+  const bool motion = warmup_->motion(step_);
+  const Camera camera = motion ? cameras_->frame_camera(st.view, frame) : cameras_->training_camera(st.view);
+  warmup_->forward(cmd_, raster_, *params_, camera, render_settings());
   cmd_.submit();
   st.raster_forward_ms = clock.lap();
-  terms_.record_image_terms(cmd_, warmup_->image_model(), warmup_->target(st.view));
+  terms_.record_image_terms(cmd_, warmup_->image_model(), warmup_->target(st.view, frame));
   cmd_.submit();
   st.loss_ms = clock.lap();
   read_losses(st, false, false);  // no exposure terms, no branch (the LDI waits for the blur steps)
   if (!st.skipped) {
     warmup_->render_grads(cmd_);
     cmd_.submit();
-    cameras_->shift_and_step(st.view, warmup_->backward(raster_, *params_, v_alpha_, *grads_), step_);
+    const lie::Vec6 g = warmup_->backward(raster_, *params_, v_alpha_, *grads_);
+    if (motion)
+      cameras_->frame_step(st.view, frame, g, step_);
+    else
+      cameras_->shift_and_step(st.view, g, step_);
     st.raster_backward_ms = clock.lap();
     optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_);
     st.optimizer_ms = clock.lap();

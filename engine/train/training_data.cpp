@@ -70,26 +70,42 @@ std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainC
 }
 
 io::Image training_target(const io::Dataset& data, size_t view, const TrainConfig& cfg) {
+  if (cfg.target != TrainTarget::Edi) return target_image(data.train.at(view), cfg);
+  return edi_frames(data, view, cfg, {0.5}).at(0);
+}
+
+std::vector<io::Image> edi_frames(const io::Dataset& data, size_t view, const TrainConfig& cfg,
+                                  const std::vector<double>& times) {
   const io::View& v = data.train.at(view);
-  if (cfg.target != TrainTarget::Edi) return target_image(v, cfg);
   if (data.events.size() == 0)
-    throw std::invalid_argument("target=edi needs events, and the dataset in '" + data.root + "' has none");
+    throw std::invalid_argument("EDI (target=edi, edi_warmup) needs events, and the dataset in '" + data.root +
+                                "' has none");
   if (!(v.exposure_end > v.exposure_start))
-    throw std::invalid_argument("target=edi: view '" + v.name + "' has no exposure interval");
+    throw std::invalid_argument("EDI (target=edi, edi_warmup): view '" + v.name + "' has no exposure interval");
   auto [pos, neg] = event_thresholds(data, cfg);
-  io::Image out = v.blurry;
-  out.data = events::edi_deblur(v.blurry.data.data(), v.blurry.channels, data.events, v.exposure_start, v.exposure_end,
-                                events::EdiThresholds{pos, neg, {}, {}});
-  for (float& x : out.data)
-    x = std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 0.0f;  // a training target lives in [0, 1]
+  const events::EdiIntegrator edi(data.events, v.exposure_start, v.exposure_end,
+                                  events::EdiThresholds{pos, neg, {}, {}});
+  std::vector<io::Image> out;
+  for (double u : times) {
+    io::Image frame = v.blurry;
+    frame.data = edi.frame_at(v.blurry.data.data(), v.blurry.channels,
+                              (1 - u) * v.exposure_start + u * v.exposure_end);  // exact at u = 0, 0.5, 1
+    for (float& x : frame.data)
+      x = std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 0.0f;  // a training target lives in [0, 1]
+    out.push_back(std::move(frame));
+  }
   return out;
 }
 
-std::vector<float> loss_space_target(const io::Dataset& data, size_t view, const TrainConfig& cfg) {
-  std::vector<float> planar = io::planar_rgb(training_target(data, view, cfg));
+std::vector<float> loss_space_image(const io::Image& image, const TrainConfig& cfg) {
+  std::vector<float> planar = io::planar_rgb(image);
   if (cfg.loss_space == LossSpace::Srgb)
     for (float& x : planar) x = io::linear_to_srgb(x);
   return planar;
+}
+
+std::vector<float> loss_space_target(const io::Dataset& data, size_t view, const TrainConfig& cfg) {
+  return loss_space_image(training_target(data, view, cfg), cfg);
 }
 
 std::vector<float> view_warped_event_planes(const io::Dataset& data, const TrainConfig& cfg,

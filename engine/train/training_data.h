@@ -18,6 +18,12 @@ namespace evflow {
 io::Image training_target(const io::Dataset& data, size_t view, const TrainConfig& cfg);
 // training_target() as the image terms compare it: planar RGB in cfg.loss_space.
 std::vector<float> loss_space_target(const io::Dataset& data, size_t view, const TrainConfig& cfg);
+// An image as the image terms compare it: planar RGB in cfg.loss_space.
+std::vector<float> loss_space_image(const io::Image& image, const TrainConfig& cfg);
+// The view's blurry input deblurred by EDI at exposure times u in [0, 1] (0.5: mid-exposure),
+// clamped to [0, 1]. Throws naming the dataset or view when it has no events or exposure.
+std::vector<io::Image> edi_frames(const io::Dataset& data, size_t view, const TrainConfig& cfg,
+                                  const std::vector<double>& times);
 // Event thresholds for the event loss / EDI: the config's, else the dataset's (simulator
 // manifest), else 0.2.
 std::pair<double, double> event_thresholds(const io::Dataset& data, const TrainConfig& cfg);
