@@ -61,7 +61,7 @@ void SsimPipeline::record(gpu::Commands& cmd, const ImageShape& shape, const gpu
   const uint32_t h_groups = gpu::Commands::div_up(uint64_t(shape.channels) * shape.height * segs, kLossGroupSize);
   const uint32_t v_groups = gpu::Commands::div_up(uint64_t(shape.channels) * strips * shape.width, kLossGroupSize);
   h_.ensure(5 * n * 4);
-  d_.ensure(4 * n * 4);
+  d_.ensure(5 * n * 4);
   partials_.ensure(uint64_t(v_groups) * 16);
   ctx_.check_binding_size(5 * n * 4, "ssim scratch");
 

@@ -46,9 +46,10 @@ class SsimPipeline {
   void record(gpu::Commands& cmd, const ImageShape& shape, const gpu::Buffer& a, const gpu::Buffer& b,
               const gpu::Buffer* grad, float ssim_grad_scale, float pixel_grad_scale, bool accumulate, bool pixel_l2,
               const Outputs& out, bool write_map = false);
-  // The per-pixel SSIM map of the last record with write_map (plane 3 of the D scratch).
+  // The per-pixel SSIM map of the last record with write_map (the plane after the D scratch's
+  // count vec4s).
   const gpu::Buffer& map_buffer() const { return d_; }
-  uint64_t map_offset_bytes(const ImageShape& shape) const { return 3 * shape.count() * 4; }
+  uint64_t map_offset_bytes(const ImageShape& shape) const { return 4 * shape.count() * 4; }
 
  private:
   gpu::Context& ctx_;
@@ -106,13 +107,15 @@ class ImageMetrics {
  public:
   explicit ImageMetrics(gpu::Context& ctx, ImageShape shape);
   void set_shape(const ImageShape& s) { shape_ = s; }
-  // write_map: keep the per-pixel SSIM map (ssim_map_buffer(), floats [3 N, 4 N), N = C*H*W).
+  // write_map: keep the per-pixel SSIM map (ssim_map_buffer(), N = C*H*W floats from
+  // ssim_map_offset_bytes()).
   void record(gpu::Commands& cmd, const gpu::Buffer& pred, const gpu::Buffer& target, bool write_map = false);
   struct Values {
     double psnr = 0, ssim = 0, mse = 0;
   };
   Values read() const;  // one download of three floats, after the submit
   const gpu::Buffer& ssim_map_buffer() const { return pipe_.map_buffer(); }
+  uint64_t ssim_map_offset_bytes() const { return pipe_.map_offset_bytes(shape_); }
 
  private:
   ImageShape shape_;

@@ -98,7 +98,7 @@ void Adam::step_group(gpu::Commands& cmd, size_t i) {
                 {shaderio::kAdamBindGrad, *g.grad},
                 {shaderio::kAdamBindM, *s.m},
                 {shaderio::kAdamBindV, *s.v}},
-               pc, cmd.linear_groups(gpu::Commands::div_up(g.count, kOptimGroupSize)));
+               pc, cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(g.count, 4), kOptimGroupSize)));
 }
 
 void Adam::reset_rows(gpu::Commands& cmd, size_t i, const gpu::Buffer& rows, uint32_t n) {

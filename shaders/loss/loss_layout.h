@@ -27,7 +27,7 @@ EVF_CONST(uint, kSsimStrip, 8u)
 EVF_CONST(uint, kLossWriteGrad, 1u)     // write the gradient (else forward only)
 EVF_CONST(uint, kLossAccumulate, 2u)    // grad += value (else grad = value; grad is not read)
 EVF_CONST(uint, kLossPixelL2, 4u)       // per-pixel term (A-B)^2 instead of |A-B|
-EVF_CONST(uint, kLossWriteSsimMap, 8u)  // ssim_v: store the per-pixel SSIM in plane 3 of D
+EVF_CONST(uint, kLossWriteSsimMap, 8u)  // ssim_v: store the per-pixel SSIM map in D (after its vec4s)
 
 // loss/pixel: e_i = |A_i - B_i| (or (A_i - B_i)^2); partials[g].x = sum of e over the group;
 // grad_i (+)= grad_scale * de_i/dA_i.
@@ -39,9 +39,12 @@ struct PixelPC {
 };
 
 // loss/ssim_h, ssim_v, ssim_bwd_h, ssim_bwd_v.
-//   H: 5 planes of count floats (horizontally filtered A, B, A^2, B^2, AB; the backward reuses
-//      planes 0..2 for the horizontally filtered partial derivatives)
-//   D: 4 planes: dS/dmu_A, dS/d(E[A^2]), dS/d(E[AB]) per pixel, and the SSIM map (optional)
+//   H: count vec4s (horizontally filtered A, B, A^2, B^2 of element i in H[i]), then a plane of
+//      count floats (filtered AB, float 4 count + i); the backward reuses H[i].xyz for the
+//      horizontally filtered partial derivatives
+//   D: count vec4s (dS/dmu_A, dS/d(E[A^2]), dS/d(E[AB]), 0 of element i in D[i]), then the SSIM
+//      map (optional) as a plane of count floats (float 4 count + i)
+//   Interleaved, a tap reads one vec4 where it read four floats (CPU drivers: one lane loop).
 // ssim_v partials[g] = (sum of the per-pixel term e, sum of SSIM, 0, 0).
 // ssim_bwd_v: grad (+)= ssim_grad_scale * dSSIM_sum/dA + pixel_grad_scale * de/dA.
 struct SsimPC {

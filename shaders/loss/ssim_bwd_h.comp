@@ -1,6 +1,6 @@
 #version 450
 // SSIM backward, horizontal pass: the same 11-tap filter (its own adjoint) applied along x to
-// the per-pixel partials d1, d3, d5 (planes 0..2 of D), into planes 0..2 of H. One invocation:
+// the per-pixel partials d1, d3, d5 (D[i].xyz), into H[i].xyz. One invocation:
 // a row segment of kSsimStrip pixels, as in ssim_h.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
@@ -8,8 +8,8 @@
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
-layout(std430, binding = kSsimBwdHBindD) readonly buffer D { float dmap[]; };
-layout(std430, binding = kSsimBwdHBindH) writeonly buffer H { float hmap[]; };
+layout(std430, binding = kSsimBwdHBindD) readonly buffer D { vec4 dmap[]; };  // see loss_layout.h
+layout(std430, binding = kSsimBwdHBindH) writeonly buffer H { vec4 hmap[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
 const int kCols = int(kSsimStrip);
@@ -28,8 +28,7 @@ void main() {
   [[unroll]] for (int r = 0; r < kSpan; ++r) {
     int xx = x0 - kSsimRadius + r;
     if (xx < 0 || xx >= w) continue;
-    uint q = row + uint(xx);
-    vec3 v = vec3(dmap[q], dmap[pc.count + q], dmap[2u * pc.count + q]);
+    vec3 v = dmap[row + uint(xx)].xyz;
     [[unroll]] for (int o = 0; o < kCols; ++o) {
       int k = r - o;
       if (k >= 0 && k <= 2 * kSsimRadius) acc[o] += kSsimG[k] * v;
@@ -38,8 +37,6 @@ void main() {
   [[unroll]] for (int o = 0; o < kCols; ++o) {
     if (x0 + o >= w) break;
     uint i = row + uint(x0 + o);
-    hmap[i] = acc[o].x;
-    hmap[pc.count + i] = acc[o].y;
-    hmap[2u * pc.count + i] = acc[o].z;
+    hmap[i] = vec4(acc[o], 0.0);
   }
 }

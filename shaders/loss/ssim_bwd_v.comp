@@ -11,7 +11,7 @@
 layout(local_size_x = kLossGroupSize) in;
 layout(std430, binding = kSsimBwdVBindA) readonly buffer A { float img_a[]; };
 layout(std430, binding = kSsimBwdVBindB) readonly buffer B { float img_b[]; };
-layout(std430, binding = kSsimBwdVBindH) readonly buffer H { float hmap[]; };
+layout(std430, binding = kSsimBwdVBindH) readonly buffer H { vec4 hmap[]; };  // see loss_layout.h
 layout(std430, binding = kSsimBwdVBindGrad) buffer Grad { float grad[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
@@ -34,8 +34,7 @@ void main() {
   [[unroll]] for (int r = 0; r < kSpan; ++r) {
     int yy = y0 - kSsimRadius + r;
     if (yy < 0 || yy >= h) continue;
-    uint q = col + uint(yy) * pc.width;
-    vec3 hv = vec3(hmap[q], hmap[pc.count + q], hmap[2u * pc.count + q]);
+    vec3 hv = hmap[col + uint(yy) * pc.width].xyz;
     [[unroll]] for (int o = 0; o < kRows; ++o) {
       int k = r - o;
       if (k >= 0 && k <= 2 * kSsimRadius) acc[o] += kSsimG[k] * hv;

@@ -9,7 +9,7 @@
 layout(local_size_x = kLossGroupSize) in;
 layout(std430, binding = kSsimHBindA) readonly buffer A { float img_a[]; };
 layout(std430, binding = kSsimHBindB) readonly buffer B { float img_b[]; };
-layout(std430, binding = kSsimHBindH) writeonly buffer H { float hmap[]; };
+layout(std430, binding = kSsimHBindH) writeonly buffer H { vec4 hmap[]; };  // see loss_layout.h
 layout(push_constant) uniform PC { SsimPC pc; };
 
 const int kCols = int(kSsimStrip);
@@ -44,10 +44,7 @@ void main() {
   [[unroll]] for (int o = 0; o < kCols; ++o) {
     if (x0 + o >= w) break;
     uint i = row + uint(x0 + o);
-    hmap[i] = m[o].x;
-    hmap[pc.count + i] = m[o].y;
-    hmap[2u * pc.count + i] = m[o].z;
-    hmap[3u * pc.count + i] = m[o].w;
-    hmap[4u * pc.count + i] = mab[o];
+    hmap[i] = m[o];
+    hmap[pc.count + (i >> 2u)][i & 3u] = mab[o];
   }
 }

@@ -11,8 +11,8 @@
 layout(local_size_x = kLossGroupSize) in;
 layout(std430, binding = kSsimVBindA) readonly buffer A { float img_a[]; };
 layout(std430, binding = kSsimVBindB) readonly buffer B { float img_b[]; };
-layout(std430, binding = kSsimVBindH) readonly buffer H { float hmap[]; };
-layout(std430, binding = kSsimVBindD) writeonly buffer D { float dmap[]; };
+layout(std430, binding = kSsimVBindH) readonly buffer H { vec4 hmap[]; };  // see loss_layout.h
+layout(std430, binding = kSsimVBindD) writeonly buffer D { vec4 dmap[]; };
 layout(std430, binding = kSsimVBindPartials) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
@@ -39,8 +39,8 @@ void main() {
       int yy = y0 - kSsimRadius + r;
       if (yy < 0 || yy >= h) continue;
       uint q = col + uint(yy) * pc.width;
-      vec4 hv = vec4(hmap[q], hmap[pc.count + q], hmap[2u * pc.count + q], hmap[3u * pc.count + q]);
-      float hab = hmap[4u * pc.count + q];
+      vec4 hv = hmap[q];
+      float hab = hmap[pc.count + (q >> 2u)][q & 3u];
       [[unroll]] for (int o = 0; o < kRows; ++o) {
         int k = r - o;
         if (k >= 0 && k <= 2 * kSsimRadius) {
@@ -57,11 +57,9 @@ void main() {
       float e = (pc.flags & kLossPixelL2) != 0u ? diff * diff : abs(diff);
       contrib += vec4(e, s.ssim, 0.0, 0.0);
       if ((pc.flags & kLossWriteGrad) != 0u) {
-        dmap[i] = s.d1;
-        dmap[pc.count + i] = s.d3;
-        dmap[2u * pc.count + i] = s.d5;
+        dmap[i] = vec4(s.d1, s.d3, s.d5, 0.0);
       }
-      if ((pc.flags & kLossWriteSsimMap) != 0u) dmap[3u * pc.count + i] = s.ssim;
+      if ((pc.flags & kLossWriteSsimMap) != 0u) dmap[pc.count + (i >> 2u)][i & 3u] = s.ssim;
     }
   }
   vec4 total = loss_group_sum(contrib);

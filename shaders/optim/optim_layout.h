@@ -7,7 +7,7 @@ EVF_NAMESPACE_BEGIN
 EVF_CONST(uint, kOptimGroupSize, 256u)
 EVF_CONST(uint, kOptimNoSource, 0xFFFFFFFFu)  // gather: index value meaning "zero state"
 
-// optim/adam, one invocation per element (PyTorch's formulation):
+// optim/adam, one invocation per four elements (PyTorch's formulation):
 //   m = b1 m + (1 - b1) g;  v = b2 v + (1 - b2) g^2
 //   p -= step_size * m / (sqrt(v) * inv_sqrt_bc2 + eps)
 // with step_size = lr / (1 - b1^t) and inv_sqrt_bc2 = 1 / sqrt(1 - b2^t) for step t (1-based),
