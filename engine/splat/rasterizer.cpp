@@ -126,7 +126,7 @@ Rasterizer::Rasterizer(gpu::Context& ctx, const RasterKernels& kernels)
       poses_(ctx, 32, "pose_gradients"),
       subgroup_reduce_(kernels.subgroup_reduce),
       block_suffix_(kernels.block ? "_block" : "") {
-  for (const char* q : {"mean_x", "mean_y", "conic_x", "conic_y", "conic_z", "opacity", "red", "green", "blue"})
+  for (const char* q : {"mean_conic_xy", "conic_z_opacity_rg", "blue"})
     isect_grad_.emplace_back(ctx, 16, std::string("isect_grad_") + q);
 }
 
@@ -326,7 +326,8 @@ void Rasterizer::check_backward(const RenderState& st, const GaussianBuffers& pa
 
 // The backward's scratch for renders of `n` Gaussians with up to `isects` intersections.
 void Rasterizer::ensure_backward_buffers(size_t n, uint64_t isects) {
-  for (gpu::Buffer& g : isect_grad_) g.ensure(std::max<uint64_t>(isects, 1) * 4);
+  for (size_t k = 0; k < isect_grad_.size(); ++k)  // two vec4 planes and a float plane
+    isect_grad_[k].ensure(std::max<uint64_t>(isects, 1) * (k < 2 ? 16 : 4));
   grad2d_norm_.ensure(n * 4);
   pose_partial_.ensure(uint64_t(std::max<uint32_t>(gpu::Commands::div_up(n, kProjectGroupSize), 1)) * 24);
 }
@@ -351,13 +352,7 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
                  {kRasterizeBwdBindVAlpha, v_alpha},
                  {kRasterizeBwdBindG0, plane(0)},
                  {kRasterizeBwdBindG1, plane(1)},
-                 {kRasterizeBwdBindG2, plane(2)},
-                 {kRasterizeBwdBindG3, plane(3)},
-                 {kRasterizeBwdBindG4, plane(4)},
-                 {kRasterizeBwdBindG5, plane(5)},
-                 {kRasterizeBwdBindG6, plane(6)},
-                 {kRasterizeBwdBindG7, plane(7)},
-                 {kRasterizeBwdBindG8, plane(8)}},
+                 {kRasterizeBwdBindG2, plane(2)}},
                 st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize backward");
   ProjectPC pp = st.project_pc_;
@@ -372,12 +367,6 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
                  {kProjectBwdBindG0, plane(0)},
                  {kProjectBwdBindG1, plane(1)},
                  {kProjectBwdBindG2, plane(2)},
-                 {kProjectBwdBindG3, plane(3)},
-                 {kProjectBwdBindG4, plane(4)},
-                 {kProjectBwdBindG5, plane(5)},
-                 {kProjectBwdBindG6, plane(6)},
-                 {kProjectBwdBindG7, plane(7)},
-                 {kProjectBwdBindG8, plane(8)},
                  {kProjectBwdBindVMeans, grads.means},
                  {kProjectBwdBindVLogScales, grads.log_scales},
                  {kProjectBwdBindVQuats, grads.quats},

@@ -124,8 +124,9 @@ class Rasterizer {
   gpu::Commands cmd_;
   PrefixSum scan_;
   RadixSort sort_;
-  // Per-intersection gradient planes of the backward pass (mean x, y, conic x, y, z, opacity, red,
-  // green, blue), a buffer each: GPU-assisted validation checks accesses against whole buffers.
+  // Per-intersection gradients of the backward pass: (mean xy, conic xy) and (conic z, opacity,
+  // red, green) as vec4 planes, blue as a float plane (splat_layout.h), a buffer each:
+  // GPU-assisted validation checks accesses against whole buffers.
   std::vector<gpu::Buffer> isect_grad_;
   gpu::Buffer grad2d_norm_, pose_partial_, pose_;
   gpu::Buffer poses_;             // a batched backward's pose gradients, one per render

@@ -13,15 +13,10 @@ layout(local_size_x = kProjectGroupSize) in;
 #include "splat/params.glsl"
 layout(std430, binding = kProjectBwdBindOffsets) readonly buffer Offsets { uint isect_offset[]; };
 layout(std430, binding = kProjectBwdBindGid) readonly buffer Gid { uint gaussian_id_from_slot[]; };
-layout(std430, binding = kProjectBwdBindG0) readonly buffer G0 { float g_mean_x[]; };
-layout(std430, binding = kProjectBwdBindG1) readonly buffer G1 { float g_mean_y[]; };
-layout(std430, binding = kProjectBwdBindG2) readonly buffer G2 { float g_conic_x[]; };
-layout(std430, binding = kProjectBwdBindG3) readonly buffer G3 { float g_conic_y[]; };
-layout(std430, binding = kProjectBwdBindG4) readonly buffer G4 { float g_conic_z[]; };
-layout(std430, binding = kProjectBwdBindG5) readonly buffer G5 { float g_opacity[]; };
-layout(std430, binding = kProjectBwdBindG6) readonly buffer G6 { float g_red[]; };
-layout(std430, binding = kProjectBwdBindG7) readonly buffer G7 { float g_green[]; };
-layout(std430, binding = kProjectBwdBindG8) readonly buffer G8 { float g_blue[]; };
+// Per-slot gradients (splat_layout.h): (v_mean2d.xy, v_conic.xy), (v_conic.z, v_opacity, v_rgb.rg), v_rgb.b.
+layout(std430, binding = kProjectBwdBindG0) readonly buffer G0 { vec4 slot_grad_a[]; };
+layout(std430, binding = kProjectBwdBindG1) readonly buffer G1 { vec4 slot_grad_b[]; };
+layout(std430, binding = kProjectBwdBindG2) readonly buffer G2 { float slot_grad_c[]; };
 layout(std430, binding = kProjectBwdBindVMeans) buffer VMeans { float v_means[]; };
 layout(std430, binding = kProjectBwdBindVLogScales) buffer VLogScales { float v_log_scales[]; };
 layout(std430, binding = kProjectBwdBindVQuats) buffer VQuats { float v_quats[]; };
@@ -83,10 +78,11 @@ void main() {
     uint begin = isect_offset[g], end = isect_offset[g + 1];
     for (uint s = begin; s < end; ++s) {
       if (gaussian_id_from_slot[s] != g) continue;
-      v_mean2d += vec2(g_mean_x[s], g_mean_y[s]);
-      v_conic += vec3(g_conic_x[s], g_conic_y[s], g_conic_z[s]);
-      v_opac += g_opacity[s];
-      v_color += vec3(g_red[s], g_green[s], g_blue[s]);
+      vec4 ga = slot_grad_a[s], gb = slot_grad_b[s];
+      v_mean2d += ga.xy;
+      v_conic += vec3(ga.zw, gb.x);
+      v_opac += gb.y;
+      v_color += vec3(gb.zw, slot_grad_c[s]);
     }
     // A Gaussian in no tile (culled) gets zeros. Everything below is computed for every
     // Gaussian and selected at the end (a culled one may give non-finite intermediates).

@@ -21,16 +21,10 @@ layout(std430, binding = kRasterizeBwdBindInT) readonly buffer InT { float final
 layout(std430, binding = kRasterizeBwdBindInLast) readonly buffer InLast { uint last_isect[]; };
 layout(std430, binding = kRasterizeBwdBindVRgb) readonly buffer VRgb { float v_rgb[]; };        // [3][H][W]
 layout(std430, binding = kRasterizeBwdBindVAlpha) readonly buffer VAlpha { float v_alpha[]; };  // [H][W]
-// Per-slot gradients, one plane per quantity: v_mean2d.xy, v_conic.xyz, v_opacity, v_rgb.
-layout(std430, binding = kRasterizeBwdBindG0) writeonly buffer G0 { float g_mean_x[]; };
-layout(std430, binding = kRasterizeBwdBindG1) writeonly buffer G1 { float g_mean_y[]; };
-layout(std430, binding = kRasterizeBwdBindG2) writeonly buffer G2 { float g_conic_x[]; };
-layout(std430, binding = kRasterizeBwdBindG3) writeonly buffer G3 { float g_conic_y[]; };
-layout(std430, binding = kRasterizeBwdBindG4) writeonly buffer G4 { float g_conic_z[]; };
-layout(std430, binding = kRasterizeBwdBindG5) writeonly buffer G5 { float g_opacity[]; };
-layout(std430, binding = kRasterizeBwdBindG6) writeonly buffer G6 { float g_red[]; };
-layout(std430, binding = kRasterizeBwdBindG7) writeonly buffer G7 { float g_green[]; };
-layout(std430, binding = kRasterizeBwdBindG8) writeonly buffer G8 { float g_blue[]; };
+// Per-slot gradients (splat_layout.h): (v_mean2d.xy, v_conic.xy), (v_conic.z, v_opacity, v_rgb.rg), v_rgb.b.
+layout(std430, binding = kRasterizeBwdBindG0) writeonly buffer G0 { vec4 slot_grad_a[]; };
+layout(std430, binding = kRasterizeBwdBindG1) writeonly buffer G1 { vec4 slot_grad_b[]; };
+layout(std430, binding = kRasterizeBwdBindG2) writeonly buffer G2 { float slot_grad_c[]; };
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint tile_last;
 
@@ -146,15 +140,9 @@ void main() {
     barrier();
     if (lid < n) {
       uint slot = batch_slot[lid], o = lid * 9;
-      g_mean_x[slot] = acc_get(o);
-      g_mean_y[slot] = acc_get(o + 1);
-      g_conic_x[slot] = acc_get(o + 2);
-      g_conic_y[slot] = acc_get(o + 3);
-      g_conic_z[slot] = acc_get(o + 4);
-      g_opacity[slot] = acc_get(o + 5);
-      g_red[slot] = acc_get(o + 6);
-      g_green[slot] = acc_get(o + 7);
-      g_blue[slot] = acc_get(o + 8);
+      slot_grad_a[slot] = vec4(acc_get(o), acc_get(o + 1), acc_get(o + 2), acc_get(o + 3));
+      slot_grad_b[slot] = vec4(acc_get(o + 4), acc_get(o + 5), acc_get(o + 6), acc_get(o + 7));
+      slot_grad_c[slot] = acc_get(o + 8);
     }
   }
 }
