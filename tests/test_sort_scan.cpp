@@ -40,9 +40,10 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
   auto& ctx = test::gpu_context();
   RadixSort sort(ctx);
   std::mt19937 rng(11);
-  // Both block sizes (16 keys per invocation on GPUs, up to 128 on CPU drivers) whatever the
+  // Both block sizes (16 keys per invocation on GPUs, up to 128 on CPU drivers; 7, not a multiple
+  // of the four keys a vector read takes, for the one-by-one path) whatever the
   // device, and the device's own choice (smaller blocks for short inputs).
-  for (uint32_t items : {16u, 128u, 0u})
+  for (uint32_t items : {16u, 128u, 7u, 0u})
     for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{
              {1, 8}, {17, 4}, {4096, 12}, {4097, 32}, {16385, 8}, {70000, 16}, {250000, 20}, {600000, 32}}) {
       sort.set_items(items);

@@ -9,8 +9,9 @@
 #include "sort/sort_layout.h"
 #include "common/dispatch.glsl"
 layout(local_size_x = kSortGroupSize) in;
-layout(std430, binding = kRadixScatterBindKeysIn) readonly buffer KeysIn { uint keys_in[]; };
-layout(std430, binding = kRadixScatterBindValuesIn) readonly buffer ValuesIn { uint values_in[]; };
+// Read four pairs per access where it can (CPU drivers loop over the lanes for every access).
+layout(std430, binding = kRadixScatterBindKeysIn) readonly buffer KeysIn { uvec4 keys_in[]; };
+layout(std430, binding = kRadixScatterBindValuesIn) readonly buffer ValuesIn { uvec4 values_in[]; };
 layout(std430, binding = kRadixScatterBindKeysOut) writeonly buffer KeysOut { uint keys_out[]; };
 layout(std430, binding = kRadixScatterBindValuesOut) writeonly buffer ValuesOut { uint values_out[]; };
 layout(std430, binding = kRadixScatterBindOffsets) readonly buffer Offsets { uint global_offset[]; };  // scanned counts
@@ -23,12 +24,19 @@ void main() {
   uint block = evf_linear_group();
   uint lid = gl_LocalInvocationIndex;
   uint base = block * kSortGroupSize * pc.items + lid * pc.items;
+  uint end = min(base + pc.items, pc.n);
+  // Whole uvec4s from base to end4 (base is a multiple of 4 when items is), single pairs after.
+  uint end4 = (pc.items & 3u) == 0u && end > base ? base + ((end - base) & ~3u) : base;
   uint local[16];
   for (uint d = 0; d < 16; ++d) local[d] = 0;
-  for (uint k = 0; k < pc.items; ++k) {
-    uint i = base + k;
-    if (i < pc.n) local[(keys_in[i] >> pc.shift) & 15u] += 1;
+  for (uint i = base; i < end4; i += 4u) {
+    uvec4 d = (keys_in[i >> 2u] >> pc.shift) & 15u;
+    local[d.x] += 1;
+    local[d.y] += 1;
+    local[d.z] += 1;
+    local[d.w] += 1;
   }
+  for (uint i = end4; i < end; ++i) local[(keys_in[i >> 2u][i & 3u] >> pc.shift) & 15u] += 1;
   for (uint d = 0; d < 16; ++d) table[d * kSortGroupSize + lid] = local[d];
   barrier();
   // Scan of the 4096-entry table: invocation lid sums entries [lid*16, lid*16+16).
@@ -55,15 +63,22 @@ void main() {
   uint dest[16];
   for (uint d = 0; d < 16; ++d)
     dest[d] = global_offset[d * pc.num_blocks + block] + table[d * kSortGroupSize + lid] - table[d * kSortGroupSize];
-  for (uint k = 0; k < pc.items; ++k) {
-    uint i = base + k;
-    if (i < pc.n) {
-      uint key = keys_in[i];
-      uint d = (key >> pc.shift) & 15u;
+  for (uint i = base; i < end4; i += 4u) {
+    uvec4 key = keys_in[i >> 2u], value = values_in[i >> 2u];
+    for (uint c = 0u; c < 4u; ++c) {
+      uint d = (key[c] >> pc.shift) & 15u;
       uint o = dest[d];
       dest[d] = o + 1;
-      keys_out[o] = key;
-      values_out[o] = values_in[i];
+      keys_out[o] = key[c];
+      values_out[o] = value[c];
     }
+  }
+  for (uint i = end4; i < end; ++i) {
+    uint key = keys_in[i >> 2u][i & 3u];
+    uint d = (key >> pc.shift) & 15u;
+    uint o = dest[d];
+    dest[d] = o + 1;
+    keys_out[o] = key;
+    values_out[o] = values_in[i >> 2u][i & 3u];
   }
 }
