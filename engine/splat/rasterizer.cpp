@@ -190,7 +190,7 @@ void Rasterizer::ensure_forward_buffers(RenderState& st) const {
   st.proj_color_.ensure(n * 16);
   // d(colour)/d(direction) for project_bwd: only with view-dependent colour (SH degree >= 1), where
   // its 36 B per Gaussian fit the binding limit like the degree-1 band does.
-  if (st.project_pc_.sh_degree >= 1) st.proj_dcolor_.ensure(n * 36);
+  if (st.project_pc_.sh_degree >= 1) st.proj_dcolor_.ensure(n * 48);  // three vec4s
   st.tile_rect_.ensure(n * 16);
   st.tiles_touched_.ensure(n * 4);
   st.isect_offset_.ensure((n + 1) * 4);

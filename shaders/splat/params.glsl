@@ -4,7 +4,7 @@
 // range sooner than needed: band l holds (2l+1) coefficients x 3 channels per Gaussian.
 layout(std430, binding = kParamBindMeans) readonly buffer Means { float means[]; };                   // [N][3]
 layout(std430, binding = kParamBindLogScales) readonly buffer LogScales { float log_scales[]; };      // [N][3]
-layout(std430, binding = kParamBindQuats) readonly buffer Quats { float quats[]; };                   // [N][4] wxyz
+layout(std430, binding = kParamBindQuats) readonly buffer Quats { vec4 quats[]; };                    // [N] wxyz
 layout(std430, binding = kParamBindOpacities) readonly buffer Opacities { float opacity_logits[]; };  // [N]
 #ifndef EVF_PARAMS_NO_SH  // project_bwd reads the colours project computed, not the bands
 layout(std430, binding = kParamBindSh0) readonly buffer Sh0 { float sh0[]; };  // [N][1][3]
@@ -18,7 +18,7 @@ layout(std430, binding = kParamBindSh3) readonly buffer Sh3 { float sh3[]; };  /
 // generic "coefficient k" accessor would touch every band for every k.
 vec3 load_mean(uint g) { return vec3(means[3 * g], means[3 * g + 1], means[3 * g + 2]); }
 vec3 load_log_scale(uint g) { return vec3(log_scales[3 * g], log_scales[3 * g + 1], log_scales[3 * g + 2]); }
-vec4 load_quat(uint g) { return vec4(quats[4 * g], quats[4 * g + 1], quats[4 * g + 2], quats[4 * g + 3]); }
+vec4 load_quat(uint g) { return quats[g]; }
 
 #ifndef EVF_PARAMS_NO_SH
 // All 16 SH coefficients of Gaussian g; bands above `degree` (the buffers' degree) are zero.

@@ -15,7 +15,7 @@ layout(std430, binding = kProjectBindRect) writeonly buffer Rect { uvec4 tile_re
 layout(std430, binding = kProjectBindCount) writeonly buffer Count { uint tiles_touched[]; };
 // d(raw colour channel c)/d(view direction), [N][3 channels][3], for project_bwd (SH degree >= 1;
 // a placeholder buffer at degree 0, never written). project_bwd then needs no SH coefficients.
-layout(std430, binding = kProjectBindDColor) writeonly buffer DColor { float proj_dcolor[]; };
+layout(std430, binding = kProjectBindDColor) writeonly buffer DColor { vec4 proj_dcolor[]; };  // [N][3] (.xyz)
 layout(push_constant) uniform PC { ProjectPC pc; };
 
 // Culling selects zeros at the end instead of returning early: on CPU drivers (lavapipe) an
@@ -67,9 +67,9 @@ void main() {
     EVF_SPLIT(8) EVF_SPLIT(9) EVF_SPLIT(10) EVF_SPLIT(11) EVF_SPLIT(12) EVF_SPLIT(13) EVF_SPLIT(14) EVF_SPLIT(15)
     vec3 jr = sh_basis_vjp(dir, pc.sh_degree, wr), jg = sh_basis_vjp(dir, pc.sh_degree, wg),
          jb = sh_basis_vjp(dir, pc.sh_degree, wb);
-    proj_dcolor[9 * g] = jr.x; proj_dcolor[9 * g + 1] = jr.y; proj_dcolor[9 * g + 2] = jr.z;
-    proj_dcolor[9 * g + 3] = jg.x; proj_dcolor[9 * g + 4] = jg.y; proj_dcolor[9 * g + 5] = jg.z;
-    proj_dcolor[9 * g + 6] = jb.x; proj_dcolor[9 * g + 7] = jb.y; proj_dcolor[9 * g + 8] = jb.z;
+    proj_dcolor[3 * g] = vec4(jr, 0.0);
+    proj_dcolor[3 * g + 1] = vec4(jg, 0.0);
+    proj_dcolor[3 * g + 2] = vec4(jb, 0.0);
   }
   tiles_touched[g] = count;  // 0 when culled
   tile_rect[g] = uvec4(t0, t1);

@@ -19,7 +19,7 @@ layout(std430, binding = kProjectBwdBindG1) readonly buffer G1 { vec4 slot_grad_
 layout(std430, binding = kProjectBwdBindG2) readonly buffer G2 { float slot_grad_c[]; };
 layout(std430, binding = kProjectBwdBindVMeans) buffer VMeans { float v_means[]; };
 layout(std430, binding = kProjectBwdBindVLogScales) buffer VLogScales { float v_log_scales[]; };
-layout(std430, binding = kProjectBwdBindVQuats) buffer VQuats { float v_quats[]; };
+layout(std430, binding = kProjectBwdBindVQuats) buffer VQuats { vec4 v_quats[]; };  // [N] wxyz
 layout(std430, binding = kProjectBwdBindVOpacities) buffer VOpacities { float v_opacity_logits[]; };
 layout(std430, binding = kProjectBwdBindVSh0) buffer VSh0 { float v_sh0[]; };
 layout(std430, binding = kProjectBwdBindVSh1) buffer VSh1 { float v_sh1[]; };
@@ -30,7 +30,7 @@ layout(std430, binding = kProjectBwdBindPosePartial) writeonly buffer PosePartia
 // From the forward (project.comp): the clamped colour max(raw, 0) (raw > 0 exactly where it is
 // > 0) and d(raw)/d(direction), so that no SH coefficient is read here.
 layout(std430, binding = kProjectBwdBindProjC) readonly buffer ProjC { vec4 proj_color[]; };
-layout(std430, binding = kProjectBwdBindDColor) readonly buffer DColor { float proj_dcolor[]; };
+layout(std430, binding = kProjectBwdBindDColor) readonly buffer DColor { vec4 proj_dcolor[]; };  // [N][3] (.xyz)
 layout(push_constant) uniform PC { ProjectPC pc; };
 
 shared float red[6][kProjectGroupSize];
@@ -121,10 +121,8 @@ void main() {
     // v_dir = sum_c v_raw_c d(raw_c)/d(dir) (zero at degree 0).
     vec3 v_dir = vec3(0.0);
     if (pc.sh_degree >= 1) {
-      uint i = 9 * g;
-      v_dir = v_raw.r * vec3(proj_dcolor[i], proj_dcolor[i + 1], proj_dcolor[i + 2]) +
-              v_raw.g * vec3(proj_dcolor[i + 3], proj_dcolor[i + 4], proj_dcolor[i + 5]) +
-              v_raw.b * vec3(proj_dcolor[i + 6], proj_dcolor[i + 7], proj_dcolor[i + 8]);
+      uint i = 3 * g;
+      v_dir = v_raw.r * proj_dcolor[i].xyz + v_raw.g * proj_dcolor[i + 1].xyz + v_raw.b * proj_dcolor[i + 2].xyz;
     }
     vec3 v_dvec = (v_dir - dir * dot(dir, v_dir)) / dlen;
     vec3 v_mean = v_dvec;
@@ -170,8 +168,7 @@ void main() {
     v_logit = listed ? v_logit : 0.0;
     EVF_PUT3(v_means, 3 * g, v_mean);
     EVF_PUT3(v_log_scales, 3 * g, v_ls);
-    EVF_PUT(v_quats, 4 * g, v_q.x); EVF_PUT(v_quats, 4 * g + 1, v_q.y);
-    EVF_PUT(v_quats, 4 * g + 2, v_q.z); EVF_PUT(v_quats, 4 * g + 3, v_q.w);
+    EVF_PUT(v_quats, g, v_q);
     EVF_PUT(v_opacity_logits, g, v_logit);
     EVF_PUT(grad2d_norm, g, length(v_mean2d));
   }
