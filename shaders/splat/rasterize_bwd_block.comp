@@ -46,23 +46,27 @@ layout(std430, binding = kRasterizeBwdBindG2) writeonly buffer G2 { float slot_g
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint tile_last;
 
+// The shared accumulator: entry e's nine sums in acc[3e] = (mean.xy, conic.xy),
+// acc[3e + 1] = (conic.z, opacity, rgb.rg), acc[3e + 2].x = rgb.b, the per-slot layout, so that
+// zeroing and reading out an entry take three vec4 accesses instead of nine.
 #ifdef EVF_CAS_ATOMICS
-shared uint acc[EVF_BATCH * 9];
-void acc_add(uint i, float v) {
-  uint old = acc[i];
+shared uvec4 acc[EVF_BATCH * 3];
+void acc_add(uint e, uint q, float v) {
+  uint i = 3u * e + q / 4u, c = q % 4u;
+  uint old = acc[i][c];
   for (;;) {
-    uint prev = atomicCompSwap(acc[i], old, floatBitsToUint(uintBitsToFloat(old) + v));
+    uint prev = atomicCompSwap(acc[i][c], old, floatBitsToUint(uintBitsToFloat(old) + v));
     if (prev == old) break;
     old = prev;
   }
 }
-float acc_get(uint i) { return uintBitsToFloat(acc[i]); }
-void acc_zero(uint i) { acc[i] = 0u; }
+vec4 acc_get(uint i) { return uintBitsToFloat(acc[i]); }
+void acc_zero(uint i) { acc[i] = uvec4(0u); }
 #else
-shared float acc[EVF_BATCH * 9];
-void acc_add(uint i, float v) { atomicAdd(acc[i], v); }
-float acc_get(uint i) { return acc[i]; }
-void acc_zero(uint i) { acc[i] = 0.0; }
+shared vec4 acc[EVF_BATCH * 3];
+void acc_add(uint e, uint q, float v) { atomicAdd(acc[3u * e + q / 4u][q % 4u], v); }
+vec4 acc_get(uint i) { return acc[i]; }
+void acc_zero(uint i) { acc[i] = vec4(0.0); }
 #endif
 
 struct Run {     // 4 horizontally adjacent pixels
@@ -155,7 +159,7 @@ void main() {
     // Entries at or past visit_end are neither loaded nor visited (their slots get zeros).
     uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
     for (uint k = lid; k < n_load; k += EVF_THREADS)
-      for (uint q = 0; q < 9; ++q) acc_zero(k * 9 + q);
+      for (uint q = 0; q < 3; ++q) acc_zero(k * 3 + q);
     barrier();
     for (uint k = lid; k < n_load; k += EVF_THREADS) load_batch_entry(k, start + k, tile_origin);
     barrier();
@@ -183,19 +187,18 @@ void main() {
         g.opac = 0.0;
         g.rgb = vec3(0.0);
         EVF_RUNS(EVF_ACC)
-        uint o = j * 9u;
-        acc_add(o, g.mean.x); acc_add(o + 1, g.mean.y);
-        acc_add(o + 2, g.conic.x); acc_add(o + 3, g.conic.y); acc_add(o + 4, g.conic.z);
-        acc_add(o + 5, g.opac);
-        acc_add(o + 6, g.rgb.r); acc_add(o + 7, g.rgb.g); acc_add(o + 8, g.rgb.b);
+        acc_add(j, 0, g.mean.x); acc_add(j, 1, g.mean.y);
+        acc_add(j, 2, g.conic.x); acc_add(j, 3, g.conic.y); acc_add(j, 4, g.conic.z);
+        acc_add(j, 5, g.opac);
+        acc_add(j, 6, g.rgb.r); acc_add(j, 7, g.rgb.g); acc_add(j, 8, g.rgb.b);
       }
     }
     barrier();
     for (uint k = lid; k < n_load; k += EVF_THREADS) {
-      uint slot = slot_from_isect[start + k], o = k * 9;
-      slot_grad_a[slot] = vec4(acc_get(o), acc_get(o + 1), acc_get(o + 2), acc_get(o + 3));
-      slot_grad_b[slot] = vec4(acc_get(o + 4), acc_get(o + 5), acc_get(o + 6), acc_get(o + 7));
-      slot_grad_c[slot] = acc_get(o + 8);
+      uint slot = slot_from_isect[start + k];
+      slot_grad_a[slot] = acc_get(3 * k);
+      slot_grad_b[slot] = acc_get(3 * k + 1);
+      slot_grad_c[slot] = acc_get(3 * k + 2).x;
     }
     for (uint k = n_load + lid; k < n; k += EVF_THREADS) {
       uint slot = slot_from_isect[start + k];
