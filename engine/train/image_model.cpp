@@ -33,11 +33,28 @@ ImageModel::ImageModel(gpu::Context& ctx, uint32_t frames, uint32_t width, uint3
   }
 }
 
-void ImageModel::colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g,
-                        const gpu::Buffer& y) {
-  shaderio::ColourPC pc{uint32_t(values_), op, 0, 0};
-  cmd.dispatch("train/colour", {{shaderio::kColourBindX, x}, {shaderio::kColourBindG, g}, {shaderio::kColourBindY, y}},
-               pc, cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kColourGroupSize)));
+void record_accumulate(gpu::Commands& cmd, uint64_t n, float scale, bool add, const gpu::Buffer& x,
+                       const gpu::Buffer& y) {
+  shaderio::AccumulatePC pc{uint32_t(n), scale, add ? 1u : 0u, 0};
+  cmd.dispatch("train/accumulate", {{shaderio::kTrainAccumulateBindX, x}, {shaderio::kTrainAccumulateBindY, y}}, pc,
+               cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(n, 4), shaderio::kAccumulateGroupSize)));
+}
+
+void record_colour(gpu::Commands& cmd, uint32_t op, uint64_t n, const gpu::Buffer& x, const gpu::Buffer& g,
+                   const gpu::Buffer& y) {
+  static const char* const kNames[] = {"train/colour_decode", "train/colour_encode", "train/colour_decode_bwd",
+                                       "train/colour_encode_bwd"};
+  static_assert(shaderio::kColourDecode == 0 && shaderio::kColourEncode == 1 && shaderio::kColourDecodeBwd == 2 &&
+                shaderio::kColourEncodeBwd == 3);
+  if (op > shaderio::kColourEncodeBwd) throw std::invalid_argument("colour conversion: unknown op");
+  shaderio::ColourPC pc{uint32_t(n), 0, 0, 0};
+  const gpu::Groups groups =
+      cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(n, 4), shaderio::kColourGroupSize));
+  if (op >= shaderio::kColourDecodeBwd)  // the forward builds have no gradient binding
+    cmd.dispatch(kNames[op], {{shaderio::kColourBindX, x}, {shaderio::kColourBindG, g}, {shaderio::kColourBindY, y}},
+                 pc, groups);
+  else
+    cmd.dispatch(kNames[op], {{shaderio::kColourBindX, x}, {shaderio::kColourBindY, y}}, pc, groups);
 }
 
 void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const gpu::Buffer* flow) {
@@ -48,12 +65,8 @@ void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer
   if (identity_) return;
   for (uint32_t i = 0; i < frames_; ++i) colour(cmd, shaderio::kColourDecode, *renders[i], *renders[i], linear_[i]);
   if (frames_ > 1)
-    for (uint32_t i = 0; i < frames_; ++i) {
-      shaderio::AccumulatePC pc{uint32_t(values_), 1.0f / float(mean_count()), i > 0 ? 1u : 0u, 0};
-      cmd.dispatch("train/accumulate",
-                   {{shaderio::kTrainAccumulateBindX, linear_[i]}, {shaderio::kTrainAccumulateBindY, mean_}}, pc,
-                   cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kAccumulateGroupSize)));
-    }
+    for (uint32_t i = 0; i < frames_; ++i)
+      record_accumulate(cmd, values_, 1.0f / float(mean_count()), i > 0, linear_[i], mean_);
   if (upsample_ > 1) upsample_forward(cmd, *flow);
   const gpu::Buffer& m = frames_ > 1 ? mean_ : linear_[0];
   if (space_ == LossSpace::Srgb) colour(cmd, shaderio::kColourEncode, m, m, encoded_);

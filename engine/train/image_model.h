@@ -25,6 +25,15 @@
 
 namespace evflow {
 
+// Records y = op(x[, g]) over n floats, op one of the colour conversions of train_layout.h
+// (kColourDecode, kColourEncode, kColourDecodeBwd, kColourEncodeBwd; g is read by the last two).
+void record_colour(gpu::Commands& cmd, uint32_t op, uint64_t n, const gpu::Buffer& x, const gpu::Buffer& g,
+                   const gpu::Buffer& y);
+
+// Records y = (add ? y : 0) + scale * x over n floats.
+void record_accumulate(gpu::Commands& cmd, uint64_t n, float scale, bool add, const gpu::Buffer& x,
+                       const gpu::Buffer& y);
+
 class ImageModel {
  public:
   // frames: renders per step (2N+1, or 1 in plain mode) of width x height; upsample: M (1: off).
@@ -59,7 +68,9 @@ class ImageModel {
   const gpu::Buffer& render_grad(uint32_t i) const { return identity_ ? v_prediction_ : v_render_[i]; }
 
  private:
-  void colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y);
+  void colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y) {
+    record_colour(cmd, op, values_, x, g, y);
+  }
   void upsample_forward(gpu::Commands& cmd, const gpu::Buffer& flow);
   gpu::Context& ctx_;
   uint32_t frames_, width_, height_, upsample_;

@@ -28,9 +28,7 @@ std::unique_ptr<GpuEvents> branch_events(gpu::Context& ctx, const io::Dataset& d
 }
 
 void accumulate(gpu::Commands& cmd, const gpu::Buffer& x, const gpu::Buffer& y, uint64_t n, float scale, bool add) {
-  shaderio::AccumulatePC pc{uint32_t(n), scale, add ? 1u : 0u, 0};
-  cmd.dispatch("train/accumulate", {{shaderio::kTrainAccumulateBindX, x}, {shaderio::kTrainAccumulateBindY, y}}, pc,
-               cmd.linear_groups(gpu::Commands::div_up(n, shaderio::kAccumulateGroupSize)));
+  record_accumulate(cmd, n, scale, add, x, y);
 }
 
 }  // namespace
@@ -118,9 +116,7 @@ ldi::Crop LdiBranch::choose_crop(uint32_t step) const {
 
 void LdiBranch::colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g,
                        const gpu::Buffer& y) {
-  shaderio::ColourPC pc{uint32_t(values_), op, 0, 0};
-  cmd.dispatch("train/colour", {{shaderio::kColourBindX, x}, {shaderio::kColourBindG, g}, {shaderio::kColourBindY, y}},
-               pc, cmd.linear_groups(gpu::Commands::div_up(values_, shaderio::kColourGroupSize)));
+  record_colour(cmd, op, values_, x, g, y);
 }
 
 void LdiBranch::record(gpu::Commands& cmd, uint32_t view, uint32_t step, const std::vector<const gpu::Buffer*>& renders,

@@ -1,25 +1,52 @@
 #version 450
-// Per-element colour conversions of the image model (ColourPC.op, train_layout.h):
-//   kColourDecode:    y = decode(x)             (sRGB render -> linear light)
-//   kColourEncode:    y = encode(x)             (linear mean -> sRGB, loss_space=srgb)
-//   kColourDecodeBwd: y = g * decode'(x)        (d/d(linear frame) -> d/d(sRGB render))
-//   kColourEncodeBwd: y = g * encode'(x)        (d/d(sRGB prediction) -> d/d(linear mean))
-// Forward and backward share shaders/common/srgb.glsl.
+// Per-element colour conversions of the image model, one build per conversion (EVF_COLOUR_OP,
+// train/colour_<op>; a push-constant switch would run every branch's work on CPU drivers):
+//   decode:     y = decode(x)             (sRGB render -> linear light)
+//   encode:     y = encode(x)             (linear mean -> sRGB, loss_space=srgb)
+//   decode_bwd: y = g * decode'(x)        (d/d(linear frame) -> d/d(sRGB render))
+//   encode_bwd: y = g * encode'(x)        (d/d(sRGB prediction) -> d/d(linear mean))
+// Four elements per invocation through vec4 accesses (CPU drivers loop over the lanes for every
+// access), one by one only for the last 1-3. Forward and backward share shaders/common/srgb.glsl.
 #extension GL_GOOGLE_include_directive : require
 #include "train/train_layout.h"
 #include "common/dispatch.glsl"
 #include "common/srgb.glsl"
+#ifndef EVF_COLOUR_OP
+#error EVF_COLOUR_OP selects the conversion (train_layout.h: kColourDecode ...)
+#endif
 layout(local_size_x = kColourGroupSize) in;
-layout(std430, binding = kColourBindX) readonly buffer X { float x[]; };
-layout(std430, binding = kColourBindG) readonly buffer G { float g[]; };
-layout(std430, binding = kColourBindY) writeonly buffer Y { float y[]; };
+layout(std430, binding = kColourBindX) readonly buffer X { vec4 x[]; };
+layout(std430, binding = kColourBindG) readonly buffer G { vec4 g[]; };
+layout(std430, binding = kColourBindY) writeonly buffer Y { vec4 y[]; };
 layout(push_constant) uniform PC { ColourPC pc; };
+
+float convert(float v, float grad) {
+#if EVF_COLOUR_OP == 0
+  return evf_srgb_decode(v);
+#elif EVF_COLOUR_OP == 1
+  return evf_srgb_encode(v);
+#elif EVF_COLOUR_OP == 2
+  return grad * evf_srgb_decode_deriv(v);
+#else
+  return grad * evf_srgb_encode_deriv(v);
+#endif
+}
+
+#if EVF_COLOUR_OP >= 2
+#define EVF_GRAD(i, c) g[i][c]
+#define EVF_GRAD4(i) g[i]
+#else
+#define EVF_GRAD(i, c) 0.0
+#define EVF_GRAD4(i) vec4(0.0)
+#endif
+
 void main() {
   uint i = evf_linear_invocation(kColourGroupSize);
-  if (i >= pc.n) return;
-  const float v = x[i];
-  if (pc.op == kColourDecode) y[i] = evf_srgb_decode(v);
-  else if (pc.op == kColourEncode) y[i] = evf_srgb_encode(v);
-  else if (pc.op == kColourDecodeBwd) y[i] = g[i] * evf_srgb_decode_deriv(v);
-  else y[i] = g[i] * evf_srgb_encode_deriv(v);
+  if (i * 4u >= pc.n) return;
+  if (i * 4u + 4u <= pc.n) {
+    vec4 v = x[i], gr = EVF_GRAD4(i);
+    y[i] = vec4(convert(v.x, gr.x), convert(v.y, gr.y), convert(v.z, gr.z), convert(v.w, gr.w));
+    return;
+  }
+  for (uint c = 0u; i * 4u + c < pc.n; ++c) y[i][c] = convert(x[i][c], EVF_GRAD(i, c));
 }

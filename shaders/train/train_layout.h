@@ -3,14 +3,15 @@
 #define EVF_TRAIN_LAYOUT_H
 #include "common/shared_prelude.h"
 EVF_NAMESPACE_BEGIN
-EVF_CONST(uint, kAccumulateGroupSize, 256u)
+EVF_CONST(uint, kAccumulateGroupSize, 256u)  // each invocation: four elements
 struct AccumulatePC {
   uint n;
   float scale;
   uint accumulate;  // 0: y = scale * x; 1: y += scale * x
   uint pad;
 };
-// Colour conversions of the image model (train/colour.comp): bindings, ops.
+// Colour conversions of the image model (train/colour.comp, one build per op: train/colour_<op>):
+// bindings, ops (each invocation converts four elements).
 EVF_CONST(uint, kColourGroupSize, 256u)
 EVF_BIND(kColourBindX, 0u, X)
 EVF_BIND(kColourBindG, 1u, G)
@@ -21,8 +22,7 @@ EVF_CONST(uint, kColourDecodeBwd, 2u)
 EVF_CONST(uint, kColourEncodeBwd, 3u)
 struct ColourPC {
   uint n;
-  uint op;
-  uint pad0, pad1;
+  uint pad0, pad1, pad2;
 };
 
 // Flow-upsampled blur (train/upsample, train/upsample_bwd; engine/train/image_model.h). For
