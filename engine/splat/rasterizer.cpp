@@ -37,10 +37,10 @@ GaussianBuffers::GaussianBuffers(gpu::Context& ctx, size_t n, int degree, const 
          make(ctx, degree >= 2 ? n * 60 : 16, prefix + "sh2"), make(ctx, degree >= 3 ? n * 84 : 16, prefix + "sh3")} {}
 
 size_t GaussianBuffers::max_count(const gpu::Context& ctx, int degree) {
-  // The widest per-Gaussian buffer: the degree-3 band (84 B), else quats (16 B) or the
-  // projection/intersection state of the rasterizer (16 B per Gaussian; 36 B of d(colour)/d(direction)
-  // at SH degree >= 1, no wider than the degree-1 band).
-  uint64_t widest = degree >= 3 ? 84 : degree >= 2 ? 60 : degree >= 1 ? 36 : 16;
+  // The widest per-Gaussian buffer: the degree-3 band (84 B), the degree-2 band (60 B), else the
+  // rasterizer's d(colour)/d(direction) at SH degree >= 1 (three vec4s, 48 B: wider than the
+  // degree-1 band's 36 B), else quats or the projection/intersection state (16 B per Gaussian).
+  uint64_t widest = degree >= 3 ? 84 : degree >= 2 ? 60 : degree >= 1 ? 48 : 16;
   return static_cast<size_t>(ctx.caps().max_storage_buffer_range / widest);
 }
 
@@ -188,9 +188,9 @@ void Rasterizer::ensure_forward_buffers(RenderState& st) const {
   st.proj_mean_conic_.ensure(n * 16);
   st.proj_misc_.ensure(n * 16);
   st.proj_color_.ensure(n * 16);
-  // d(colour)/d(direction) for project_bwd: only with view-dependent colour (SH degree >= 1), where
-  // its 36 B per Gaussian fit the binding limit like the degree-1 band does.
-  if (st.project_pc_.sh_degree >= 1) st.proj_dcolor_.ensure(n * 48);  // three vec4s
+  // d(colour)/d(direction) for project_bwd: only with view-dependent colour (SH degree >= 1); its
+  // three vec4s (48 B) per Gaussian are counted in GaussianBuffers::max_count.
+  if (st.project_pc_.sh_degree >= 1) st.proj_dcolor_.ensure(n * 48);
   st.tile_rect_.ensure(n * 16);
   st.tiles_touched_.ensure(n * 4);
   st.isect_offset_.ensure((n + 1) * 4);
