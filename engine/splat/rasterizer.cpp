@@ -326,6 +326,11 @@ void Rasterizer::check_backward(const RenderState& st, const GaussianBuffers& pa
 
 // The backward's scratch for renders of `n` Gaussians with up to `isects` intersections.
 void Rasterizer::ensure_backward_buffers(size_t n, uint64_t isects) {
+  const uint64_t max_range = ctx_.caps().max_storage_buffer_range;
+  if (isects * 16 > max_range)  // the two vec4 gradient planes: the widest per-intersection buffers
+    throw gpu::Error(std::to_string(isects) +
+                     " tile intersections exceed, in the backward pass, the storage binding limit of " +
+                     ctx_.caps().name + " (" + std::to_string(max_range / 16) + " at most)");
   for (size_t k = 0; k < isect_grad_.size(); ++k)  // two vec4 planes and a float plane
     isect_grad_[k].ensure(std::max<uint64_t>(isects, 1) * (k < 2 ? 16 : 4));
   grad2d_norm_.ensure(n * 4);
