@@ -36,6 +36,7 @@ ContextOptions ContextOptions::from_env() {
     if (o.raster_kernel != "pixel" && o.raster_kernel != "block")
       throw Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + o.raster_kernel + "'");
   }
+  if (const char* e = std::getenv("EVF_BINDING_LIMIT")) o.binding_limit = std::strtoull(e, nullptr, 10);
   return o;
 }
 
@@ -256,6 +257,8 @@ void Context::query_caps(const VkPhysicalDeviceProperties& props) {
   caps_.max_workgroup_invocations = props.limits.maxComputeWorkGroupInvocations;
   caps_.max_shared_memory = props.limits.maxComputeSharedMemorySize;
   caps_.max_storage_buffer_range = props.limits.maxStorageBufferRange;
+  if (opts_.binding_limit)
+    caps_.max_storage_buffer_range = std::min<uint64_t>(caps_.max_storage_buffer_range, opts_.binding_limit);
   caps_.min_storage_offset_alignment = props.limits.minStorageBufferOffsetAlignment;
   caps_.timestamps = props.limits.timestampComputeAndGraphics;
   caps_.timestamp_period_ns = props.limits.timestampPeriod;

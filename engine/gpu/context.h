@@ -42,6 +42,9 @@ struct ContextOptions {
   uint32_t sort_items = 0;    // keys per radix-sort invocation, 1..256; 0 = by device and size
   int subgroup_reduce = -1;   // rasterize backward: 1 = subgroupAdd first, 0 = per-lane adds; -1 = by device
   std::string raster_kernel;  // "pixel" or "block" compositing kernels; "" = by device
+  // A storage binding limit below the device's (bytes; 0: the device's own): every size check
+  // then answers as a device with that limit would, so the refusals can be tried on any device.
+  uint64_t binding_limit = 0;
   // Presentation (opt-in, for a window): enables these instance extensions (the windowing
   // system's surface extensions, e.g. from glfwGetRequiredInstanceExtensions) plus
   // VK_KHR_surface, and VK_KHR_swapchain on the device; devices without it are skipped.
@@ -50,7 +53,7 @@ struct ContextOptions {
   // Defaults that read the environment, once: EVF_DEVICE, EVF_VALIDATION=1, EVF_POISON=1,
   // EVF_FORCE_CAS=1, EVF_VALIDATION_PRINT=1, EVF_VALIDATION_SYNC=1, EVF_VALIDATION_GPU=1,
   // EVF_SORT_ITEMS=n,
-  // EVF_SUBGROUP_REDUCE=0|1, EVF_RASTER_KERNEL=pixel|block.
+  // EVF_SUBGROUP_REDUCE=0|1, EVF_RASTER_KERNEL=pixel|block, EVF_BINDING_LIMIT=bytes.
   static ContextOptions from_env();
 };
 
