@@ -177,6 +177,10 @@ TEST_CASE("event loss value and frame gradients match the double reference (fini
     check_against_reference(ev, random_frames(W, H, 7, 14, false), 20, 5);
   }
   SECTION("pooled over 2 x 2 cells") { check_against_reference(ev, random_frames(W, H, 5, 15, false), 21, 2); }
+  // 24 x 16 pixels take the four-pixel kernels at pool 1; 23 x 15 (not a multiple of 4) the per-cell ones.
+  SECTION("per pixel over a pixel count that is not a multiple of 4") {
+    check_against_reference(random_events(23, 15, 4000, 4), random_frames(23, 15, 7, 16, false), 22);
+  }
   test::require_no_validation_messages();
 }
 

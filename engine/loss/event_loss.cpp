@@ -56,9 +56,11 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
       throw std::invalid_argument("event loss: frame " + std::to_string(i) +
                                   " buffers hold less than 3 x H x W floats");
   const uint32_t intervals = F - 1;
-  const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
+  // Per pixel with H*W a multiple of 4: four pixels per invocation (the quad kernels' vec4 accesses).
+  const bool quads = options_.pool == 1 && hw % 4 == 0;
+  const uint32_t groups = gpu::Commands::div_up(quads ? hw / 4 : hw, shaderio::kLossGroupSize);
   const uint64_t cells = event_pool_cells(f.width, f.height, options_.pool);
-  const uint32_t cell_groups = gpu::Commands::div_up(cells, shaderio::kLossGroupSize);
+  const uint32_t cell_groups = quads ? groups : gpu::Commands::div_up(cells, shaderio::kLossGroupSize);
   counts_.ensure(uint64_t(intervals) * 2 * hw * 4);
   scratch_.ensure(2 * cells * 4);
   partials_.ensure(uint64_t(cell_groups) * 16);
@@ -97,7 +99,7 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     pc.pair = q;
     pc.counts_float = events_.float_planes() ? 1u : 0u;
     pc.pool = options_.pool;
-    cmd.dispatch("loss/event_pair",
+    cmd.dispatch(quads ? "loss/event_pair_quads" : "loss/event_pair",
                  {{shaderio::kEventPairBindCounts, counts_},
                   {shaderio::kEventPairBindFrameS, *f.rgb[s]},
                   {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
@@ -106,7 +108,7 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
                  pc, gc);
     record_event_sums(cmd, partials_, sums_, cell_groups, 4 * q);
     if (gradients)
-      cmd.dispatch("loss/event_pair_bwd",
+      cmd.dispatch(quads ? "loss/event_pair_quads_bwd" : "loss/event_pair_bwd",
                    {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},
                     {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
                     {shaderio::kEventPairBwdBindScratch, scratch_},

@@ -89,6 +89,8 @@ struct ReducePC {
 //   l = || E / nE - D / nD ||^2, grad_j (+)= grad_scale * dl/drgb_j, grad_s (+)= grad_scale * dl/drgb_s,
 // and invocation 0 writes (value_accumulate: adds) value_scale * l into values[value_index].
 // loss/event_pair_value: that value alone (one invocation; no gradients).
+// loss/event_pair_quads and loss/event_pair_quads_bwd: the same at pool 1 when H*W is a multiple
+// of 4, four pixels per invocation (the planes read as vec4 / uvec4; partials per group of quads).
 struct EventPairPC {
   uint width;
   uint height;

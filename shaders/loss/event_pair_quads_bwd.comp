@@ -1,0 +1,36 @@
+#version 450
+// Event loss, backward part of one pair per pixel (pool 1) when H*W is a multiple of 4: what
+// loss/event_pair_bwd adds into both frames' gradient images (and the pair's value), four pixels
+// per invocation through vec4 accesses, after loss/event_pair_quads.
+#extension GL_GOOGLE_include_directive : require
+#include "loss/loss_layout.h"
+#include "common/dispatch.glsl"
+layout(local_size_x = kLossGroupSize) in;
+layout(std430, binding = kEventPairBwdBindFrameS) readonly buffer FrameS { vec4 frame_s[]; };
+layout(std430, binding = kEventPairBwdBindFrameJ) readonly buffer FrameJ { vec4 frame_j[]; };
+layout(std430, binding = kEventPairBwdBindScratch) readonly buffer Scratch { vec4 scratch[]; };
+layout(std430, binding = kEventPairBwdBindSums) readonly buffer Sums { float sums[]; };
+layout(std430, binding = kEventPairBwdBindGradS) buffer GradS { vec4 grad_s[]; };
+layout(std430, binding = kEventPairBwdBindGradJ) buffer GradJ { vec4 grad_j[]; };
+layout(std430, binding = kEventPairBwdBindValues) buffer Values { float values[]; };
+layout(push_constant) uniform PC { EventPairPC pc; };
+#include "loss/event_math.glsl"
+
+void main() {
+  uint quads = pc.width * pc.height / 4u, q = evf_linear_invocation(kLossGroupSize);
+  float ed = sums[4u * pc.pair], dd = sums[4u * pc.pair + 1u], ee = sums[4u * pc.pair + 2u];
+  if (q == 0u) {
+    float v = pc.value_scale * event_pair_loss(ed, dd, ee, pc.norm_floor2);
+    values[pc.value_index] = pc.value_accumulate != 0u ? values[pc.value_index] + v : v;
+  }
+  if (q >= quads) return;
+  vec4 g = pc.grad_scale * event_pair_dl_dd(scratch[q], scratch[quads + q], ed, dd, ee, pc.norm_floor2);
+  uint r = q, gr = quads + q, b = 2u * quads + q;
+  vec4 yj = event_luma(frame_j[r], frame_j[gr], frame_j[b]), ys = event_luma(frame_s[r], frame_s[gr], frame_s[b]);
+  grad_j[r] += g * event_log_luma_grad(yj, kEventLuma.r, pc.eps);
+  grad_j[gr] += g * event_log_luma_grad(yj, kEventLuma.g, pc.eps);
+  grad_j[b] += g * event_log_luma_grad(yj, kEventLuma.b, pc.eps);
+  grad_s[r] -= g * event_log_luma_grad(ys, kEventLuma.r, pc.eps);
+  grad_s[gr] -= g * event_log_luma_grad(ys, kEventLuma.g, pc.eps);
+  grad_s[b] -= g * event_log_luma_grad(ys, kEventLuma.b, pc.eps);
+}
