@@ -27,10 +27,6 @@ std::unique_ptr<GpuEvents> branch_events(gpu::Context& ctx, const io::Dataset& d
   return std::unique_ptr<GpuEvents>(static_cast<GpuEvents*>(ev.release()));
 }
 
-void accumulate(gpu::Commands& cmd, const gpu::Buffer& x, const gpu::Buffer& y, uint64_t n, float scale, bool add) {
-  record_accumulate(cmd, n, scale, add, x, y);
-}
-
 }  // namespace
 
 LdiBranch::LdiBranch(gpu::Context& ctx, const io::Dataset& data, const TrainConfig& cfg,
@@ -175,7 +171,7 @@ std::vector<std::vector<float>> LdiBranch::view_frames(gpu::Commands& cmd, uint3
 // L_blur^ldi: each frame's gradient starts as its share of the mean's.
 void LdiBranch::record_blur(gpu::Commands& cmd) {
   const uint32_t F = model_->frames();
-  for (uint32_t i = 0; i < F; ++i) accumulate(cmd, model_->frame(i), mean_, values_, 1.0f / float(F), i > 0);
+  for (uint32_t i = 0; i < F; ++i) record_accumulate(cmd, values_, 1.0f / float(F), i > 0, model_->frame(i), mean_);
   if (srgb_) colour(cmd, shaderio::kColourEncode, mean_, mean_, mean_ls_);
   blur_->record(cmd, srgb_ ? mean_ls_ : mean_, target_crop_, v_mean_ls_, blur_->weight() / float(F), false);
   if (srgb_) colour(cmd, shaderio::kColourEncodeBwd, mean_, v_mean_ls_, v_mean_);
@@ -199,7 +195,7 @@ void LdiBranch::record_joint(gpu::Commands& cmd, const std::vector<const gpu::Bu
   joint_->record(cmd, a, b, ga, gb, joint_->weight(), false);
   for (uint32_t i = 0; i < F; ++i) {
     if (srgb_) colour(cmd, shaderio::kColourEncodeBwd, model_->frame(i), g_ldi_ls_[i], tmp_);
-    accumulate(cmd, srgb_ ? tmp_ : g_ldi_ls_[i], grad_[i], values_, 1.0f, true);
+    record_accumulate(cmd, values_, 1.0f, true, srgb_ ? tmp_ : g_ldi_ls_[i], grad_[i]);
     if (srgb_) continue;
     ldi::record_crop(cmd, *renders[i], W, H, 3, crop_, tmp_);
     colour(cmd, shaderio::kColourDecodeBwd, tmp_, g_gs_ls_[i], g_render_[i]);
