@@ -165,6 +165,7 @@ static int bench_train(ArgParser& p) {
   std::vector<double> total, fwd, loss, bwd, opt, ldi;
   std::map<std::string, std::vector<double>> stages;  // the rasterizer's own stages
   std::vector<std::string> order;
+  const uint64_t submits0 = ctx.submits(), transfers0 = ctx.transfers();
   for (int i = 0; i < steps; ++i) {
     StepStats st = t.step();
     for (auto& [name, ms] : t.rasterizer().stage_ms()) {
@@ -179,15 +180,18 @@ static int bench_train(ArgParser& p) {
     ldi.push_back(st.ldi_ms);
   }
   const double m = median(total);
+  const double submits = double(ctx.submits() - submits0) / steps,
+               transfers = double(ctx.transfers() - transfers0) / steps;
   const double host_mib = peak_host_mib(), device_mib = double(ctx.peak_device_bytes()) / (1 << 20);
   if (json) {
     std::printf(
         "{\"bench\": \"train\", \"method\": \"%s\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": "
-        "%u, \"steps\": %d, \"peak_host_mib\": %.1f, \"peak_device_mib\": %.1f, "
-        "\"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, \"rasterize_backward\": %.2f, "
+        "%u, \"steps\": %d, \"peak_host_mib\": %.1f, \"peak_device_mib\": %.1f, \"submits_per_step\": %.1f, "
+        "\"transfers_per_step\": %.1f, \"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, "
+        "\"rasterize_backward\": %.2f, "
         "\"optimizer\": %.2f, \"ldi\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
-        method.c_str(), ctx.caps().name.c_str(), W, H, N, steps, host_mib, device_mib, 1000.0 / m, median(fwd),
-        median(loss), median(bwd), median(opt), median(ldi), m);
+        method.c_str(), ctx.caps().name.c_str(), W, H, N, steps, host_mib, device_mib, submits, transfers, 1000.0 / m,
+        median(fwd), median(loss), median(bwd), median(opt), median(ldi), m);
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
     std::printf("}}\n");
@@ -203,6 +207,7 @@ static int bench_train(ArgParser& p) {
     std::printf(" ms\n");
     std::printf("  peak memory: host %.1f MiB (the process's resident set), device %.1f MiB (buffers)\n", host_mib,
                 device_mib);
+    std::printf("  round trips per step: %.1f submits, %.1f host-device copies\n", submits, transfers);
   }
   return 0;
 }

@@ -18,7 +18,8 @@ cp "$build/evflow" "$stage/$build/"
 [ -x "$build/tests/evflow_tests" ] && cp "$build/tests/evflow_tests" "$stage/$build/tests/"
 # The C runtime (glibc, libstdc++, libgcc) is the host's own: newer there than here is fine.
 runtime='^(linux-vdso|ld-linux|libc|libm|libdl|libpthread|librt|libresolv|libstdc\+\+|libgcc_s)\.'
-for bin in "$stage/$build/evflow" "$stage/$build"/tests/*; do
+for bin in "$stage/$build/evflow" "$stage/$build/tests/evflow_tests"; do
+  [ -f "$bin" ] || continue  # a build of the CLI alone has no test binary
   ldd "$bin" | awk '$3 ~ /^\// {print $1, $3}'
 done | sort -u | while read -r name path; do
   [[ "$name" =~ $runtime ]] || cp -L "$path" "$stage/.portable/lib/$name"

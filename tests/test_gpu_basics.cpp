@@ -1,8 +1,11 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+
 #include "common/common_layout.h"
 #include "gpu/buffer.h"
 #include "gpu/commands.h"
+#include "gpu/staging.h"
 #include "gpu_fixture.h"
 
 using namespace evflow;
@@ -156,4 +159,38 @@ TEST_CASE("gpu: commands recorded on a buffer that is then grown are refused at 
   cmd.submit();
   REQUIRE(b.read<uint32_t>(64)[63] == 70u);
   test::require_no_validation_messages();
+}
+
+TEST_CASE("gpu: a device without host-visible memory copies through one staging buffer, in pieces past its cap",
+          "[gpu]") {
+  gpu::ContextOptions o = gpu::ContextOptions::from_env();
+  o.validation = true;
+  o.sync_validation = true;
+  o.poison = true;
+  o.staged_transfers = true;  // as a discrete GPU: buffers unmapped, every copy staged
+  gpu::Context ctx(o);
+  REQUIRE_FALSE(ctx.caps().unified_memory);
+  // Small copies: one submit each, through a staging buffer made once and kept.
+  gpu::Buffer small(ctx, 4096, "small");
+  std::vector<uint32_t> v(1024);
+  for (uint32_t i = 0; i < v.size(); ++i) v[i] = i * 2654435761u;
+  const uint64_t submits0 = ctx.submits(), transfers0 = ctx.transfers();
+  small.write(v);
+  REQUIRE(small.read<uint32_t>(v.size()) == v);
+  CHECK(ctx.submits() - submits0 == 2);
+  CHECK(ctx.transfers() - transfers0 == 2);
+  const uint64_t cap = ctx.staging().capacity();
+  REQUIRE(cap >= 4096);
+  // A copy larger than the staging cap goes in pieces, at an offset, and leaves the rest intact.
+  const uint64_t words = gpu::Staging::kMaxBytes / 4 + 1000, offset_words = 7;
+  gpu::Buffer big(ctx, (words + offset_words + 1) * 4, "big");
+  std::vector<uint32_t> w(words);
+  for (uint64_t i = 0; i < words; ++i) w[i] = uint32_t(i ^ 0x5bd1e995u);
+  big.upload(w.data(), words * 4, offset_words * 4);
+  CHECK(ctx.staging().capacity() == gpu::Staging::kMaxBytes);
+  const std::vector<uint32_t> back = big.read<uint32_t>(words + offset_words + 1);
+  CHECK(std::equal(w.begin(), w.end(), back.begin() + offset_words));
+  CHECK(back[0] == 0xFFFFFFFFu);  // poisoned in tests, untouched by the copy
+  CHECK(back[words + offset_words] == 0xFFFFFFFFu);
+  REQUIRE(ctx.take_validation_messages().empty());
 }

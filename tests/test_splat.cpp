@@ -371,7 +371,12 @@ TEST_CASE("splat batch: an exposure's frames rendered and differentiated in one 
   Rasterizer batch(ctx);  // fresh: its sort's scratch starts small
   std::vector<RenderState> states;
   for (size_t i = 0; i < cams.size(); ++i) states.emplace_back(ctx);
+  const uint64_t transfers0 = ctx.transfers(), submits0 = ctx.submits();
   batch.forward(params, cams, s.settings, {&states[0], &states[1], &states[2]});
+  // Two submits and one download (the three intersection counts): the host's round trips,
+  // whatever the number of frames.
+  CHECK(ctx.transfers() - transfers0 == 1);
+  CHECK(ctx.submits() - submits0 == 2);
   for (size_t i = 0; i < cams.size(); ++i) {
     INFO("frame " << i);
     REQUIRE(states[i].num_intersections() == isects[i]);

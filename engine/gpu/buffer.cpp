@@ -1,5 +1,7 @@
 #include "gpu/buffer.h"
 
+#include "gpu/staging.h"
+
 #include <cstring>
 #include <utility>
 
@@ -93,6 +95,7 @@ void Buffer::upload(const void* data, uint64_t bytes, uint64_t offset) {
   if (offset + bytes > size_)
     throw Error("upload of " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " overflows buffer '" +
                 name_ + "'");
+  ctx_->count_transfer();
   if (mapped_)
     std::memcpy(static_cast<char*>(mapped_) + offset, data, bytes);
   else
@@ -103,63 +106,17 @@ void Buffer::download(void* data, uint64_t bytes, uint64_t offset) const {
   if (offset + bytes > size_)
     throw Error("download of " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " overflows buffer '" +
                 name_ + "'");
+  ctx_->count_transfer();
   if (mapped_)
     std::memcpy(data, static_cast<const char*>(mapped_) + offset, bytes);
   else
     staged_copy(false, data, bytes, offset);
 }
 
-// For devices whose device-local memory is not host-visible: a host-visible staging buffer and
-// one blocking copy. Only used off the hot path (uploads of parameters, readback of results).
+// For devices whose device-local memory is not host-visible: through the context's staging
+// buffer, one submit and one wait per copy.
 void Buffer::staged_copy(bool to_device, void* host, uint64_t bytes, uint64_t offset) const {
-  VkDevice dev = ctx_->device();
-  VkBuffer staging;
-  VkDeviceMemory mem;
-  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
-  bci.size = std::max<uint64_t>(bytes, 16);
-  bci.usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-  EVF_VK(vkCreateBuffer(dev, &bci, nullptr, &staging));
-  VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(dev, staging, &req);
-  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  mai.allocationSize = req.size;
-  mai.memoryTypeIndex =
-      ctx_->memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
-  EVF_VK(vkAllocateMemory(dev, &mai, nullptr, &mem));
-  EVF_VK(vkBindBufferMemory(dev, staging, mem, 0));
-  void* p;
-  EVF_VK(vkMapMemory(dev, mem, 0, VK_WHOLE_SIZE, 0, &p));
-  if (to_device) std::memcpy(p, host, bytes);
-  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  cai.commandPool = ctx_->command_pool();
-  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-  cai.commandBufferCount = 1;
-  VkCommandBuffer cb;
-  EVF_VK(vkAllocateCommandBuffers(dev, &cai, &cb));
-  VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  vkBeginCommandBuffer(cb, &bi);
-  VkBufferCopy region{};
-  region.size = bytes;
-  if (to_device) {
-    region.dstOffset = offset;
-    vkCmdCopyBuffer(cb, staging, buffer_, 1, &region);
-  } else {
-    region.srcOffset = offset;
-    vkCmdCopyBuffer(cb, buffer_, staging, 1, &region);
-  }
-  vkEndCommandBuffer(cb);
-  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  si.commandBufferCount = 1;
-  si.pCommandBuffers = &cb;
-  EVF_VK(vkQueueSubmit(ctx_->queue(), 1, &si, VK_NULL_HANDLE));
-  EVF_VK(vkQueueWaitIdle(ctx_->queue()));
-  if (!to_device) std::memcpy(host, p, bytes);
-  vkFreeCommandBuffers(dev, ctx_->command_pool(), 1, &cb);
-  vkUnmapMemory(dev, mem);
-  vkDestroyBuffer(dev, staging, nullptr);
-  vkFreeMemory(dev, mem, nullptr);
+  ctx_->staging().copy(buffer_, to_device, host, bytes, offset);
 }
 
 }  // namespace evflow::gpu

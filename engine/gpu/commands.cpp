@@ -4,14 +4,7 @@
 
 namespace evflow::gpu {
 
-Commands::Commands(Context& ctx) : ctx_(ctx) {
-  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  cai.commandPool = ctx.command_pool();
-  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-  cai.commandBufferCount = 1;
-  EVF_VK(vkAllocateCommandBuffers(ctx.device(), &cai, &cb_));
-  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  EVF_VK(vkCreateFence(ctx.device(), &fci, nullptr, &fence_));
+Commands::Commands(Context& ctx) : ctx_(ctx), cb_(ctx.allocate_command_buffer()), fence_(ctx.create_fence()) {
   if (ctx.caps().timestamps) {
     VkQueryPoolCreateInfo qci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     qci.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -217,12 +210,7 @@ void Commands::submit() {
   check_used();
   EVF_VK(vkEndCommandBuffer(cb_));
   recording_ = false;
-  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  si.commandBufferCount = 1;
-  si.pCommandBuffers = &cb_;
-  EVF_VK(vkQueueSubmit(ctx_.queue(), 1, &si, fence_));
-  EVF_VK(vkWaitForFences(ctx_.device(), 1, &fence_, VK_TRUE, UINT64_MAX));
-  EVF_VK(vkResetFences(ctx_.device(), 1, &fence_));
+  ctx_.submit_and_wait(cb_, fence_);
   stage_ms_.clear();
   if (queries_ && !marks_.empty()) {
     std::vector<uint64_t> ts(marks_.size() + 1);

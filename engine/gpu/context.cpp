@@ -1,5 +1,7 @@
 #include "gpu/context.h"
 
+#include "gpu/staging.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -37,6 +39,7 @@ ContextOptions ContextOptions::from_env() {
       throw Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + o.raster_kernel + "'");
   }
   if (const char* e = std::getenv("EVF_BINDING_LIMIT")) o.binding_limit = std::strtoull(e, nullptr, 10);
+  o.staged_transfers = env_flag("EVF_STAGED");
   return o;
 }
 
@@ -283,6 +286,7 @@ void Context::query_caps(const VkPhysicalDeviceProperties& props) {
     if ((f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT))
       caps_.unified_memory = false;
   }
+  if (opts_.staged_transfers) caps_.unified_memory = false;
 }
 
 // The device with only the features used, its queue and command pool.
@@ -323,6 +327,7 @@ void Context::create_device() {
 Context::~Context() {
   if (device_) vkDeviceWaitIdle(device_);
   kernels_.clear();
+  staging_.reset();
   if (pool_) vkDestroyCommandPool(device_, pool_, nullptr);
   if (device_) vkDestroyDevice(device_, nullptr);
   if (messenger_) {
@@ -331,6 +336,39 @@ Context::~Context() {
     if (fn) fn(instance_, messenger_, nullptr);
   }
   if (instance_) vkDestroyInstance(instance_, nullptr);
+}
+
+VkCommandBuffer Context::allocate_command_buffer() const {
+  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  cai.commandPool = pool_;
+  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  cai.commandBufferCount = 1;
+  VkCommandBuffer cb;
+  EVF_VK(vkAllocateCommandBuffers(device_, &cai, &cb));
+  return cb;
+}
+
+VkFence Context::create_fence() const {
+  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VkFence fence;
+  EVF_VK(vkCreateFence(device_, &fci, nullptr, &fence));
+  return fence;
+}
+
+void Context::submit_and_wait(VkCommandBuffer cb, VkFence fence) {
+  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cb;
+  count_submit();
+  EVF_VK(vkQueueSubmit(queue_, 1, &si, fence));
+  EVF_VK(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX));
+  EVF_VK(vkResetFences(device_, 1, &fence));
+}
+
+Staging& Context::staging() {
+  std::lock_guard<std::mutex> lock(staging_mutex_);
+  if (!staging_) staging_ = std::make_unique<Staging>(*this);
+  return *staging_;
 }
 
 bool Context::can_present(VkSurfaceKHR surface) const {

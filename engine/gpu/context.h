@@ -16,6 +16,8 @@
 
 namespace evflow::gpu {
 
+class Staging;
+
 struct Error : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -45,6 +47,9 @@ struct ContextOptions {
   // A storage binding limit below the device's (bytes; 0: the device's own): every size check
   // then answers as a device with that limit would, so the refusals can be tried on any device.
   uint64_t binding_limit = 0;
+  // Treat the device as one without host-visible device memory (a discrete GPU): buffers are not
+  // mapped and every upload and download goes through the staging copy, as there.
+  bool staged_transfers = false;
   // Presentation (opt-in, for a window): enables these instance extensions (the windowing
   // system's surface extensions, e.g. from glfwGetRequiredInstanceExtensions) plus
   // VK_KHR_surface, and VK_KHR_swapchain on the device; devices without it are skipped.
@@ -53,7 +58,7 @@ struct ContextOptions {
   // Defaults that read the environment, once: EVF_DEVICE, EVF_VALIDATION=1, EVF_POISON=1,
   // EVF_FORCE_CAS=1, EVF_VALIDATION_PRINT=1, EVF_VALIDATION_SYNC=1, EVF_VALIDATION_GPU=1,
   // EVF_SORT_ITEMS=n,
-  // EVF_SUBGROUP_REDUCE=0|1, EVF_RASTER_KERNEL=pixel|block, EVF_BINDING_LIMIT=bytes.
+  // EVF_SUBGROUP_REDUCE=0|1, EVF_RASTER_KERNEL=pixel|block, EVF_BINDING_LIMIT=bytes, EVF_STAGED=1.
   static ContextOptions from_env();
 };
 
@@ -131,6 +136,22 @@ class Context {
   void release_allocation(uint64_t serial);
   bool allocation_live(uint64_t serial) const;
 
+  // A primary command buffer from the context's pool, and an unsignalled fence (the caller frees
+  // both). submit_and_wait submits `cb`, waits on `fence`, resets it and counts the submit.
+  VkCommandBuffer allocate_command_buffer() const;
+  VkFence create_fence() const;
+  void submit_and_wait(VkCommandBuffer cb, VkFence fence);
+
+  // The staging copy of a device without host-visible device memory (made on first use).
+  Staging& staging();
+
+  // Queue submits (commands and staging copies) and host-device copies so far: each is a round
+  // trip from the host to the device and back, the cost a GPU pays per step beyond its kernels.
+  void count_submit() { submits_.fetch_add(1, std::memory_order_relaxed); }
+  void count_transfer() { transfers_.fetch_add(1, std::memory_order_relaxed); }
+  uint64_t submits() const { return submits_.load(); }
+  uint64_t transfers() const { return transfers_.load(); }
+
   // Throws a clear error when a binding of `bytes` would exceed the device's storage range.
   void check_binding_size(uint64_t bytes, const std::string& what) const;
 
@@ -157,6 +178,9 @@ class Context {
   std::vector<std::string> messages_;
   size_t message_total_ = 0;
   std::atomic<uint64_t> device_bytes_{0}, peak_device_bytes_{0};
+  std::atomic<uint64_t> submits_{0}, transfers_{0};
+  std::mutex staging_mutex_;
+  std::unique_ptr<Staging> staging_;
   mutable std::mutex live_mutex_;
   std::unordered_set<uint64_t> live_allocations_;
   uint64_t next_serial_ = 1;

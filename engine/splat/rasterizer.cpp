@@ -124,6 +124,7 @@ Rasterizer::Rasterizer(gpu::Context& ctx, const RasterKernels& kernels)
       pose_partial_(ctx, 16, "pose_partial"),
       pose_(ctx, 32, "pose_gradient"),
       poses_(ctx, 32, "pose_gradients"),
+      counts_(ctx, 16, "isect_counts"),
       subgroup_reduce_(kernels.subgroup_reduce),
       block_suffix_(kernels.block ? "_block" : "") {
   for (const char* q : {"mean_conic_xy", "conic_z_opacity_rg", "blue"})
@@ -237,10 +238,9 @@ void Rasterizer::record_project(const GaussianBuffers& params, const Camera& cam
   cmd_.mark("scan");
 }
 
-// The intersection count the prefix sum left, read back to size the intersection buffers.
-void Rasterizer::read_count(RenderState& st) const {
-  const size_t n = st.count_;
-  const uint32_t m = st.num_isects_ = n ? st.isect_offset_.read_one<uint32_t>(n) : 0;
+// The intersection count the prefix sum left (read back) sizes the intersection buffers.
+void Rasterizer::set_count(RenderState& st, uint32_t isects) const {
+  const uint32_t m = st.num_isects_ = st.count_ ? isects : 0;
   st.project_pc_.num_isects = m;
   st.raster_pc_.num_isects = m;
 
@@ -301,12 +301,18 @@ void Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const
 void Rasterizer::forward(const GaussianBuffers& params, const std::vector<Camera>& cams, const RenderSettings& settings,
                          const std::vector<RenderState*>& states) {
   if (cams.size() != states.size()) throw gpu::Error("Rasterizer::forward: one state per camera expected");
-  for (size_t i = 0; i < cams.size(); ++i) record_project(params, cams[i], settings, *states[i]);
+  // Each render's count is gathered into counts_, so that one download reads them all.
+  counts_.ensure(cams.size() * 4);
+  for (size_t i = 0; i < cams.size(); ++i) {
+    record_project(params, cams[i], settings, *states[i]);
+    if (params.count) cmd_.copy(states[i]->isect_offset_, counts_, 4, uint64_t(params.count) * 4, i * 4);
+  }
   cmd_.submit();
   stage_ms_ = cmd_.stage_ms();
-  for (RenderState* st : states) {
-    read_count(*st);
-    sort_.reserve(st->num_isects_);  // the sort's scratch at its largest before any is recorded
+  const std::vector<uint32_t> counts = params.count ? counts_.read<uint32_t>(cams.size()) : std::vector<uint32_t>();
+  for (size_t i = 0; i < states.size(); ++i) {
+    set_count(*states[i], params.count ? counts[i] : 0);
+    sort_.reserve(states[i]->num_isects_);  // the sort's scratch at its largest before any is recorded
   }
   for (RenderState* st : states) record_raster(*st);
   cmd_.submit();

@@ -112,7 +112,7 @@ class Rasterizer {
   void ensure_forward_buffers(RenderState& st) const;
   void record_project(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings,
                       RenderState& st);
-  void read_count(RenderState& st) const;
+  void set_count(RenderState& st, uint32_t isects) const;
   void record_raster(RenderState& st);
   void check_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
                       const gpu::Buffer& v_alpha, const GaussianBuffers& grads) const;
@@ -130,6 +130,7 @@ class Rasterizer {
   std::vector<gpu::Buffer> isect_grad_;
   gpu::Buffer grad2d_norm_, pose_partial_, pose_;
   gpu::Buffer poses_;             // a batched backward's pose gradients, one per render
+  gpu::Buffer counts_;            // a batch's intersection counts, one per render: one download
   bool subgroup_reduce_ = false;  // backward: subgroupAdd before the shared add
   std::string block_suffix_;      // "" (one pixel per invocation) or "_block" (RasterKernels::block)
   std::vector<std::pair<std::string, double>> stage_ms_;
