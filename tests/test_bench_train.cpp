@@ -1,6 +1,7 @@
 // evflow bench train: the step's split and the run's peak memory as JSON.
 #include <catch2/catch.hpp>
 
+#include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -24,4 +25,22 @@ TEST_CASE("bench train: JSON with it/s, the split of a step and the peak host an
   CHECK(device < 512);
   // On a CPU driver the buffers live in the process's memory.
   if (b["device"].get<std::string>().find("llvmpipe") != std::string::npos) CHECK(host > device);
+}
+
+// The host's round trips per step, as a GPU pays them (EVF_STAGED=1: every copy staged): the
+// batch's intersection counts come back in one download, every loss term's value in another.
+TEST_CASE("bench train: a blur+events step's round trips do not grow with its frames or terms", "[cli]") {
+  const fs::path dir = fresh_dir("evflow_bench_round_trips");
+  std::string out;
+  REQUIRE(run_evflow(dir, "simulate --scene gallery --out sim --width 32 --height 24 --blur-px 3 --train-views 2",
+                     out) == 0);
+  setenv("EVF_STAGED", "1", 1);
+  const int rc = run_evflow(
+      dir, "bench train --data sim --method blur+events --gaussians 500 --steps 2 --json event_flip_until=0", out);
+  unsetenv("EVF_STAGED");
+  REQUIRE(rc == 0);
+  const nlohmann::json b = nlohmann::json::parse(out.substr(out.find('{')));
+  // The counts, the loss values and the trajectory's pose gradients: one download each.
+  CHECK(b["transfers_per_step"].get<double>() == 3.0);
+  CHECK(b["submits_per_step"].get<double>() <= 12.0);
 }

@@ -3,7 +3,8 @@
 //   exposure terms  see every virtual frame of the exposure (the event loss; flow and
 //                   residual terms plug in here);
 //   branch terms    recorded by a branch with its own parameters (LdiBranch), only read here.
-// Values are read back in the order the terms were added (the order of curve.csv's columns).
+// Values are read back in the order the terms were added (the order of curve.csv's columns), from
+// one buffer that every term added writes its values into: one download per step for all.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -45,6 +46,10 @@ class LossTerms {
   std::vector<std::unique_ptr<ImageLossTerm>> image_;
   std::vector<std::unique_ptr<ExposureLossTerm>> exposure_;
   std::vector<LossTerm*> all_;
+  // Gives `term` its slot in values_ (grown as terms are added, before any is recorded).
+  void share_values(LossTerm& term);
+  std::unique_ptr<gpu::Buffer> values_;
+  uint32_t value_floats_ = 0;  // the slots given so far
   enum class Kind { Image, Exposure, Branch, ScheduledBranch };
   std::vector<Kind> kind_;  // per entry of all_
 };
