@@ -7,8 +7,7 @@
 
 namespace evflow::gpu {
 
-Staging::Staging(Context& ctx)
-    : ctx_(ctx), cb_(ctx.allocate_command_buffer()), fence_(ctx.create_fence()) {}
+Staging::Staging(Context& ctx) : ctx_(ctx), cb_(ctx.allocate_command_buffer()), fence_(ctx.create_fence()) {}
 
 Staging::~Staging() {
   release_buffer();
