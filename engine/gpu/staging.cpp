@@ -69,11 +69,13 @@ void Staging::copy_piece(VkBuffer buffer, bool to_device, char* host, uint64_t b
   EVF_VK(vkBeginCommandBuffer(cb_, &bi));
   VkBufferCopy region{};
   region.size = bytes;
-  (to_device ? region.dstOffset : region.srcOffset) = offset;
-  if (to_device)
+  if (to_device) {
+    region.dstOffset = offset;
     vkCmdCopyBuffer(cb_, buffer_, buffer, 1, &region);
-  else
+  } else {
+    region.srcOffset = offset;
     vkCmdCopyBuffer(cb_, buffer, buffer_, 1, &region);
+  }
   EVF_VK(vkEndCommandBuffer(cb_));
   ctx_.submit_and_wait(cb_, fence_);
   EVF_VK(vkResetCommandBuffer(cb_, 0));

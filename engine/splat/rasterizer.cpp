@@ -240,7 +240,7 @@ void Rasterizer::record_project(const GaussianBuffers& params, const Camera& cam
 
 // The intersection count the prefix sum left (read back) sizes the intersection buffers.
 void Rasterizer::set_count(RenderState& st, uint32_t isects) const {
-  const uint32_t m = st.num_isects_ = st.count_ ? isects : 0;
+  const uint32_t m = st.num_isects_ = isects;
   st.project_pc_.num_isects = m;
   st.raster_pc_.num_isects = m;
 
@@ -309,9 +309,10 @@ void Rasterizer::forward(const GaussianBuffers& params, const std::vector<Camera
   }
   cmd_.submit();
   stage_ms_ = cmd_.stage_ms();
-  const std::vector<uint32_t> counts = params.count ? counts_.read<uint32_t>(cams.size()) : std::vector<uint32_t>();
+  const std::vector<uint32_t> counts =
+      params.count ? counts_.read<uint32_t>(cams.size()) : std::vector<uint32_t>(cams.size(), 0);
   for (size_t i = 0; i < states.size(); ++i) {
-    set_count(*states[i], params.count ? counts[i] : 0);
+    set_count(*states[i], counts[i]);
     sort_.reserve(states[i]->num_isects_);  // the sort's scratch at its largest before any is recorded
   }
   for (RenderState* st : states) record_raster(*st);
