@@ -34,6 +34,9 @@ shared vec4 batch_a[EVF_BATCH];  // mean.xy, conic.xy
 shared vec4 batch_b[EVF_BATCH];  // conic.z, opacity, red, green
 shared vec2 batch_c[EVF_BATCH];  // blue, depth
 shared uint block_bits[EVF_BLOCKS][EVF_BATCH / 32];
+#if EVF_BATCH > 32 * EVF_THREADS || EVF_BLOCKS > 32
+#error a batch is loaded one 32-entry word per invocation, and a Gaussian's blocks are one uint
+#endif
 
 // Half extents of the support {d : d^T conic d <= q_max}: its bounding box is
 // sqrt(q_max * diag(inverse(conic))). Padded so that float rounding never drops a pixel whose
@@ -43,34 +46,75 @@ vec2 support_half_extent(vec3 conic, float q_max) {
   return sqrt(max(q_max, 0.0) * vec2(conic.z, conic.x) / det) * (1.0 + 4.0 * kBoxPad) + 0.01;
 }
 
-// Loads Gaussian `isect` of the tile as batch entry `local` and marks the blocks whose pixel
-// centres its bounding box covers. `tile_origin`: the tile's first pixel.
-void load_batch_entry(uint local, uint isect, vec2 tile_origin) {
+// Columns [c0, c1) of the blocks in a row of blocks that the support {d : d^T conic d <= q} can
+// reach, for pixel centres y - mean.y in [dy0, dy1]. For a fixed dy the support spans
+// dx in -conic.y dy / conic.x -+ sqrt(q conic.x - det dy^2) / conic.x; its right end is concave in
+// dy and peaks at dx = ex (the rightmost point, dy = -conic.y ex / conic.z), its left end convex
+// with the trough -ex at dy = conic.y ex / conic.z, so over the band each end is that extreme or
+// the value at the band's nearer edge. `mx`: the mean's x in tile coordinates; `ex`, `ey`: the
+// support's half extents for q. Widened like the box against float rounding.
+uvec2 support_cols(float mx, vec3 conic, float q, float det, float ex, float ey, float dy0, float dy1) {
+  float lo_dy = max(dy0, -ey), hi_dy = min(dy1, ey);
+  if (lo_dy > hi_dy) return uvec2(0u);
+  vec2 dy = vec2(lo_dy, hi_dy);
+  vec2 centre = -conic.y * dy / conic.x;
+  vec2 half_w = sqrt(max(q * conic.x - det * dy * dy, vec2(0.0))) / conic.x;
+  float peak = conic.y * ex / conic.z;  // dy of the leftmost point; the rightmost is at -peak
+  float right = (-peak >= lo_dy && -peak <= hi_dy) ? ex : max(centre.x + half_w.x, centre.y + half_w.y);
+  float left = (peak >= lo_dy && peak <= hi_dy) ? -ex : min(centre.x - half_w.x, centre.y - half_w.y);
+  float pad = 4.0 * kBoxPad * ex + 0.01;
+  float c0 = clamp(ceil((mx + left - pad - 3.5) / 4.0), 0.0, 4.0);
+  float c1 = clamp(floor((mx + right + pad - 0.5) / 4.0) + 1.0, 0.0, 4.0);
+  return uvec2(c0, max(c0, c1));
+}
+
+// The blocks (bit r * 4 + c: row r, column c of blocks) that hold a pixel centre of the support
+// of a Gaussian with mean `mean` (tile coordinates), conic and q_max: rows of blocks from the
+// support's bounding box, the columns of each row from the support over that row (support_cols).
+uint support_blocks(vec2 mean, vec3 conic, float q_max) {
+  vec2 ext = support_half_extent(conic, q_max);
+  // Block row r holds pixel centres y in [R r + 0.5, R r + R - 0.5], R = EVF_ROWS.
+  float rows = float(EVF_ROWS), nrows = float(EVF_BLOCKS / 4);
+  uint r0 = uint(clamp(ceil((mean.y - ext.y - (rows - 0.5)) / rows), 0.0, nrows));
+  uint r1 = uint(clamp(floor((mean.y + ext.y - 0.5) / rows) + 1.0, 0.0, nrows));
+  float q = max(q_max, 0.0) * (1.0 + 8.0 * kBoxPad);
+  float det = conic.x * conic.z - conic.y * conic.y;
+  float ex = sqrt(q * conic.z / det), ey = sqrt(q * conic.x / det);
+  uint mask = 0u;
+  for (uint r = r0; r < r1; ++r) {
+    float y0 = rows * float(r) + 0.5 - mean.y;
+    uvec2 c = support_cols(mean.x, conic, q, det, ex, ey, y0 - 0.01, y0 + rows - 1.0 + 0.01);
+    mask |= (((1u << c.y) - 1u) & ~((1u << c.x) - 1u)) << (4u * r);
+  }
+  return mask;
+}
+
+// Loads Gaussian `isect` of the tile as batch entry `local`; returns its blocks (support_blocks).
+// `tile_origin`: the tile's first pixel.
+uint load_batch_entry(uint local, uint isect, vec2 tile_origin) {
   uint g = gaussian_id_from_slot[slot_from_isect[isect]];
   vec4 a = proj_mean_conic[g], b = proj_misc[g];
-  vec3 conic = vec3(a.zw, b.x);
-  vec2 ext = support_half_extent(conic, b.w);
   vec3 col = proj_color[g].rgb;
   batch_a[local] = a;
   batch_b[local] = vec4(b.xy, col.rg);
   batch_c[local] = vec2(col.b, b.z);
-  // Block column c holds pixel centres x in [4c + 0.5, 4c + 3.5] (tile coordinates); rows alike.
-  vec2 m = a.xy - tile_origin, bsize = vec2(4.0, float(EVF_ROWS));
-  vec2 nblk = vec2(4.0, float(EVF_BLOCKS / 4));
-  vec2 lo = clamp(ceil((m - ext - (bsize - 0.5)) / bsize), vec2(0.0), nblk);
-  vec2 hi = clamp(floor((m + ext - 0.5) / bsize), vec2(-1.0), nblk - 1.0);
-  uint c0 = uint(lo.x), c1 = uint(hi.x + 1.0), r0 = uint(lo.y), r1 = uint(hi.y + 1.0);
-  if (c0 >= c1) return;
-  uint cols = ((1u << c1) - 1u) & ~((1u << c0) - 1u);
-  uint bit = 1u << (local & 31u);
-  for (uint r = r0; r < r1; ++r) {
-    uint m4 = cols;
-    while (m4 != 0u) {
-      uint c = uint(findLSB(m4));
-      m4 &= m4 - 1u;
-      atomicOr(block_bits[r * 4u + c][local >> 5], bit);
-    }
+  return support_blocks(a.xy - tile_origin, vec3(a.zw, b.x), b.w);
+}
+
+// Loads the batch's entries [32 w, min(32 w + 32, n)), the tile's Gaussians from `start` on, and
+// writes word w of every block's bit set. One invocation builds a whole word in registers and
+// stores it: no shared atomics (each is a loop over the SIMD lanes on lavapipe), EVF_BLOCKS stores
+// per 32 entries instead of one atomic per entry and block.
+void load_batch_word(uint w, uint start, uint n, vec2 tile_origin) {
+  uvec4 q[EVF_BLOCKS / 4];  // q[i][k]: block 4 i + k
+  for (uint i = 0u; i < EVF_BLOCKS / 4; ++i) q[i] = uvec4(0u);
+  uint e_end = min(32u, n - 32u * w);
+  for (uint e = 0u; e < e_end; ++e) {
+    uvec4 m = uvec4(load_batch_entry(32u * w + e, start + 32u * w + e, tile_origin));
+    for (uint i = 0u; i < EVF_BLOCKS / 4; ++i) q[i] |= ((m >> (4u * i + uvec4(0u, 1u, 2u, 3u))) & 1u) << e;
   }
+  for (uint i = 0u; i < EVF_BLOCKS / 4; ++i)
+    for (uint k = 0u; k < 4u; ++k) block_bits[4u * i + k][w] = q[i][k];
 }
 #endif
 

@@ -31,10 +31,11 @@
 #define EVF_BLOCKS EVF_THREADS
 layout(local_size_x = EVF_THREADS) in;
 #define EVF_BLOCK_BATCH 1
-// Batches of 64: the tile stops loading Gaussians sooner once all its blocks are opaque (batches
-// of 32, 64, 128, 256 measured: 64 and 32 best, 256 about 30% slower on bench raster 100k).
+// Batches of 256, loaded a 32-entry word per invocation (raster_io.glsl): 64, 128, 256 and 512
+// measured on bench raster 100k, 256 best. (With one shared atomic per entry and block, the
+// loading cost more and 64 was best: a tile stops loading sooner once all its blocks are opaque.)
 #ifndef EVF_BATCH
-#define EVF_BATCH 64
+#define EVF_BATCH 256
 #endif
 #include "splat/raster_io.glsl"
 layout(std430, binding = kRasterizeBindOutRgb) writeonly buffer OutRgb { float out_rgb[]; };        // [3][H][W]
@@ -118,10 +119,9 @@ void main() {
     uint n = min(uint(EVF_BATCH), range.y - start);
     barrier();
     if (lid == 0) done_count = 0;
-    for (uint w = 0; w < EVF_BATCH / 32; ++w) block_bits[lid][w] = 0u;
     bool done = true EVF_RUNS(EVF_DONE);
     barrier();
-    for (uint k = lid; k < n; k += EVF_THREADS) load_batch_entry(k, start + k, tile_origin);
+    if (32u * lid < n) load_batch_word(lid, start, n, tile_origin);
     if (done) atomicAdd(done_count, 1u);
     barrier();
     if (done_count == EVF_THREADS) break;

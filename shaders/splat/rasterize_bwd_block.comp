@@ -155,13 +155,12 @@ void main() {
     uint start = range.x + (nb - 1u) * EVF_BATCH;
     uint n = min(uint(EVF_BATCH), range.y - start);
     barrier();
-    for (uint w = 0; w < EVF_BATCH / 32; ++w) block_bits[lid][w] = 0u;
     // Entries at or past visit_end are neither loaded nor visited (their slots get zeros).
     uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
     for (uint k = lid; k < n_load; k += EVF_THREADS)
       for (uint q = 0; q < 3; ++q) acc_zero(k * 3 + q);
-    barrier();
-    for (uint k = lid; k < n_load; k += EVF_THREADS) load_batch_entry(k, start + k, tile_origin);
+    // Words at or past (n_load + 31) / 32 are never read: n_visit <= n_load.
+    if (32u * lid < n_load) load_batch_word(lid, start, n_load, tile_origin);
     barrier();
     // This block's Gaussians below its last blended one, back to front, from its bit set: one
     // loop over the batch (see rasterize_block.comp).
