@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -16,11 +18,27 @@
 
 namespace evflow::test {
 
-// An empty folder <tmp>/<name>_<pid> (removed first if it exists).
+// The folders fresh_dir made in this process, removed when the test program exits normally
+// (a crashed run leaves them for a look).
+inline std::vector<std::filesystem::path>& fresh_dirs() {
+  static struct Registry {
+    std::vector<std::filesystem::path> dirs;
+    ~Registry() {
+      for (const auto& d : dirs) {
+        std::error_code ec;
+        std::filesystem::remove_all(d, ec);
+      }
+    }
+  } registry;
+  return registry.dirs;
+}
+
+// An empty folder <tmp>/<name>_<pid> (removed first if it exists; removed again at exit).
 inline std::filesystem::path fresh_dir(const std::string& name) {
   const std::filesystem::path d = std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(d);
   std::filesystem::create_directories(d);
+  fresh_dirs().push_back(d);
   return d;
 }
 
