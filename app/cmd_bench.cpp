@@ -125,6 +125,21 @@ static double peak_host_mib() {
   return double(u.ru_maxrss) / 1024.0;  // KiB on Linux
 }
 
+// The state a train bench starts from with --splats: the splats of a run, .ply or .glb (a run's
+// learned exposure trajectories too, in blur mode), at step 0 with a fresh optimizer.
+static Checkpoint bench_start(const std::string& splats, const TrainConfig& cfg) {
+  Checkpoint start;
+  if (std::filesystem::is_directory(splats)) {
+    start = RunFolder::open(splats).checkpoint;
+    start.step = 0;
+    start.optimizer.clear();
+    if (cfg.mode != TrainMode::Blur) start.trajectories.clear();
+  } else {
+    start.cloud = load_splats(splats);
+  }
+  return start;
+}
+
 // Training steps (sharp views rendered from a synthetic ground-truth cloud, or a dataset folder
 // with any method): it/s and the split between rasterization, loss terms and optimizer.
 static int bench_train(ArgParser& p) {
@@ -133,7 +148,7 @@ static int bench_train(ArgParser& p) {
   const int steps = int(p.integer("--steps", 20));
   const int views = int(p.integer("--views", 8));
   const bool json = p.flag("--json");
-  const std::string data_dir = p.value("--data");
+  const std::string data_dir = p.value("--data"), splats = p.value("--splats");
   std::string method = p.value("--method");
   if (method.empty()) method = "plain";
   gpu::ContextOptions o = context_options(p);
@@ -160,7 +175,7 @@ static int bench_train(ArgParser& p) {
   cfg.event_flip_until = 1;  // and so is the direction check
   for (auto& [k, v] : overrides) cfg.set(k, v);
   cfg.iterations = std::max<uint32_t>(cfg.iterations, uint32_t(steps) + 1);  // the warm-up step and the timed ones
-  Trainer t(ctx, data, cfg);
+  Trainer t = splats.empty() ? Trainer(ctx, data, cfg) : Trainer(ctx, data, cfg, bench_start(splats, cfg));
   t.step();  // warm-up: pipelines compiled, buffers sized
   std::vector<double> total, fwd, loss, bwd, opt, ldi;
   std::map<std::string, std::vector<double>> stages;  // the rasterizer's own stages
@@ -179,6 +194,7 @@ static int bench_train(ArgParser& p) {
     opt.push_back(st.optimizer_ms);
     ldi.push_back(st.ldi_ms);
   }
+  const uint32_t count = uint32_t(t.params().count);
   const double m = median(total);
   const double submits = double(ctx.submits() - submits0) / steps,
                transfers = double(ctx.transfers() - transfers0) / steps;
@@ -190,14 +206,14 @@ static int bench_train(ArgParser& p) {
         "\"transfers_per_step\": %.1f, \"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, "
         "\"rasterize_backward\": %.2f, "
         "\"optimizer\": %.2f, \"ldi\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
-        method.c_str(), ctx.caps().name.c_str(), W, H, N, steps, host_mib, device_mib, submits, transfers, 1000.0 / m,
-        median(fwd), median(loss), median(bwd), median(opt), median(ldi), m);
+        method.c_str(), ctx.caps().name.c_str(), W, H, count, steps, host_mib, device_mib, submits, transfers,
+        1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), median(ldi), m);
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
     std::printf("}}\n");
   } else {
     std::printf("train bench (%s) on %s: %ux%u, %u Gaussians, one view per step, median of %d steps\n", method.c_str(),
-                ctx.caps().name.c_str(), W, H, N, steps);
+                ctx.caps().name.c_str(), W, H, count, steps);
     std::printf(
         "  rasterize forward   %9.2f ms\n  loss terms          %9.2f ms\n  rasterize backward  %9.2f ms\n"
         "  optimizer (Adam)    %9.2f ms\n  LDI branch          %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
@@ -316,9 +332,10 @@ static int run_bench(const Args& a) {
         "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--views 8] "
         "[--json]\n"
         "                          [--data DIR --method plain|edi|blur-only|blur+events|blur+events+warp|\n"
-        "                          blur+events+flow] [key=value ...]\n"
+        "                          blur+events+flow] [--splats RUN|F.ply|F.glb] [key=value ...]\n"
         "  Training steps (render, loss terms, backward, Adam): it/s and the split per part. With --data,\n"
-        "  the steps train that dataset with the method (blur modes: 2N+1 renders per step).\n"
+        "  the steps train that dataset with the method (blur modes: 2N+1 renders per step). --splats\n"
+        "  starts from those splats (a run's: its learned exposures too) instead of --gaussians new ones.\n"
         "       evflow bench flow --data DIR [--views N] [--json]\n"
         "  Optical flow from events of the first N (default all) training views: seconds in all and\n"
         "  the GPU stages summed over every evaluation of the contrast.\n"

@@ -44,3 +44,24 @@ TEST_CASE("bench train: a blur+events step's round trips do not grow with its fr
   CHECK(b["transfers_per_step"].get<double>() == 3.0);
   CHECK(b["submits_per_step"].get<double>() <= 12.0);
 }
+
+// --splats: the steps start from a run's Gaussians (their count, not --gaussians) and, in blur
+// mode, its learned exposures; a missing run is named.
+TEST_CASE("bench train --splats: steps from a run's Gaussians", "[cli]") {
+  const fs::path dir = fresh_dir("evflow_bench_splats");
+  std::string out;
+  REQUIRE(run_evflow(dir, "simulate --scene gallery --out sim --width 32 --height 24 --blur-px 3 --train-views 2",
+                     out) == 0);
+  REQUIRE(run_evflow(dir, "train sim --out run method=blur-only iterations=3 init_gaussians=300 densify=false", out) ==
+          0);
+  REQUIRE(run_evflow(dir, "bench train --data sim --method blur-only --splats run --gaussians 900 --steps 2 --json",
+                     out) == 0);
+  const nlohmann::json b = nlohmann::json::parse(out.substr(out.find('{')));
+  CHECK(b["gaussians"] == 300);
+  CHECK(b["it_per_s"].get<double>() > 0);
+  REQUIRE(run_evflow(dir, "export run --ply splats.ply", out) == 0);
+  REQUIRE(run_evflow(dir, "bench train --data sim --method blur-only --splats splats.ply --steps 2 --json", out) == 0);
+  CHECK(nlohmann::json::parse(out.substr(out.find('{')))["gaussians"] == 300);
+  CHECK(run_evflow(dir, "bench train --data sim --splats nowhere --steps 2", out) != 0);
+  CHECK(out.find("nowhere") != std::string::npos);
+}
