@@ -24,9 +24,9 @@ void load_batch_entry(uint local, uint isect) {
 #else
 // Block kernels (rasterize_block, rasterize_bwd_block): the tile is split into EVF_BLOCKS blocks
 // of 4 x EVF_ROWS pixels, one per invocation. Loading a batch also records, per block, which of
-// the batch's Gaussians can reach it (a 256-bit set per block), so that each invocation visits
-// only those. A visit reads 9 (backward) or 10 (forward) floats: each float read is a loop over
-// the SIMD lanes on lavapipe, so nothing else is kept.
+// the batch's Gaussians can reach it (an EVF_BATCH-bit set per block, load_batch_word), so that
+// each invocation visits only those. A visit reads 9 (backward) or 10 (forward) floats in three
+// accesses (each a loop over the SIMD lanes on lavapipe), so nothing else is kept.
 #ifndef EVF_BATCH
 #define EVF_BATCH 256  // Gaussians per batch, a multiple of 32
 #endif

@@ -1,8 +1,8 @@
 #version 450
 // Forward rasterization for CPU drivers: one workgroup per 16x16 tile, each invocation owns a
 // block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s) and visits, front to back, only the
-// Gaussians whose support's bounding box covers its block. Same result as rasterize.comp, pixel
-// for pixel; see docs/rasterizer.md.
+// Gaussians whose support reaches a pixel centre of its block (support_blocks in raster_io.glsl).
+// Same result as rasterize.comp, pixel for pixel; see docs/rasterizer.md.
 // Why: lavapipe runs the invocations of a SIMD vector in lockstep with masks (an `if` skips
 // nothing; only loops end early) and turns every shared-memory access into a loop over the
 // lanes. So each invocation walks its own list (the lanes read different Gaussians, which costs

@@ -1,7 +1,7 @@
 #version 450
 // Backward rasterization for CPU drivers: one workgroup per 16x16 tile, each invocation owns a
 // block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s), as rasterize_block.comp, and visits
-// back to front only the Gaussians whose support's bounding box covers its block. Per Gaussian
+// back to front only the Gaussians whose support reaches its block (support_blocks). Per Gaussian
 // it sums its block's 9 gradient terms in registers (fixed order) and adds them to the
 // workgroup's shared accumulator. Same maths as rasterize_bwd.comp.
 // Why: see rasterize_block.comp; in addition, one set of 9 shared adds per block instead of per
