@@ -46,14 +46,32 @@ struct StageSamples {
   }
 };
 
-// The bench scene: the first camera of --camera (its size and intrinsics) or a 60-degree camera
-// of --width x --height; the splats of --splats (a run, .ply or .glb) or N synthetic Gaussians in
-// front of that camera.
+// A run's first training view at mid-exposure, as `evflow eval` renders it (its learned camera),
+// from the run's dataset.
+static Camera run_camera(const RunFolder& run) {
+  const std::string data_dir = run.data_dir();
+  try {
+    const io::Dataset data = io::load_dataset(data_dir);
+    return run.learned_camera(data.train.at(0), 0, 0.5);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(run.dir.string() + ": its dataset '" + data_dir + "' gives no camera (" + e.what() +
+                             "); name one with --camera");
+  }
+}
+
+// The bench scene: the first camera of --camera (its size and intrinsics), else a run's first
+// training view (--splats RUN), else a 60-degree camera of --width x --height; the splats of
+// --splats (a run, .ply or .glb) or N synthetic Gaussians in front of that camera.
 static std::pair<Camera, GaussianCloud> raster_scene(ArgParser& p) {
   const uint32_t W = uint32_t(p.integer("--width", 346)), H = uint32_t(p.integer("--height", 260));
   const size_t N = size_t(p.integer("--gaussians", 100000));
   const int degree = int(p.integer("--sh-degree", 3));
   const std::string camera_file = p.value("--camera"), splats = p.value("--splats");
+  if (!splats.empty() && std::filesystem::is_directory(splats)) {
+    RunFolder run = RunFolder::open(splats);
+    Camera cam = camera_file.empty() ? run_camera(run) : io::read_cameras_json(camera_file).at(0);
+    return {cam, std::move(run.checkpoint.cloud)};
+  }
   Camera cam = camera_file.empty() ? Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 1}, {0, -1, 0})
                                    : io::read_cameras_json(camera_file).at(0);
   GaussianCloud cloud = splats.empty() ? synthetic_cloud(1, N, degree, cam) : load_splats(splats);
@@ -328,7 +346,8 @@ static int run_bench(const Args& a) {
         "                           [--repeats 10] [--warmup 2] [--antialiased] [--json] [--device N|name]\n"
         "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians), on\n"
         "  synthetic Gaussians in front of a 60-degree camera, or from the first camera of a camera file\n"
-        "  (as evflow render --camera reads; its size replaces --width/--height), of the given splats.\n"
+        "  (as evflow render --camera reads; its size replaces --width/--height), of the given splats;\n"
+        "  a run's splats without --camera: from its first training view at mid-exposure.\n"
         "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--views 8] "
         "[--json]\n"
         "                          [--data DIR --method plain|edi|blur-only|blur+events|blur+events+warp|\n"

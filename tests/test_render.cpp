@@ -157,4 +157,23 @@ TEST_CASE("render: a run's exposure path, its mid-exposure frame being the image
   expect_ok(dir, "train data --out plain method=plain" + small);
   CHECK(run_evflow(dir, "render plain --path exposure --out x", out) != 0);
   CHECK(out.find("mode=plain") != std::string::npos);
+  // The rasterizer benchmark on a run without a camera file: its first training view at
+  // mid-exposure, the learned camera (the intersections of that very view).
+  REQUIRE(run_evflow(dir, "bench raster --splats blur --repeats 1 --warmup 0 --json", out) == 0);
+  const nlohmann::json bench = nlohmann::json::parse(out.substr(out.find('{')));
+  CHECK(bench["width"] == 32);
+  CHECK(bench["height"] == 24);
+  CHECK(bench["gaussians"] == ck.cloud.size());
+  ExposureTrajectory first(data.train[0].camera, 0, 0.0);
+  std::copy(ck.trajectories[0].knots.begin(), ck.trajectories[0].knots.end(), first.data());
+  auto& ctx = gpu_context();
+  GaussianBuffers params(ctx, ck.cloud.size(), ck.cloud.sh_degree, "p_");
+  params.upload(ck.cloud);
+  Rasterizer r(ctx);
+  CHECK(bench["intersections"] == r.forward(params, first.camera_at(0.5), RenderSettings{}).num_intersections());
+  // Its dataset gone, the run names it and asks for a camera file.
+  fs::rename(dir / "data", dir / "data_moved");
+  CHECK(run_evflow(dir, "bench raster --splats blur --repeats 1 --warmup 0", out) != 0);
+  CHECK(out.find("--camera") != std::string::npos);
+  fs::rename(dir / "data_moved", dir / "data");
 }
