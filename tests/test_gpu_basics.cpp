@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstdlib>
+#include <string>
 
 #include "common/common_layout.h"
 #include "gpu/buffer.h"
@@ -193,4 +195,19 @@ TEST_CASE("gpu: a device without host-visible memory copies through one staging 
   CHECK(back[0] == 0xFFFFFFFFu);  // poisoned in tests, untouched by the copy
   CHECK(back[words + offset_words] == 0xFFFFFFFFu);
   REQUIRE(ctx.take_validation_messages().empty());
+}
+
+TEST_CASE("gpu: the kernel overrides in the environment are checked, naming the variable", "[gpu]") {
+  const char* was = std::getenv("EVF_SORT_ITEMS");
+  const std::string saved = was ? was : "";
+  setenv("EVF_SORT_ITEMS", "64", 1);
+  CHECK(gpu::ContextOptions::from_env().sort_items == 64);
+  for (const char* bad : {"0", "257", "abc", "12x", ""}) {
+    INFO("EVF_SORT_ITEMS='" << bad << "'");
+    setenv("EVF_SORT_ITEMS", bad, 1);
+    CHECK_THROWS_WITH(gpu::ContextOptions::from_env(), Catch::Contains("EVF_SORT_ITEMS must be a whole number"));
+  }
+  unsetenv("EVF_SORT_ITEMS");
+  CHECK(gpu::ContextOptions::from_env().sort_items == 0);
+  if (was) setenv("EVF_SORT_ITEMS", saved.c_str(), 1);
 }

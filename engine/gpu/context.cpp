@@ -30,8 +30,13 @@ ContextOptions ContextOptions::from_env() {
   o.print_validation = env_flag("EVF_VALIDATION_PRINT");
   o.sync_validation = env_flag("EVF_VALIDATION_SYNC");
   o.gpu_validation = env_flag("EVF_VALIDATION_GPU");
-  if (const char* e = std::getenv("EVF_SORT_ITEMS"))
-    o.sort_items = std::clamp<uint32_t>(uint32_t(std::atoi(e)), 1u, 256u);
+  if (const char* e = std::getenv("EVF_SORT_ITEMS")) {
+    char* end = nullptr;
+    const unsigned long v = std::strtoul(e, &end, 10);
+    if (end == e || *end != '\0' || v < 1 || v > 256)
+      throw Error(std::string("EVF_SORT_ITEMS must be a whole number from 1 to 256, not '") + e + "'");
+    o.sort_items = uint32_t(v);
+  }
   if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) o.subgroup_reduce = e[0] == '1' ? 1 : 0;
   if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
     o.raster_kernel = e;
