@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <vector>
 
 #include <sys/resource.h>
@@ -67,15 +68,13 @@ static std::pair<Camera, GaussianCloud> raster_scene(ArgParser& p) {
   const size_t N = size_t(p.integer("--gaussians", 100000));
   const int degree = int(p.integer("--sh-degree", 3));
   const std::string camera_file = p.value("--camera"), splats = p.value("--splats");
-  if (!splats.empty() && std::filesystem::is_directory(splats)) {
-    RunFolder run = RunFolder::open(splats);
-    Camera cam = camera_file.empty() ? run_camera(run) : io::read_cameras_json(camera_file).at(0);
-    return {cam, std::move(run.checkpoint.cloud)};
-  }
-  Camera cam = camera_file.empty() ? Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 1}, {0, -1, 0})
-                                   : io::read_cameras_json(camera_file).at(0);
-  GaussianCloud cloud = splats.empty() ? synthetic_cloud(1, N, degree, cam) : load_splats(splats);
-  return {cam, std::move(cloud)};
+  std::optional<RunFolder> run;
+  if (!splats.empty() && std::filesystem::is_directory(splats)) run = RunFolder::open(splats);
+  const Camera cam = !camera_file.empty() ? io::read_cameras_json(camera_file).at(0)
+                     : run                ? run_camera(*run)
+                                          : Camera::look_at(W, H, 60.0, {0, 0, 0}, {0, 0, 1}, {0, -1, 0});
+  if (run) return {cam, std::move(run->checkpoint.cloud)};
+  return {cam, splats.empty() ? synthetic_cloud(1, N, degree, cam) : load_splats(splats)};
 }
 
 static int bench_raster(ArgParser& p) {
