@@ -40,35 +40,39 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
   auto& ctx = test::gpu_context();
   RadixSort sort(ctx);
   std::mt19937 rng(11);
-  // Both block sizes (16 keys per invocation on GPUs, up to 128 on CPU drivers; 7, not a multiple
-  // of the four keys a vector read takes, for the one-by-one path) whatever the
-  // device, and the device's own choice (smaller blocks for short inputs).
-  for (uint32_t items : {16u, 128u, 7u, 0u})
-    for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{
-             {1, 8}, {17, 4}, {4096, 12}, {4097, 32}, {16385, 8}, {70000, 16}, {250000, 20}, {600000, 32}}) {
-      sort.set_items(items);
-      std::vector<uint32_t> keys(n), vals(n);
-      // Few distinct keys in the sorted bits so stability is exercised; junk above `bits`.
-      for (auto& k : keys) k = (rng() % 977) * 2654435761u;
-      std::iota(vals.begin(), vals.end(), 0u);
-      gpu::Buffer bk(ctx, n * 4ull, "keys"), bv(ctx, n * 4ull, "values");
-      bk.write(keys);
-      bv.write(vals);
-      gpu::Commands cmd(ctx);
-      auto [sk, sv] = sort.record(cmd, bk, bv, n, bits);
-      cmd.submit();
-      auto gk = sk->read<uint32_t>(n);
-      auto gv = sv->read<uint32_t>(n);
-      const uint32_t mask = bits >= 32 ? 0xFFFFFFFFu : ((1u << bits) - 1u);
-      // Expected: stable sort of indices by (key & mask). Bits above are not sorted on.
-      std::vector<uint32_t> order(n);
-      std::iota(order.begin(), order.end(), 0u);
-      std::stable_sort(order.begin(), order.end(),
-                       [&](uint32_t a, uint32_t b) { return (keys[a] & mask) < (keys[b] & mask); });
-      bool ok = true;
-      for (uint32_t i = 0; i < n; ++i) ok = ok && gv[i] == order[i] && gk[i] == keys[order[i]];
-      INFO("n = " << n << ", bits = " << bits << ", items " << items);
-      REQUIRE(ok);
-    }
+  // Both digit widths (4 bits on GPUs, 8 on CPU drivers: the last pass of 12 or 20 bits is
+  // narrower, and junk above `bits` must not be sorted on) and several block sizes (16 keys per
+  // invocation on GPUs, up to 4096 on CPU drivers; 7, not a multiple of the four keys a vector
+  // read takes, for the one-by-one path) whatever the device, and the device's own choice
+  // (smaller blocks for short inputs).
+  for (uint32_t digit_bits : {4u, 8u, 0u})
+    for (uint32_t items : {16u, 128u, 7u, 4096u, 0u})
+      for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{
+               {1, 8}, {17, 4}, {4096, 12}, {4097, 32}, {16385, 8}, {70000, 16}, {250000, 20}, {600000, 32}}) {
+        sort.set_digit_bits(digit_bits);
+        sort.set_items(items);
+        std::vector<uint32_t> keys(n), vals(n);
+        // Few distinct keys in the sorted bits so stability is exercised; junk above `bits`.
+        for (auto& k : keys) k = (rng() % 977) * 2654435761u;
+        std::iota(vals.begin(), vals.end(), 0u);
+        gpu::Buffer bk(ctx, n * 4ull, "keys"), bv(ctx, n * 4ull, "values");
+        bk.write(keys);
+        bv.write(vals);
+        gpu::Commands cmd(ctx);
+        auto [sk, sv] = sort.record(cmd, bk, bv, n, bits);
+        cmd.submit();
+        auto gk = sk->read<uint32_t>(n);
+        auto gv = sv->read<uint32_t>(n);
+        const uint32_t mask = bits >= 32 ? 0xFFFFFFFFu : ((1u << bits) - 1u);
+        // Expected: stable sort of indices by (key & mask). Bits above are not sorted on.
+        std::vector<uint32_t> order(n);
+        std::iota(order.begin(), order.end(), 0u);
+        std::stable_sort(order.begin(), order.end(),
+                         [&](uint32_t a, uint32_t b) { return (keys[a] & mask) < (keys[b] & mask); });
+        bool ok = true;
+        for (uint32_t i = 0; i < n; ++i) ok = ok && gv[i] == order[i] && gk[i] == keys[order[i]];
+        INFO("n = " << n << ", bits = " << bits << ", items " << items << ", digit bits " << digit_bits);
+        REQUIRE(ok);
+      }
   test::require_no_validation_messages();
 }

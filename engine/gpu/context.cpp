@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "gpu/kernel.h"
+#include "sort/sort_layout.h"
 
 namespace evflow::gpu {
 
@@ -33,8 +34,9 @@ ContextOptions ContextOptions::from_env() {
   if (const char* e = std::getenv("EVF_SORT_ITEMS")) {
     char* end = nullptr;
     const unsigned long v = std::strtoul(e, &end, 10);
-    if (end == e || *end != '\0' || v < 1 || v > 256)
-      throw Error(std::string("EVF_SORT_ITEMS must be a whole number from 1 to 256, not '") + e + "'");
+    if (end == e || *end != '\0' || v < 1 || v > shaderio::kSortItemsMax)
+      throw Error(std::string("EVF_SORT_ITEMS must be a whole number from 1 to ") +
+                  std::to_string(shaderio::kSortItemsMax) + ", not '" + e + "'");
     o.sort_items = uint32_t(v);
   }
   if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) o.subgroup_reduce = e[0] == '1' ? 1 : 0;

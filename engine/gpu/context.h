@@ -41,7 +41,7 @@ struct ContextOptions {
   // of push descriptors, which the layer's GPU-assisted checks cannot follow.
   bool gpu_validation = false;
   // Kernel choices for the device, overridden where set (Rasterizer, RadixSort read them):
-  uint32_t sort_items = 0;    // keys per radix-sort invocation, 1..256; 0 = by device and size
+  uint32_t sort_items = 0;    // keys per radix-sort invocation, 1..kSortItemsMax; 0 = by device and size
   int subgroup_reduce = -1;   // rasterize backward: 1 = subgroupAdd first, 0 = per-lane adds; -1 = by device
   std::string raster_kernel;  // "pixel" or "block" compositing kernels; "" = by device
   // A storage binding limit below the device's (bytes; 0: the device's own): every size check

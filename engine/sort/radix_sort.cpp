@@ -14,22 +14,29 @@ RadixSort::RadixSort(gpu::Context& ctx)
       keys_tmp_(ctx, 16, "sort_keys_tmp"),
       values_tmp_(ctx, 16, "sort_values_tmp"),
       counts_(ctx, 16, "sort_counts"),
-      items_(ctx.options().sort_items) {}
+      items_(ctx.options().sort_items),
+      wide_(ctx.caps().cpu_driver) {}
 
-void RadixSort::set_items(uint32_t items) { items_ = items ? std::clamp<uint32_t>(items, 1u, 256u) : 0u; }
+void RadixSort::set_items(uint32_t items) { items_ = items ? std::clamp<uint32_t>(items, 1u, kSortItemsMax) : 0u; }
+
+void RadixSort::set_digit_bits(uint32_t bits) { wide_ = bits == 0 ? ctx_.caps().cpu_driver : bits == 8; }
+
+uint32_t RadixSort::group_size() const { return wide_ ? kSortGroupSizeWide : kSortGroupSize; }
+
+uint32_t RadixSort::bins() const { return wide_ ? kSortBinsWide : kSortBins; }
 
 uint32_t RadixSort::items_for(uint32_t n) const {
   if (items_) return items_;
-  uint32_t items = ctx_.caps().cpu_driver ? kSortItemsCpu : kSortItemsGpu;
+  uint32_t items = wide_ ? kSortItemsCpu : kSortItemsGpu;
   // Short inputs: smaller blocks so that at least two workgroups share the work (a single block
   // runs on one CPU thread). More than two made medium sizes slower (bench train's sort).
-  while (items > kSortItemsGpu && uint64_t(n) < uint64_t(2) * kSortGroupSize * items) items /= 2;
+  while (items > kSortItemsGpu && uint64_t(n) < uint64_t(2) * group_size() * items) items /= 2;
   return items;
 }
 
 void RadixSort::reserve(uint32_t n) {
   if (n <= 1) return;
-  const uint32_t n_counts = gpu::Commands::div_up(n, kSortGroupSize * items_for(n)) * kSortBins;
+  const uint32_t n_counts = gpu::Commands::div_up(n, group_size() * items_for(n)) * bins();
   counts_.ensure(uint64_t(n_counts + 1) * 4);
   scan_.reserve(n_counts);
 }
@@ -48,19 +55,23 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Command
   keys_alt.ensure(uint64_t(n) * 4);
   values_alt.ensure(uint64_t(n) * 4);
   const uint32_t items = items_for(n);
-  const uint32_t blocks = gpu::Commands::div_up(n, kSortGroupSize * items);
-  const uint32_t n_counts = blocks * kSortBins;
+  const uint32_t blocks = gpu::Commands::div_up(n, group_size() * items);
+  const uint32_t n_counts = blocks * bins();
+  const uint32_t digit_bits = wide_ ? 8u : 4u;
+  const char* count_kernel = wide_ ? "sort/radix_count_wide" : "sort/radix_count";
+  const char* scatter_kernel = wide_ ? "sort/radix_scatter_wide" : "sort/radix_scatter";
   reserve(n);
   const gpu::Buffer* kin = &keys;
   const gpu::Buffer* vin = &values;
   const gpu::Buffer* kout = &keys_alt;
   const gpu::Buffer* vout = &values_alt;
-  for (uint32_t shift = 0; shift < bits; shift += 4) {
-    SortPC pc{n, shift, blocks, items};
-    cmd.dispatch("sort/radix_count", {{kRadixCountBindKeys, *kin}, {kRadixCountBindCounts, counts_}}, pc,
+  for (uint32_t shift = 0; shift < bits; shift += digit_bits) {
+    const uint32_t width = std::min(digit_bits, bits - shift);
+    SortPC pc{n, shift, blocks, items, (1u << width) - 1u};
+    cmd.dispatch(count_kernel, {{kRadixCountBindKeys, *kin}, {kRadixCountBindCounts, counts_}}, pc,
                  cmd.linear_groups(blocks));
     scan_.record(cmd, counts_, counts_, n_counts, n_counts);
-    cmd.dispatch("sort/radix_scatter",
+    cmd.dispatch(scatter_kernel,
                  {{kRadixScatterBindKeysIn, *kin},
                   {kRadixScatterBindValuesIn, *vin},
                   {kRadixScatterBindKeysOut, *kout},

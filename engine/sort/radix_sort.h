@@ -1,6 +1,7 @@
-// Stable LSD radix sort of (key, value) uint pairs on the GPU, 4 bits per pass, sorting only the
-// low `bits` bits of the keys (rounded up to a multiple of 4: bits above must be zero). Ping-pongs between the caller's
-// buffers and internal ones; the result is in the buffers returned by record().
+// Stable LSD radix sort of (key, value) uint pairs on the GPU, sorting only the low `bits` bits of
+// the keys (bits above are ignored): 4 bits per pass on GPUs, 8 on CPU drivers (sort_layout.h).
+// Ping-pongs between the caller's buffers and internal ones; the result is in the buffers
+// returned by record().
 #pragma once
 #include <utility>
 
@@ -12,9 +13,11 @@ namespace evflow {
 class RadixSort {
  public:
   explicit RadixSort(gpu::Context& ctx);
-  // Keys per invocation, 1..256, for every record from now on; 0 = the device's choice by input
-  // size (the default, unless the context's options set sort_items).
+  // Keys per invocation, 1..kSortItemsMax, for every record from now on; 0 = the device's choice
+  // by input size (the default, unless the context's options set sort_items).
   void set_items(uint32_t items);
+  // Digit width, 4 or 8, for every record from now on; 0 = the device's choice (8 on CPU drivers).
+  void set_digit_bits(uint32_t bits);
   // Records the passes; returns the buffers holding the sorted keys and values (either the
   // inputs or the internal scratch buffers, depending on the pass count).
   std::pair<const gpu::Buffer*, const gpu::Buffer*> record(gpu::Commands& cmd, const gpu::Buffer& keys,
@@ -31,10 +34,13 @@ class RadixSort {
 
  private:
   uint32_t items_for(uint32_t n) const;
+  uint32_t group_size() const;
+  uint32_t bins() const;
   gpu::Context& ctx_;
   PrefixSum scan_;
   gpu::Buffer keys_tmp_, values_tmp_, counts_;
   uint32_t items_ = 0;
+  bool wide_ = false;  // 8-bit digits
 };
 
 }  // namespace evflow

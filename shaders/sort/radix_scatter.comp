@@ -1,5 +1,5 @@
 #version 450
-// Radix sort pass, step 2: stable scatter of one block of 256 x pc.items pairs.
+// Radix sort pass, step 2: stable scatter of one block of EVF_SORT_GROUP x pc.items pairs.
 // One invocation owns pc.items consecutive pairs. Its per-digit counts go to shared memory as a
 // [digit][invocation] table; an exclusive scan of that table (digit-major) gives each
 // invocation, for each digit, how many earlier pairs of the block share that digit. The
@@ -7,8 +7,9 @@
 // Uses shared memory only: correct for any subgroup size.
 #extension GL_GOOGLE_include_directive : require
 #include "sort/sort_layout.h"
+#include "sort/sort_build.glsl"
 #include "common/dispatch.glsl"
-layout(local_size_x = kSortGroupSize) in;
+layout(local_size_x = EVF_SORT_GROUP) in;
 // Read four pairs per access where it can (CPU drivers loop over the lanes for every access).
 layout(std430, binding = kRadixScatterBindKeysIn) readonly buffer KeysIn { uvec4 keys_in[]; };
 layout(std430, binding = kRadixScatterBindValuesIn) readonly buffer ValuesIn { uvec4 values_in[]; };
@@ -17,35 +18,35 @@ layout(std430, binding = kRadixScatterBindValuesOut) writeonly buffer ValuesOut 
 layout(std430, binding = kRadixScatterBindOffsets) readonly buffer Offsets { uint global_offset[]; };  // scanned counts
 layout(push_constant) uniform PC { SortPC pc; };
 
-shared uint table[16 * kSortGroupSize];   // [digit][invocation], then its exclusive scan
-shared uint partial[2][kSortGroupSize];
+shared uint table[EVF_SORT_BINS * EVF_SORT_GROUP];   // [digit][invocation], then its exclusive scan
+shared uint partial[2][EVF_SORT_GROUP];
 
 void main() {
   uint block = evf_linear_group();
   uint lid = gl_LocalInvocationIndex;
-  uint base = block * kSortGroupSize * pc.items + lid * pc.items;
+  uint base = block * EVF_SORT_GROUP * pc.items + lid * pc.items;
   uint end = min(base + pc.items, pc.n);
   // Whole uvec4s from base to end4 (base is a multiple of 4 when items is), single pairs after.
   uint end4 = (pc.items & 3u) == 0u && end > base ? base + ((end - base) & ~3u) : base;
-  uint local[16];
-  for (uint d = 0; d < 16; ++d) local[d] = 0;
+  uint local[EVF_SORT_BINS];
+  for (uint d = 0; d < EVF_SORT_BINS; ++d) local[d] = 0;
   for (uint i = base; i < end4; i += 4u) {
-    uvec4 d = (keys_in[i >> 2u] >> pc.shift) & 15u;
+    uvec4 d = (keys_in[i >> 2u] >> pc.shift) & pc.digit_mask;
     local[d.x] += 1;
     local[d.y] += 1;
     local[d.z] += 1;
     local[d.w] += 1;
   }
-  for (uint i = end4; i < end; ++i) local[(keys_in[i >> 2u][i & 3u] >> pc.shift) & 15u] += 1;
-  for (uint d = 0; d < 16; ++d) table[d * kSortGroupSize + lid] = local[d];
+  for (uint i = end4; i < end; ++i) local[(keys_in[i >> 2u][i & 3u] >> pc.shift) & pc.digit_mask] += 1;
+  for (uint d = 0; d < EVF_SORT_BINS; ++d) table[d * EVF_SORT_GROUP + lid] = local[d];
   barrier();
-  // Scan of the 4096-entry table: invocation lid sums entries [lid*16, lid*16+16).
+  // Scan of the table: invocation lid sums entries [lid * BINS, lid * BINS + BINS).
   uint sum = 0;
-  for (uint k = 0; k < 16; ++k) sum += table[lid * 16 + k];
+  for (uint k = 0; k < EVF_SORT_BINS; ++k) sum += table[lid * EVF_SORT_BINS + k];
   partial[0][lid] = sum;
   barrier();
   uint src = 0;
-  for (uint off = 1; off < kSortGroupSize; off <<= 1) {
+  for (uint off = 1; off < EVF_SORT_GROUP; off <<= 1) {
     uint x = partial[src][lid];
     if (lid >= off) x += partial[src][lid - off];
     partial[1 - src][lid] = x;
@@ -53,20 +54,20 @@ void main() {
     barrier();
   }
   uint run = partial[src][lid] - sum;
-  for (uint k = 0; k < 16; ++k) {
-    uint v = table[lid * 16 + k];
-    table[lid * 16 + k] = run;
+  for (uint k = 0; k < EVF_SORT_BINS; ++k) {
+    uint v = table[lid * EVF_SORT_BINS + k];
+    table[lid * EVF_SORT_BINS + k] = run;
     run += v;
   }
   barrier();
   // Position of pair: offset of (digit, block) + rank among the block's pairs of that digit.
-  uint dest[16];
-  for (uint d = 0; d < 16; ++d)
-    dest[d] = global_offset[d * pc.num_blocks + block] + table[d * kSortGroupSize + lid] - table[d * kSortGroupSize];
+  uint dest[EVF_SORT_BINS];
+  for (uint d = 0; d < EVF_SORT_BINS; ++d)
+    dest[d] = global_offset[d * pc.num_blocks + block] + table[d * EVF_SORT_GROUP + lid] - table[d * EVF_SORT_GROUP];
   for (uint i = base; i < end4; i += 4u) {
     uvec4 key = keys_in[i >> 2u], value = values_in[i >> 2u];
     for (uint c = 0u; c < 4u; ++c) {
-      uint d = (key[c] >> pc.shift) & 15u;
+      uint d = (key[c] >> pc.shift) & pc.digit_mask;
       uint o = dest[d];
       dest[d] = o + 1;
       keys_out[o] = key[c];
@@ -75,7 +76,7 @@ void main() {
   }
   for (uint i = end4; i < end; ++i) {
     uint key = keys_in[i >> 2u][i & 3u];
-    uint d = (key >> pc.shift) & 15u;
+    uint d = (key >> pc.shift) & pc.digit_mask;
     uint o = dest[d];
     dest[d] = o + 1;
     keys_out[o] = key;
