@@ -40,8 +40,10 @@ size_t GaussianBuffers::max_count(const gpu::Context& ctx, int degree) {
   // The widest per-Gaussian buffer: the degree-3 band (84 B), the degree-2 band (60 B), else the
   // rasterizer's d(colour)/d(direction) at SH degree >= 1 (three vec4s, 48 B: wider than the
   // degree-1 band's 36 B), else quats or the projection/intersection state (16 B per Gaussian).
+  // Buffers are whole vec4s (Buffer rounds up; project reads the SH bands as vec4s): the count
+  // whose widest buffer, rounded up, still fits.
   uint64_t widest = degree >= 3 ? 84 : degree >= 2 ? 60 : degree >= 1 ? 48 : 16;
-  return static_cast<size_t>(ctx.caps().max_storage_buffer_range / widest);
+  return static_cast<size_t>((ctx.caps().max_storage_buffer_range & ~uint64_t(15)) / widest);
 }
 
 void GaussianBuffers::upload(const GaussianCloud& c) {

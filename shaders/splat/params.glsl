@@ -7,10 +7,11 @@ layout(std430, binding = kParamBindLogScales) readonly buffer LogScales { float 
 layout(std430, binding = kParamBindQuats) readonly buffer Quats { vec4 quats[]; };                    // [N] wxyz
 layout(std430, binding = kParamBindOpacities) readonly buffer Opacities { float opacity_logits[]; };  // [N]
 #ifndef EVF_PARAMS_NO_SH  // project_bwd reads the colours project computed, not the bands
-layout(std430, binding = kParamBindSh0) readonly buffer Sh0 { float sh0[]; };  // [N][1][3]
-layout(std430, binding = kParamBindSh1) readonly buffer Sh1 { float sh1[]; };  // [N][3][3]
-layout(std430, binding = kParamBindSh2) readonly buffer Sh2 { float sh2[]; };  // [N][5][3]
-layout(std430, binding = kParamBindSh3) readonly buffer Sh3 { float sh3[]; };  // [N][7][3]
+// Packed floats read as vec4s (load_sh_all): [N][1][3], [N][3][3], [N][5][3], [N][7][3].
+layout(std430, binding = kParamBindSh0) readonly buffer Sh0 { vec4 sh0[]; };
+layout(std430, binding = kParamBindSh1) readonly buffer Sh1 { vec4 sh1[]; };
+layout(std430, binding = kParamBindSh2) readonly buffer Sh2 { vec4 sh2[]; };
+layout(std430, binding = kParamBindSh3) readonly buffer Sh3 { vec4 sh3[]; };
 #endif
 
 // Every access below uses constant indices and no data-dependent branch: CPU drivers (lavapipe)
@@ -21,33 +22,52 @@ vec3 load_log_scale(uint g) { return vec3(log_scales[3 * g], log_scales[3 * g + 
 vec4 load_quat(uint g) { return quats[g]; }
 
 #ifndef EVF_PARAMS_NO_SH
-// All 16 SH coefficients of Gaussian g; bands above `degree` (the buffers' degree) are zero.
-void load_sh_all(uint g, uint degree, out vec3 c[16]) {
-  c[0] = vec3(sh0[3 * g], sh0[3 * g + 1], sh0[3 * g + 2]);
+// The 4 floats from position s of the 8 in (a, b), s < 4, by selects (no per-lane index).
+vec4 shift_window(vec4 a, vec4 b, uint s) {
+  return s == 0u ? a : s == 1u ? vec4(a.yzw, b.x) : s == 2u ? vec4(a.zw, b.xy) : vec4(a.w, b.xyz);
+}
+
+// u[k] = floats [f + 4k, f + 4k + 4), k < K, of the packed floats of `buf`, a vec4 array whose
+// last element is `last`: K + 1 whole vec4 reads from the one holding float f (clamped to `last`:
+// the floats kept always lie before the end), shifted by f % 4. On CPU drivers each read is a
+// loop over the SIMD lanes whatever its width, so this takes a third of the reads of one float at
+// a time.
+#define EVF_READ_FLOATS(buf, f, K, last, u)                                        \
+  vec4 u[K + 1];                                                                   \
+  {                                                                                \
+    uint v_ = (f) >> 2u, s_ = (f) & 3u;                                            \
+    for (uint k_ = 0u; k_ <= K; ++k_) u[k_] = buf[min(v_ + k_, last)];            \
+    for (uint k_ = 0u; k_ < K; ++k_) u[k_] = shift_window(u[k_], u[k_ + 1u], s_); \
+  }
+
+// All 16 SH coefficients of Gaussian g of n; bands above `degree` (the buffers' degree) are zero.
+void load_sh_all(uint g, uint n, uint degree, out vec3 c[16]) {
   for (int k = 1; k < 16; ++k) c[k] = vec3(0.0);
+  EVF_READ_FLOATS(sh0, 3u * g, 1u, (3u * n - 1u) >> 2u, u0)
+  c[0] = u0[0].xyz;
   if (degree >= 1) {
-    uint i = g * 9;
-    c[1] = vec3(sh1[i], sh1[i + 1], sh1[i + 2]);
-    c[2] = vec3(sh1[i + 3], sh1[i + 4], sh1[i + 5]);
-    c[3] = vec3(sh1[i + 6], sh1[i + 7], sh1[i + 8]);
+    EVF_READ_FLOATS(sh1, 9u * g, 3u, (9u * n - 1u) >> 2u, u)
+    c[1] = u[0].xyz;
+    c[2] = vec3(u[0].w, u[1].xy);
+    c[3] = vec3(u[1].zw, u[2].x);
   }
   if (degree >= 2) {
-    uint i = g * 15;
-    c[4] = vec3(sh2[i], sh2[i + 1], sh2[i + 2]);
-    c[5] = vec3(sh2[i + 3], sh2[i + 4], sh2[i + 5]);
-    c[6] = vec3(sh2[i + 6], sh2[i + 7], sh2[i + 8]);
-    c[7] = vec3(sh2[i + 9], sh2[i + 10], sh2[i + 11]);
-    c[8] = vec3(sh2[i + 12], sh2[i + 13], sh2[i + 14]);
+    EVF_READ_FLOATS(sh2, 15u * g, 4u, (15u * n - 1u) >> 2u, u)
+    c[4] = u[0].xyz;
+    c[5] = vec3(u[0].w, u[1].xy);
+    c[6] = vec3(u[1].zw, u[2].x);
+    c[7] = u[2].yzw;
+    c[8] = u[3].xyz;
   }
   if (degree >= 3) {
-    uint i = g * 21;
-    c[9] = vec3(sh3[i], sh3[i + 1], sh3[i + 2]);
-    c[10] = vec3(sh3[i + 3], sh3[i + 4], sh3[i + 5]);
-    c[11] = vec3(sh3[i + 6], sh3[i + 7], sh3[i + 8]);
-    c[12] = vec3(sh3[i + 9], sh3[i + 10], sh3[i + 11]);
-    c[13] = vec3(sh3[i + 12], sh3[i + 13], sh3[i + 14]);
-    c[14] = vec3(sh3[i + 15], sh3[i + 16], sh3[i + 17]);
-    c[15] = vec3(sh3[i + 18], sh3[i + 19], sh3[i + 20]);
+    EVF_READ_FLOATS(sh3, 21u * g, 6u, (21u * n - 1u) >> 2u, u)
+    c[9] = u[0].xyz;
+    c[10] = vec3(u[0].w, u[1].xy);
+    c[11] = vec3(u[1].zw, u[2].x);
+    c[12] = u[2].yzw;
+    c[13] = u[3].xyz;
+    c[14] = vec3(u[3].w, u[4].xy);
+    c[15] = vec3(u[4].zw, u[5].x);
   }
 }
 #endif
