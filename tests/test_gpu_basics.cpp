@@ -210,4 +210,17 @@ TEST_CASE("gpu: the kernel overrides in the environment are checked, naming the 
   unsetenv("EVF_SORT_ITEMS");
   CHECK(gpu::ContextOptions::from_env().sort_items == 0);
   if (was) setenv("EVF_SORT_ITEMS", saved.c_str(), 1);
+
+  const char* limit_was = std::getenv("EVF_BINDING_LIMIT");
+  const std::string limit_saved = limit_was ? limit_was : "";
+  setenv("EVF_BINDING_LIMIT", "1048576", 1);
+  CHECK(gpu::ContextOptions::from_env().binding_limit == 1048576);
+  for (const char* bad : {"0", "8", "-5", "1e6", "abc", "64k", "", "99999999999999999999999"}) {
+    INFO("EVF_BINDING_LIMIT='" << bad << "'");
+    setenv("EVF_BINDING_LIMIT", bad, 1);
+    CHECK_THROWS_WITH(gpu::ContextOptions::from_env(), Catch::Contains("EVF_BINDING_LIMIT must be a whole number"));
+  }
+  unsetenv("EVF_BINDING_LIMIT");
+  CHECK(gpu::ContextOptions::from_env().binding_limit == 0);
+  if (limit_was) setenv("EVF_BINDING_LIMIT", limit_saved.c_str(), 1);
 }

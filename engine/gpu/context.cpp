@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #include "gpu/kernel.h"
 #include "sort/sort_layout.h"
@@ -22,6 +24,19 @@ static bool env_flag(const char* name) {
   return v && *v && std::strcmp(v, "0") != 0;
 }
 
+// The whole number in environment variable `name` (set, with value `text`), from lo to hi, else
+// an error naming the variable.
+static uint64_t env_whole(const char* name, const char* text, uint64_t lo, uint64_t hi) {
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long v = std::strtoull(text, &end, 10);
+  const bool digits_only = *text != '\0' && std::strspn(text, "0123456789") == std::strlen(text);
+  if (!digits_only || end == text || *end != '\0' || errno == ERANGE || v < lo || v > hi)
+    throw Error(std::string(name) + " must be a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) +
+                ", not '" + text + "'");
+  return v;
+}
+
 ContextOptions ContextOptions::from_env() {
   ContextOptions o;
   if (const char* d = std::getenv("EVF_DEVICE")) o.device = d;
@@ -31,21 +46,16 @@ ContextOptions ContextOptions::from_env() {
   o.print_validation = env_flag("EVF_VALIDATION_PRINT");
   o.sync_validation = env_flag("EVF_VALIDATION_SYNC");
   o.gpu_validation = env_flag("EVF_VALIDATION_GPU");
-  if (const char* e = std::getenv("EVF_SORT_ITEMS")) {
-    char* end = nullptr;
-    const unsigned long v = std::strtoul(e, &end, 10);
-    if (end == e || *end != '\0' || v < 1 || v > shaderio::kSortItemsMax)
-      throw Error(std::string("EVF_SORT_ITEMS must be a whole number from 1 to ") +
-                  std::to_string(shaderio::kSortItemsMax) + ", not '" + e + "'");
-    o.sort_items = uint32_t(v);
-  }
+  if (const char* e = std::getenv("EVF_SORT_ITEMS"))
+    o.sort_items = uint32_t(env_whole("EVF_SORT_ITEMS", e, 1, shaderio::kSortItemsMax));
   if (const char* e = std::getenv("EVF_SUBGROUP_REDUCE")) o.subgroup_reduce = e[0] == '1' ? 1 : 0;
   if (const char* e = std::getenv("EVF_RASTER_KERNEL")) {
     o.raster_kernel = e;
     if (o.raster_kernel != "pixel" && o.raster_kernel != "block")
       throw Error("EVF_RASTER_KERNEL must be 'pixel' or 'block', not '" + o.raster_kernel + "'");
   }
-  if (const char* e = std::getenv("EVF_BINDING_LIMIT")) o.binding_limit = std::strtoull(e, nullptr, 10);
+  if (const char* e = std::getenv("EVF_BINDING_LIMIT"))
+    o.binding_limit = env_whole("EVF_BINDING_LIMIT", e, 16, std::numeric_limits<uint64_t>::max());
   o.staged_transfers = env_flag("EVF_STAGED");
   return o;
 }
