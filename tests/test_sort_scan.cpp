@@ -74,5 +74,6 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
         INFO("n = " << n << ", bits = " << bits << ", items " << items << ", digit bits " << digit_bits);
         REQUIRE(ok);
       }
+  CHECK_THROWS_WITH(sort.set_digit_bits(5), Catch::Contains("4 or 8"));
   test::require_no_validation_messages();
 }

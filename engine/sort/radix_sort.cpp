@@ -1,6 +1,7 @@
 #include "sort/radix_sort.h"
 
 #include <algorithm>
+#include <string>
 
 #include "sort/sort_layout.h"
 
@@ -19,7 +20,11 @@ RadixSort::RadixSort(gpu::Context& ctx)
 
 void RadixSort::set_items(uint32_t items) { items_ = items ? std::clamp<uint32_t>(items, 1u, kSortItemsMax) : 0u; }
 
-void RadixSort::set_digit_bits(uint32_t bits) { wide_ = bits == 0 ? ctx_.caps().cpu_driver : bits == 8; }
+void RadixSort::set_digit_bits(uint32_t bits) {
+  if (bits != 0 && bits != 4 && bits != 8)
+    throw gpu::Error("RadixSort: digits of " + std::to_string(bits) + " bits; 4 or 8 (0: the device's choice)");
+  wide_ = bits == 0 ? ctx_.caps().cpu_driver : bits == 8;
+}
 
 uint32_t RadixSort::group_size() const { return wide_ ? kSortGroupSizeWide : kSortGroupSize; }
 
