@@ -27,11 +27,10 @@ static bool env_flag(const char* name) {
 // The whole number in environment variable `name` (set, with value `text`), from lo to hi, else
 // an error naming the variable.
 static uint64_t env_whole(const char* name, const char* text, uint64_t lo, uint64_t hi) {
-  char* end = nullptr;
-  errno = 0;
-  const unsigned long long v = std::strtoull(text, &end, 10);
   const bool digits_only = *text != '\0' && std::strspn(text, "0123456789") == std::strlen(text);
-  if (!digits_only || end == text || *end != '\0' || errno == ERANGE || v < lo || v > hi)
+  errno = 0;
+  const unsigned long long v = digits_only ? std::strtoull(text, nullptr, 10) : 0;
+  if (!digits_only || errno == ERANGE || v < lo || v > hi)
     throw Error(std::string(name) + " must be a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) +
                 ", not '" + text + "'");
   return v;
