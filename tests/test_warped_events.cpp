@@ -291,11 +291,21 @@ TEST_CASE("blur+events+warp and +flow train on a simulated folder with ground-tr
       CHECK(row[size_t(w)] < 4.0);  // 4: exactly opposed
     }
   };
-  check_term(train("sim", "gt", "gt"));
+  const plot::CurveTable plain_mean = train("sim", "gt", "gt");
+  check_term(plain_mean);
   CHECK(out.find("estimated") == std::string::npos);
   // With the flow-upsampled blur (2NM+1 = 13 frames in the mean) as well.
   check_term(train("sim", "gt_flow", "gt", "blur+events+flow"));
   CHECK(test::slurp(dir / "gt_flow" / "config.json").find("\"blur_upsample\": 4") != std::string::npos);
+  // upsample_from=0.5: the plain mean for steps 1-2 (the same run as blur+events+warp), the
+  // upsampled blur from step 3.
+  const plot::CurveTable late = train("sim", "gt_late", "gt upsample_from=0.5", "blur+events+flow");
+  const int loss = late.column("loss");
+  REQUIRE(loss >= 0);
+  REQUIRE(late.rows.size() == 4);
+  for (size_t r = 0; r < 2; ++r)
+    CHECK(late.rows[r][size_t(loss)] == Approx(plain_mean.rows[r][size_t(loss)]).epsilon(1e-4));
+  CHECK(std::abs(late.rows[2][size_t(loss)] / plain_mean.rows[2][size_t(loss)] - 1.0) > 1e-3);
 
   // `evflow flow` estimates every view, scores it against the ground truth and fills the cache
   // that training with flow=events reads.

@@ -235,6 +235,9 @@ std::vector<Setting> blur_settings() {
             "M of the flow-upsampled blur (paper Eq. 9): each interval of the virtual frames adds M−1 sub-frames, "
             "its first frame moved m/M of the way along the interval's optical flow (`flow`), and the blurry "
             "image is the mean of all 2NM+1 in linear light; 1: off (the paper: 4); > 1 needs `mode=blur`"),
+      field("upsample_from", &TrainConfig::upsample_from,
+            "fraction of the blur steps with the plain 2N+1-frame mean before the upsampled blur (`blur_upsample`) "
+            "starts, counted as `event_from` is; 0: from the first step (the paper)"),
       field("edi_warmup", &TrainConfig::edi_warmup,
             "fraction of the run's first steps that fit one render per step, the view's trajectory at "
             "mid-exposure, to the view's EDI image (as `target=edi`), before the blur model and its terms take "

@@ -47,6 +47,7 @@ struct TrainConfig {
   TrainMode mode = TrainMode::Plain;
   uint32_t virtual_frames = 3;
   uint32_t blur_upsample = 1;
+  double upsample_from = 0.0;  // fraction of the blur steps before the upsampled blur starts
   double edi_warmup = 0.0;
   double edi_warmup_motion = 0.0;
   double splats_from = 0.0;
@@ -99,7 +100,7 @@ struct TrainConfig {
   // The last warm-up step that fits the virtual frames (edi_warmup_motion; 0: none).
   uint32_t edi_motion_steps() const { return uint32_t(edi_warmup_motion * edi_warmup_steps()); }
   // Where a fraction of the blur steps ends (event_from, event_flip_until, flow_model_from,
-  // joint_from): the
+  // joint_from, upsample_from): the
   // blur steps after an EDI warm-up keep the schedule a run of that many steps would have.
   double blur_point(double fraction) const {
     const uint32_t w = edi_warmup_steps();

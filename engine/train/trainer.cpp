@@ -98,7 +98,9 @@ void Trainer::setup(const Checkpoint& checkpoint) {
   cameras_ = std::make_unique<CameraModel>(data_, cfg_);
   const uint32_t frames = uint32_t(cameras_->frame_times().size());
   exposure_ = std::make_unique<ExposureRender>(ctx_, frames);
-  image_model_ = std::make_unique<ImageModel>(ctx_, frames, c0.width, c0.height, cfg_.loss_space, cfg_.blur_upsample);
+  if (!(cfg_.upsample_from >= 0 && cfg_.upsample_from <= 1))
+    throw std::invalid_argument("upsample_from must be in [0, 1]");
+  set_image_model(upsample_start() == 0 ? cfg_.blur_upsample : 1);
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
   if (cfg_.event_weight > 0) add_event_term();
   if (cfg_.res_weight > 0) add_residual_term();
@@ -217,6 +219,20 @@ void Trainer::upload_view_flow(uint32_t v) {
   if (warp_) warp_->set_view_planes(v, view_warped_event_planes(data_, cfg_, cameras_->frame_times(), v, flows_[v]));
 }
 
+// The image model of the blur steps, with upsample M (1: the plain mean of the 2N+1 frames).
+void Trainer::set_image_model(uint32_t upsample) {
+  const Camera& c0 = data_.train[0].camera;
+  image_model_ =
+      std::make_unique<ImageModel>(ctx_, exposure_->frames(), c0.width, c0.height, cfg_.loss_space, upsample);
+}
+
+// The first step of the upsampled blur (UINT32_MAX: never); before it the blur is the plain mean.
+uint32_t Trainer::upsample_start() const {
+  if (cfg_.blur_upsample <= 1) return UINT32_MAX;
+  if (cfg_.upsample_from <= 0) return 0;
+  return cfg_.blur_step(cfg_.upsample_from) + 1;  // as event_from counts
+}
+
 // The first step that trains with the model's flow (UINT32_MAX: never).
 uint32_t Trainer::model_flow_start() const {
   if (!model_flow_) return UINT32_MAX;
@@ -268,6 +284,7 @@ StepStats Trainer::step() {
   }
   const bool exposure_on = terms_.has_exposure_terms() && step_ > cfg_.blur_step(cfg_.event_from);
   if (model_flow_due(exposure_on)) refresh_model_flows();
+  if (step_ >= upsample_start() && image_model_->upsample() != cfg_.blur_upsample) set_image_model(cfg_.blur_upsample);
   render_exposure(st.view);
   st.raster_forward_ms = clock.lap();
   record_losses(st, exposure_on);
@@ -336,7 +353,7 @@ void Trainer::render_exposure(uint32_t view) {
   std::vector<Camera> cameras;
   for (uint32_t i = 0; i < exposure_->frames(); ++i) cameras.push_back(cameras_->frame_camera(view, i));
   exposure_->forward(raster_, *params_, cameras, render_settings());
-  image_model_->forward(cmd_, exposure_->images(), flow_planes_.empty() ? nullptr : &flow_planes_[view]);
+  image_model_->forward(cmd_, exposure_->images(), image_model_->upsample() > 1 ? &flow_planes_[view] : nullptr);
   cmd_.submit();
 }
 
