@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <initializer_list>
 #include <string>
 
 #include "common/common_layout.h"
@@ -197,30 +198,33 @@ TEST_CASE("gpu: a device without host-visible memory copies through one staging 
   REQUIRE(ctx.take_validation_messages().empty());
 }
 
-TEST_CASE("gpu: the kernel overrides in the environment are checked, naming the variable", "[gpu]") {
-  const char* was = std::getenv("EVF_SORT_ITEMS");
-  const std::string saved = was ? was : "";
-  setenv("EVF_SORT_ITEMS", "64", 1);
-  CHECK(gpu::ContextOptions::from_env().sort_items == 64);
-  for (const char* bad : {"0", "4097", "abc", "12x", ""}) {
-    INFO("EVF_SORT_ITEMS='" << bad << "'");
-    setenv("EVF_SORT_ITEMS", bad, 1);
-    CHECK_THROWS_WITH(gpu::ContextOptions::from_env(), Catch::Contains("EVF_SORT_ITEMS must be a whole number"));
-  }
-  unsetenv("EVF_SORT_ITEMS");
-  CHECK(gpu::ContextOptions::from_env().sort_items == 0);
-  if (was) setenv("EVF_SORT_ITEMS", saved.c_str(), 1);
+namespace {
 
-  const char* limit_was = std::getenv("EVF_BINDING_LIMIT");
-  const std::string limit_saved = limit_was ? limit_was : "";
-  setenv("EVF_BINDING_LIMIT", "1048576", 1);
-  CHECK(gpu::ContextOptions::from_env().binding_limit == 1048576);
-  for (const char* bad : {"0", "8", "-5", "1e6", "abc", "64k", "", "99999999999999999999999"}) {
-    INFO("EVF_BINDING_LIMIT='" << bad << "'");
-    setenv("EVF_BINDING_LIMIT", bad, 1);
-    CHECK_THROWS_WITH(gpu::ContextOptions::from_env(), Catch::Contains("EVF_BINDING_LIMIT must be a whole number"));
+// Environment variable `name` read by ContextOptions::from_env into `field`: `good` gives `expect`,
+// every one of `bad` is refused naming the variable, unset gives 0; its old value is restored.
+template <typename Field>
+void check_env_whole(const char* name, const char* good, uint64_t expect, std::initializer_list<const char*> bad,
+                     Field field) {
+  const char* was = std::getenv(name);
+  const std::string saved = was ? was : "";
+  setenv(name, good, 1);
+  CHECK(uint64_t(field(gpu::ContextOptions::from_env())) == expect);
+  for (const char* b : bad) {
+    INFO(name << "='" << b << "'");
+    setenv(name, b, 1);
+    CHECK_THROWS_WITH(gpu::ContextOptions::from_env(), Catch::Contains(std::string(name) + " must be a whole number"));
   }
-  unsetenv("EVF_BINDING_LIMIT");
-  CHECK(gpu::ContextOptions::from_env().binding_limit == 0);
-  if (limit_was) setenv("EVF_BINDING_LIMIT", limit_saved.c_str(), 1);
+  unsetenv(name);
+  CHECK(uint64_t(field(gpu::ContextOptions::from_env())) == 0);
+  if (was) setenv(name, saved.c_str(), 1);
+}
+
+}  // namespace
+
+TEST_CASE("gpu: the kernel overrides in the environment are checked, naming the variable", "[gpu]") {
+  check_env_whole("EVF_SORT_ITEMS", "64", 64, {"0", "4097", "abc", "12x", ""},
+                  [](const gpu::ContextOptions& o) { return o.sort_items; });
+  check_env_whole("EVF_BINDING_LIMIT", "1048576", 1048576,
+                  {"0", "8", "-5", "1e6", "abc", "64k", "", "99999999999999999999999"},
+                  [](const gpu::ContextOptions& o) { return o.binding_limit; });
 }

@@ -100,7 +100,7 @@ void Trainer::setup(const Checkpoint& checkpoint) {
   exposure_ = std::make_unique<ExposureRender>(ctx_, frames);
   if (!(cfg_.upsample_from >= 0 && cfg_.upsample_from <= 1))
     throw std::invalid_argument("upsample_from must be in [0, 1]");
-  set_image_model(upsample_start() == 0 ? cfg_.blur_upsample : 1);
+  set_image_model(upsample_at(step_ + 1));
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
   if (cfg_.event_weight > 0) add_event_term();
   if (cfg_.res_weight > 0) add_residual_term();
@@ -226,11 +226,11 @@ void Trainer::set_image_model(uint32_t upsample) {
       std::make_unique<ImageModel>(ctx_, exposure_->frames(), c0.width, c0.height, cfg_.loss_space, upsample);
 }
 
-// The first step of the upsampled blur (UINT32_MAX: never); before it the blur is the plain mean.
-uint32_t Trainer::upsample_start() const {
-  if (cfg_.blur_upsample <= 1) return UINT32_MAX;
-  if (cfg_.upsample_from <= 0) return 0;
-  return cfg_.blur_step(cfg_.upsample_from) + 1;  // as event_from counts
+// The blur's upsample M at a step: blur_upsample from upsample_from on (counted as event_from
+// is), before it 1, the plain mean.
+uint32_t Trainer::upsample_at(uint32_t step) const {
+  const bool started = cfg_.upsample_from <= 0 || step > cfg_.blur_step(cfg_.upsample_from);
+  return started ? cfg_.blur_upsample : 1;
 }
 
 // The first step that trains with the model's flow (UINT32_MAX: never).
@@ -284,7 +284,7 @@ StepStats Trainer::step() {
   }
   const bool exposure_on = terms_.has_exposure_terms() && step_ > cfg_.blur_step(cfg_.event_from);
   if (model_flow_due(exposure_on)) refresh_model_flows();
-  if (step_ >= upsample_start() && image_model_->upsample() != cfg_.blur_upsample) set_image_model(cfg_.blur_upsample);
+  if (image_model_->upsample() != upsample_at(step_)) set_image_model(upsample_at(step_));
   render_exposure(st.view);
   st.raster_forward_ms = clock.lap();
   record_losses(st, exposure_on);

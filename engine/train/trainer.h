@@ -142,7 +142,7 @@ class Trainer {
   void setup_flows();
   void add_warp_term();
   void set_image_model(uint32_t upsample);
-  uint32_t upsample_start() const;
+  uint32_t upsample_at(uint32_t step) const;
   uint32_t model_flow_start() const;
   bool model_flow_due(bool exposure_on) const;
   void refresh_model_flows();
