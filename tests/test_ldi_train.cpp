@@ -237,3 +237,29 @@ TEST_CASE("LDI branch: after an EDI warm-up, from the first blur step, L_joint f
   }
   test::require_no_validation_messages();
 }
+
+TEST_CASE("LDI branch: joint_ldi_share sets how much of L_joint reaches the network; the renders get it all",
+          "[gpu][train][ldi]") {
+  auto& ctx = test::gpu_context();
+  const io::Dataset data = drift_dataset(ctx);
+  TrainConfig both = ldi_config();  // L_joint from the first step
+  TrainConfig splats_only = both, no_joint = both, half = both;
+  splats_only.joint_ldi_share = 0.0;
+  half.joint_ldi_share = 0.5;
+  no_joint.joint_weight = 0.0;
+  Trainer a(ctx, data, both), b(ctx, data, splats_only), c(ctx, data, no_joint), d(ctx, data, half);
+  for (Trainer* t : {&a, &b, &c, &d}) REQUIRE(t->step().term_values[3] >= 0.0);
+  auto weights = [](Trainer& t) { return t.ldi()->model().network().layer(0).weight_values(); };
+  CHECK(weights(b) == weights(c));  // share 0: the network learns from its own terms alone
+  CHECK(weights(a) != weights(c));
+  CHECK(weights(d) != weights(c));
+  CHECK(weights(d) != weights(a));
+  CHECK(test::same_values(a.cloud().sh, b.cloud().sh));  // the renders' side does not depend on it
+  CHECK_FALSE(test::same_values(b.cloud().sh, c.cloud().sh));
+  TrainConfig bad = both;
+  for (double s : {-0.1, 1.5, std::nan("")}) {
+    bad.joint_ldi_share = s;
+    CHECK_THROWS_WITH(Trainer(ctx, data, bad), Catch::Contains("joint_ldi_share must be in [0, 1]"));
+  }
+  test::require_no_validation_messages();
+}

@@ -34,6 +34,8 @@ LdiBranch::LdiBranch(gpu::Context& ctx, const io::Dataset& data, const TrainConf
     : ctx_(ctx), data_(data), cfg_(cfg), frame_u_(frame_u), srgb_(cfg.loss_space == LossSpace::Srgb) {
   if (cfg.mode != TrainMode::Blur)
     throw std::invalid_argument("ldi=on needs mode=blur (its frames pair with the virtual frames)");
+  if (!(cfg.joint_ldi_share >= 0 && cfg.joint_ldi_share <= 1))
+    throw std::invalid_argument("joint_ldi_share must be in [0, 1], got " + std::to_string(cfg.joint_ldi_share));
   events_ = branch_events(ctx, data);
   const uint32_t W = events_->width(), H = events_->height(), F = uint32_t(frame_u.size());
   const uint32_t cw = cfg.ldi_crop ? std::min(cfg.ldi_crop, W) : W, ch = cfg.ldi_crop ? std::min(cfg.ldi_crop, H) : H;
@@ -178,8 +180,8 @@ void LdiBranch::record_blur(gpu::Commands& cmd) {
   for (uint32_t i = 0; i < F; ++i) cmd.copy(srgb_ ? v_mean_ : v_mean_ls_, grad_[i], values_ * 4);
 }
 
-// L_joint in loss_space: the LDI frame's gradient goes back to linear light and adds to the
-// frame's; the render's (the crop of an sRGB render) waits for backward().
+// L_joint in loss_space: the LDI frame's gradient (its joint_ldi_share) goes back to linear light
+// and adds to the frame's; the render's (the crop of an sRGB render) waits for backward().
 void LdiBranch::record_joint(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const ImageModel& im) {
   const uint32_t F = model_->frames();
   const uint32_t W = data_.train[view_].camera.width, H = data_.train[view_].camera.height;
@@ -193,9 +195,12 @@ void LdiBranch::record_joint(gpu::Commands& cmd, const std::vector<const gpu::Bu
     gb.push_back(srgb_ ? &g_render_[i] : &g_gs_ls_[i]);
   }
   joint_->record(cmd, a, b, ga, gb, joint_->weight(), false);
+  const float share = float(cfg_.joint_ldi_share);
   for (uint32_t i = 0; i < F; ++i) {
-    if (srgb_) colour(cmd, shaderio::kColourEncodeBwd, model_->frame(i), g_ldi_ls_[i], tmp_);
-    record_accumulate(cmd, values_, 1.0f, true, srgb_ ? tmp_ : g_ldi_ls_[i], grad_[i]);
+    if (share > 0) {
+      if (srgb_) colour(cmd, shaderio::kColourEncodeBwd, model_->frame(i), g_ldi_ls_[i], tmp_);
+      record_accumulate(cmd, values_, share, true, srgb_ ? tmp_ : g_ldi_ls_[i], grad_[i]);
+    }
     if (srgb_) continue;
     ldi::record_crop(cmd, *renders[i], W, H, 3, crop_, tmp_);
     colour(cmd, shaderio::kColourDecodeBwd, tmp_, g_gs_ls_[i], g_render_[i]);

@@ -5,8 +5,9 @@
 //   LDI frames C_ldi(t_i) = B / E(t_i) at the 2N+1 virtual frames' times (linear light)
 //   L_blur^ldi  the frames' mean against the blurry input (the trainer's image loss, loss_space)
 //   L_ev^ldi    the event loss on the LDI frames, on from the first step at a constant weight
-//   L_joint     (1/(2N+1)) sum_i L(C_ldi(t_i), C_gs(t_i)) in loss_space, into both sides, on
-//               from joint_from (once the splats' exposures run the right way)
+//   L_joint     (1/(2N+1)) sum_i L(C_ldi(t_i), C_gs(t_i)) in loss_space, into the renders and
+//               (joint_ldi_share of it) the LDI frames, on from joint_from (once the splats'
+//               exposures run the right way)
 //
 // record() runs in the trainer's loss stage (after the image model's forward); backward() after
 // the image model's render gradients: it adds the joint loss's gradients into the renders' and

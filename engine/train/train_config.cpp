@@ -400,6 +400,10 @@ std::vector<Setting> ldi_settings() {
             "L_joint is on from this fraction of the run: before the splats' time-direction check ends "
             "(`event_flip_until`) a view's renders may run backwards against the LDI frames, and the joint loss "
             "then pulls both towards the blurry image ([ldi.md](ldi.md))"),
+      field("joint_ldi_share", &TrainConfig::joint_ldi_share,
+            "the share of L_joint's gradient that reaches the LDI frames: 1, the paper's Eq. 10 (both sides); 0, "
+            "the joint loss teaches the splats only and the LDI learns from its own terms ([ldi.md](ldi.md)); in "
+            "[0, 1]"),
       field("ldi_lr", &TrainConfig::ldi_lr, "the LDI network's Adam learning rate (eps 1e-8), as EVDI"),
       field("ldi_init_steps", &TrainConfig::ldi_init_steps,
             "steps of the initialisation to EDI before training: the network regressed to EDI's double integral "
