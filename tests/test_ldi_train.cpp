@@ -238,7 +238,7 @@ TEST_CASE("LDI branch: after an EDI warm-up, from the first blur step, L_joint f
   test::require_no_validation_messages();
 }
 
-TEST_CASE("LDI branch: joint_ldi_share sets how much of L_joint reaches the network; the renders get it all",
+TEST_CASE("LDI branch: joint_ldi_share scales the network's side of L_joint and leaves the renders' side as it is",
           "[gpu][train][ldi]") {
   auto& ctx = test::gpu_context();
   const io::Dataset data = drift_dataset(ctx);
