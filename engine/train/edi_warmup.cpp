@@ -8,10 +8,8 @@
 namespace evflow {
 
 void check_edi_warmup(const TrainConfig& cfg, const io::Dataset& data) {
-  if (!(cfg.edi_warmup >= 0 && cfg.edi_warmup < 1))
-    throw std::invalid_argument("edi_warmup must be in [0, 1), got " + std::to_string(cfg.edi_warmup));
-  if (!(cfg.edi_warmup_motion >= 0 && cfg.edi_warmup_motion <= 1))
-    throw std::invalid_argument("edi_warmup_motion must be in [0, 1], got " + std::to_string(cfg.edi_warmup_motion));
+  require_fraction("edi_warmup", cfg.edi_warmup, false);
+  require_fraction("edi_warmup_motion", cfg.edi_warmup_motion);
   if (cfg.edi_warmup == 0 && cfg.edi_warmup_motion > 0)
     throw std::invalid_argument("edi_warmup_motion > 0 is a share of the EDI warm-up: it needs edi_warmup > 0");
   if (cfg.edi_warmup == 0) return;

@@ -34,8 +34,7 @@ LdiBranch::LdiBranch(gpu::Context& ctx, const io::Dataset& data, const TrainConf
     : ctx_(ctx), data_(data), cfg_(cfg), frame_u_(frame_u), srgb_(cfg.loss_space == LossSpace::Srgb) {
   if (cfg.mode != TrainMode::Blur)
     throw std::invalid_argument("ldi=on needs mode=blur (its frames pair with the virtual frames)");
-  if (!(cfg.joint_ldi_share >= 0 && cfg.joint_ldi_share <= 1))
-    throw std::invalid_argument("joint_ldi_share must be in [0, 1], got " + std::to_string(cfg.joint_ldi_share));
+  require_fraction("joint_ldi_share", cfg.joint_ldi_share);
   events_ = branch_events(ctx, data);
   const uint32_t W = events_->width(), H = events_->height(), F = uint32_t(frame_u.size());
   const uint32_t cw = cfg.ldi_crop ? std::min(cfg.ldi_crop, W) : W, ch = cfg.ldi_crop ? std::min(cfg.ldi_crop, H) : H;

@@ -625,4 +625,10 @@ std::string TrainConfig::describe_markdown() {
   return md;
 }
 
+void require_fraction(const char* key, double value, bool one_allowed) {
+  if (value >= 0 && (one_allowed ? value <= 1 : value < 1)) return;
+  throw std::invalid_argument(std::string(key) + " must be in [0, 1" + (one_allowed ? "]" : ")") + ", got " +
+                              std::to_string(value));
+}
+
 }  // namespace evflow

@@ -120,4 +120,8 @@ struct TrainConfig {
   static std::string describe_markdown();
 };
 
+// Throws "KEY must be in [0, 1], got V" (with one_allowed false: [0, 1)) unless value lies there
+// (a NaN does not).
+void require_fraction(const char* key, double value, bool one_allowed = true);
+
 }  // namespace evflow

@@ -78,8 +78,7 @@ void Trainer::setup(const Checkpoint& checkpoint) {
   const GaussianCloud& start = checkpoint.cloud;
   if (data_.train.empty()) throw std::invalid_argument("dataset has no training views");
   check_edi_warmup(cfg_, data_);
-  if (!(cfg_.splats_from >= 0 && cfg_.splats_from < 1))
-    throw std::invalid_argument("splats_from must be in [0, 1), got " + std::to_string(cfg_.splats_from));
+  require_fraction("splats_from", cfg_.splats_from, false);
   if (cfg_.splats_from > 0 && cfg_.mode != TrainMode::Blur)
     throw std::invalid_argument("splats_from > 0 needs mode=blur (the knots learn alone in the first blur steps)");
   const Camera& c0 = data_.train[0].camera;
@@ -98,8 +97,7 @@ void Trainer::setup(const Checkpoint& checkpoint) {
   cameras_ = std::make_unique<CameraModel>(data_, cfg_);
   const uint32_t frames = uint32_t(cameras_->frame_times().size());
   exposure_ = std::make_unique<ExposureRender>(ctx_, frames);
-  if (!(cfg_.upsample_from >= 0 && cfg_.upsample_from <= 1))
-    throw std::invalid_argument("upsample_from must be in [0, 1]");
+  require_fraction("upsample_from", cfg_.upsample_from);
   set_image_model(upsample_at(step_ + 1));
   add_loss(std::make_unique<BlendLoss>(ctx_, ImageShape{3, c0.height, c0.width}, float(cfg_.ssim_lambda), 1.0f));
   if (cfg_.event_weight > 0) add_event_term();
@@ -171,8 +169,7 @@ void Trainer::setup_flows() {
     throw std::invalid_argument("warp_weight > 0 needs an event stream with times, and the dataset in '" + data_.root +
                                 "' has none");
   if (cfg_.flow_refresh < 1) throw std::invalid_argument("flow_refresh must be >= 1");
-  if (!(cfg_.flow_model_from >= 0 && cfg_.flow_model_from <= 1))
-    throw std::invalid_argument("flow_model_from must be in [0, 1]");
+  require_fraction("flow_model_from", cfg_.flow_model_from);
   const bool model = cfg_.flow == FlowSource::Model;
   if (model && cfg_.flow_model_from > 0)
     throw std::invalid_argument(
