@@ -293,6 +293,8 @@ void Context::query_caps(const VkPhysicalDeviceProperties& props) {
   if (has_atomic_float) f12.pNext = &af;
   vkGetPhysicalDeviceFeatures2(physical_, &f2);
   caps_.host_query_reset = f12.hostQueryReset;
+  // The splat kernels read and write packed [N][3] rows as vec3 arrays of 12-byte stride.
+  if (!f12.scalarBlockLayout) throw Error(caps_.name + ": the scalar block layout (Vulkan 1.2) is required and missing");
   caps_.shared_float_atomic_add = has_atomic_float && af.shaderSharedFloat32AtomicAdd && !opts_.force_cas;
   caps_.buffer_float_atomic_add = has_atomic_float && af.shaderBufferFloat32AtomicAdd && !opts_.force_cas;
   vkGetPhysicalDeviceMemoryProperties(physical_, &mem_props_);
@@ -313,6 +315,7 @@ void Context::create_device() {
   af_on.shaderBufferFloat32AtomicAdd = caps_.buffer_float_atomic_add;
   VkPhysicalDeviceVulkan12Features f12_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
   f12_on.hostQueryReset = caps_.host_query_reset;
+  f12_on.scalarBlockLayout = VK_TRUE;
   if (af_on.shaderSharedFloat32AtomicAdd || af_on.shaderBufferFloat32AtomicAdd) f12_on.pNext = &af_on;
   VkPhysicalDeviceFeatures2 f2_on{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
   f2_on.pNext = &f12_on;

@@ -3,6 +3,7 @@
 // opacity, colour from SH and camera depth, and counts the 16x16 tiles its support ellipse
 // meets (0 when culled).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_scalar_block_layout : require
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
@@ -58,7 +59,7 @@ void main() {
   float Y[16];
   sh_basis(dir, pc.sh_degree, Y);
   vec3 coeffs[16];
-  load_sh_all(g, pc.num_gaussians, (pc.flags >> 8) & 3u, coeffs);
+  load_sh_all(g, (pc.flags >> 8) & 3u, coeffs);
   vec3 rgb = sh_eval(vec3(0.5), Y, coeffs);
   if (pc.sh_degree >= 1) {
     float wr[16], wg[16], wb[16];

@@ -5,6 +5,7 @@
 // through the camera-space mean, the rotated covariance and the SH view direction), which the
 // workgroup reduces to one partial 6-vector.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_scalar_block_layout : require
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
@@ -17,14 +18,16 @@ layout(std430, binding = kProjectBwdBindGid) readonly buffer Gid { uint gaussian
 layout(std430, binding = kProjectBwdBindG0) readonly buffer G0 { vec4 slot_grad_a[]; };
 layout(std430, binding = kProjectBwdBindG1) readonly buffer G1 { vec4 slot_grad_b[]; };
 layout(std430, binding = kProjectBwdBindG2) readonly buffer G2 { float slot_grad_c[]; };
-layout(std430, binding = kProjectBwdBindVMeans) buffer VMeans { float v_means[]; };
-layout(std430, binding = kProjectBwdBindVLogScales) buffer VLogScales { float v_log_scales[]; };
+// Packed [N][3] rows and SH bands ([N][2l+1] rgb triples) as scalar-layout vec3 arrays: one
+// access per triple (on CPU drivers each access is a loop over the SIMD lanes, whatever its width).
+layout(scalar, binding = kProjectBwdBindVMeans) buffer VMeans { vec3 v_means[]; };
+layout(scalar, binding = kProjectBwdBindVLogScales) buffer VLogScales { vec3 v_log_scales[]; };
 layout(std430, binding = kProjectBwdBindVQuats) buffer VQuats { vec4 v_quats[]; };  // [N] wxyz
 layout(std430, binding = kProjectBwdBindVOpacities) buffer VOpacities { float v_opacity_logits[]; };
-layout(std430, binding = kProjectBwdBindVSh0) buffer VSh0 { float v_sh0[]; };
-layout(std430, binding = kProjectBwdBindVSh1) buffer VSh1 { float v_sh1[]; };
-layout(std430, binding = kProjectBwdBindVSh2) buffer VSh2 { float v_sh2[]; };
-layout(std430, binding = kProjectBwdBindVSh3) buffer VSh3 { float v_sh3[]; };
+layout(scalar, binding = kProjectBwdBindVSh0) buffer VSh0 { vec3 v_sh0[]; };
+layout(scalar, binding = kProjectBwdBindVSh1) buffer VSh1 { vec3 v_sh1[]; };
+layout(scalar, binding = kProjectBwdBindVSh2) buffer VSh2 { vec3 v_sh2[]; };
+layout(scalar, binding = kProjectBwdBindVSh3) buffer VSh3 { vec3 v_sh3[]; };
 layout(std430, binding = kProjectBwdBindGrad2d) buffer Grad2d { float grad2d_norm[]; };
 layout(std430, binding = kProjectBwdBindPosePartial) writeonly buffer PosePartial { float pose_partial[]; };  // [groups][6]
 // From the forward (project.comp): the clamped colour max(raw, 0) (raw > 0 exactly where it is
@@ -43,26 +46,16 @@ shared float red[6][kProjectGroupSize];
 #else
 #define EVF_PUT(buf, i, value) buf[i] = (value)
 #endif
-#define EVF_PUT3(buf, i, v) EVF_PUT(buf, (i), (v).x); EVF_PUT(buf, (i) + 1, (v).y); EVF_PUT(buf, (i) + 2, (v).z)
 
-// SH gradients of every band the buffers hold (constant indices, see params.glsl).
+// SH gradients of every band the buffers hold (constant indices after unrolling, see params.glsl).
 void store_sh_all(uint g, uint degree, vec3 v[16]) {
-  EVF_PUT3(v_sh0, 3 * g, v[0]);
-  if (degree >= 1) {
-    uint i = g * 9;
-    EVF_PUT3(v_sh1, i, v[1]); EVF_PUT3(v_sh1, i + 3, v[2]); EVF_PUT3(v_sh1, i + 6, v[3]);
-  }
-  if (degree >= 2) {
-    uint i = g * 15;
-    EVF_PUT3(v_sh2, i, v[4]); EVF_PUT3(v_sh2, i + 3, v[5]); EVF_PUT3(v_sh2, i + 6, v[6]);
-    EVF_PUT3(v_sh2, i + 9, v[7]); EVF_PUT3(v_sh2, i + 12, v[8]);
-  }
-  if (degree >= 3) {
-    uint i = g * 21;
-    EVF_PUT3(v_sh3, i, v[9]); EVF_PUT3(v_sh3, i + 3, v[10]); EVF_PUT3(v_sh3, i + 6, v[11]);
-    EVF_PUT3(v_sh3, i + 9, v[12]); EVF_PUT3(v_sh3, i + 12, v[13]); EVF_PUT3(v_sh3, i + 15, v[14]);
-    EVF_PUT3(v_sh3, i + 18, v[15]);
-  }
+  EVF_PUT(v_sh0, g, v[0]);
+  if (degree >= 1)
+    for (uint k = 0u; k < 3u; ++k) EVF_PUT(v_sh1, 3u * g + k, v[1u + k]);
+  if (degree >= 2)
+    for (uint k = 0u; k < 5u; ++k) EVF_PUT(v_sh2, 5u * g + k, v[4u + k]);
+  if (degree >= 3)
+    for (uint k = 0u; k < 7u; ++k) EVF_PUT(v_sh3, 7u * g + k, v[9u + k]);
 }
 
 void main() {
@@ -166,8 +159,8 @@ void main() {
     v_ls = listed ? v_ls : vec3(0.0);
     v_q = listed ? v_q : vec4(0.0);
     v_logit = listed ? v_logit : 0.0;
-    EVF_PUT3(v_means, 3 * g, v_mean);
-    EVF_PUT3(v_log_scales, 3 * g, v_ls);
+    EVF_PUT(v_means, g, v_mean);
+    EVF_PUT(v_log_scales, g, v_ls);
     EVF_PUT(v_quats, g, v_q);
     EVF_PUT(v_opacity_logits, g, v_logit);
     EVF_PUT(grad2d_norm, g, length(v_mean2d));
