@@ -294,7 +294,8 @@ void Context::query_caps(const VkPhysicalDeviceProperties& props) {
   vkGetPhysicalDeviceFeatures2(physical_, &f2);
   caps_.host_query_reset = f12.hostQueryReset;
   // The splat kernels read and write packed [N][3] rows as vec3 arrays of 12-byte stride.
-  if (!f12.scalarBlockLayout) throw Error(caps_.name + ": the scalar block layout (Vulkan 1.2) is required and missing");
+  if (!f12.scalarBlockLayout)
+    throw Error(caps_.name + ": the scalar block layout (Vulkan 1.2) is required and missing");
   caps_.shared_float_atomic_add = has_atomic_float && af.shaderSharedFloat32AtomicAdd && !opts_.force_cas;
   caps_.buffer_float_atomic_add = has_atomic_float && af.shaderBufferFloat32AtomicAdd && !opts_.force_cas;
   vkGetPhysicalDeviceMemoryProperties(physical_, &mem_props_);
