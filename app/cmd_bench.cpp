@@ -195,8 +195,8 @@ static int bench_train(ArgParser& p) {
   Trainer t = splats.empty() ? Trainer(ctx, data, cfg) : Trainer(ctx, data, cfg, bench_start(splats, cfg));
   t.step();  // warm-up: pipelines compiled, buffers sized
   std::vector<double> total, fwd, loss, bwd, opt, ldi;
-  std::map<std::string, std::vector<double>> stages;  // the rasterizer's own stages
-  std::vector<std::string> order;
+  std::map<std::string, std::vector<double>> stages, ldi_stages;  // the rasterizer's, the LDI branch's
+  std::vector<std::string> order, ldi_order;
   const uint64_t submits0 = ctx.submits(), transfers0 = ctx.transfers();
   for (int i = 0; i < steps; ++i) {
     StepStats st = t.step();
@@ -204,6 +204,12 @@ static int bench_train(ArgParser& p) {
       if (!stages.count(name)) order.push_back(name);
       stages[name].push_back(ms);
     }
+    std::map<std::string, double> step_ldi;  // a stage recorded several times a step (chunks): its sum
+    for (auto& [name, ms] : st.ldi_stages) {
+      if (!ldi_stages.count(name) && !step_ldi.count(name)) ldi_order.push_back(name);
+      step_ldi[name] += ms;
+    }
+    for (auto& [name, ms] : step_ldi) ldi_stages[name].push_back(ms);
     total.push_back(st.ms);
     fwd.push_back(st.raster_forward_ms);
     loss.push_back(st.loss_ms);
@@ -227,6 +233,9 @@ static int bench_train(ArgParser& p) {
         1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), median(ldi), m);
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
+    std::printf("}, \"ldi_stages_ms\": {");
+    for (size_t i = 0; i < ldi_order.size(); ++i)
+      std::printf("%s\"%s\": %.3f", i ? ", " : "", ldi_order[i].c_str(), median(ldi_stages[ldi_order[i]]));
     std::printf("}}\n");
   } else {
     std::printf("train bench (%s) on %s: %ux%u, %u Gaussians, one view per step, median of %d steps\n", method.c_str(),
@@ -238,6 +247,11 @@ static int bench_train(ArgParser& p) {
     std::printf("  rasterizer stages:");
     for (auto& name : order) std::printf(" %s %.1f,", name.c_str(), median(stages[name]));
     std::printf(" ms\n");
+    if (!ldi_order.empty()) {
+      std::printf("  LDI branch stages:");
+      for (auto& name : ldi_order) std::printf(" %s %.1f,", name.c_str(), median(ldi_stages[name]));
+      std::printf(" ms\n");
+    }
     std::printf("  peak memory: host %.1f MiB (the process's resident set), device %.1f MiB (buffers)\n", host_mib,
                 device_mib);
     std::printf("  round trips per step: %.1f submits, %.1f host-device copies\n", submits, transfers);

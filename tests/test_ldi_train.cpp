@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <functional>
 #include <numeric>
+#include <set>
 
 #include "camera/trajectory.h"
 #include "events/event_model.h"
@@ -158,6 +159,17 @@ TEST_CASE("LDI branch: a short run with every term changes the network and the s
     REQUIRE_FALSE(st.skipped);
     for (double v : st.term_values) REQUIRE(std::isfinite(v));
     CHECK(st.term_values[2] > 0.0);  // the event term on the LDI frames took part
+    if (ctx.caps().timestamps) {     // every stage of the branch has its time (bench train prints them)
+      std::set<std::string> names;
+      for (const auto& [name, ms] : st.ldi_stages) {
+        names.insert(name);
+        REQUIRE(ms >= 0.0);
+      }
+      for (const char* stage : {"ldi crops", "ldi event tensors", "ldi conv 0", "ldi conv 1", "ldi frames",
+                                "ldi blur term", "ldi joint term", "ldi event term", "ldi joint to renders",
+                                "ldi conv backward 1", "ldi conv backward 0", "ldi adam"})
+        CHECK(names.count(stage) == 1);
+    }
   }
   CHECK(t.ldi()->model().network().layer(0).weight_values() != w0);
   CHECK(t.cloud().sh != c0.sh);

@@ -87,7 +87,8 @@ void LdiModel::run_chunk(gpu::Commands& cmd, uint32_t first) {
     record_side_counts(cmd, events_, view_, times_[c.frame], c.side, crop_, net_.input().buffer(), j);
   }
   record_counts_to_float(cmd, net_.input().buffer(), values);
-  net_.forward(cmd, "", n);
+  cmd.mark("ldi event tensors");
+  net_.forward(cmd, "ldi conv", n);
 }
 
 void LdiModel::forward(gpu::Commands& cmd, size_t view, const std::vector<double>& times, const Crop& crop,
@@ -175,7 +176,8 @@ void LdiModel::backward_calls(gpu::Commands& cmd) {
   for (uint32_t first = last;; first -= batch()) {
     if (first != last) run_chunk(cmd, first);
     cmd.copy(side_grads_, net_.output_grad().buffer(), chunk_size(first) * plane, first * plane, 0);
-    net_.backward(cmd, false, first != last, "", chunk_size(first));
+    cmd.mark("ldi side gradients");
+    net_.backward(cmd, false, first != last, "ldi conv backward", chunk_size(first));
     if (first == 0) break;
   }
 }

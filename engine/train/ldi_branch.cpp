@@ -125,13 +125,18 @@ void LdiBranch::record(gpu::Commands& cmd, uint32_t view, uint32_t step, const s
   crop_ = choose_crop(step);
   ldi::record_crop(cmd, blurry_[view], W, H, 3, crop_, blurry_crop_);
   ldi::record_crop(cmd, target_[view], W, H, 3, crop_, target_crop_);
+  cmd.mark("ldi crops");
   model_->forward(cmd, view, frame_times(view), crop_, blurry_crop_);
+  cmd.mark("ldi frames");
   record_blur(cmd);
+  cmd.mark("ldi blur term");
   if (joint_on)
     record_joint(cmd, renders, image_model);
   else
     cmd.fill(joint_->value_buffer(), 0u, uint64_t(joint_->value_offset()) * 4, 4);
+  cmd.mark("ldi joint term");
   record_events(cmd, view, seed);
+  cmd.mark("ldi event term");
 }
 
 // Inside the exposure, whatever the rounding of t_0 + u T.
@@ -229,8 +234,10 @@ void LdiBranch::backward(gpu::Commands& cmd, const ImageModel& image_model) {
     if (joint_on_) ldi::record_uncrop_add(cmd, g_render_[i], W, H, 3, crop_, image_model.render_grad(i));
     grads.push_back(&grad_[i]);
   }
+  cmd.mark("ldi joint to renders");
   model_->backward_from_frames(cmd, grads);
   adam_->step(cmd);
+  cmd.mark("ldi adam");
 }
 
 nn::SafetensorsFile LdiBranch::state() const {

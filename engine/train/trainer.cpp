@@ -291,6 +291,7 @@ StepStats Trainer::step() {
                  cfg_.seed * 0x100000001B3ull + step_);
     cmd_.submit();
     st.ldi_ms = clock.lap();
+    st.ldi_stages = cmd_.stage_ms();
   }
   read_losses(st, exposure_on, true);
   if (st.flipped && model_flow_step_ > 0) refresh_model_flow(st.view);  // the reversed trajectory's flow
@@ -301,6 +302,7 @@ StepStats Trainer::step() {
       ldi_->backward(cmd_, *image_model_);  // the joint loss's share of the renders' gradients
       cmd_.submit();
       st.ldi_ms += clock.lap();
+      st.ldi_stages.insert(st.ldi_stages.end(), cmd_.stage_ms().begin(), cmd_.stage_ms().end());
     }
     backward_raster(st.view);
     st.raster_backward_ms += clock.lap();

@@ -42,6 +42,8 @@ struct StepStats {
   // Wall-clock split of the step (each part ends in a submit and wait); optimizer_ms includes
   // density control; ldi_ms: the LDI branch's forward, terms, backward and Adam step (ldi=on).
   double raster_forward_ms = 0, loss_ms = 0, raster_backward_ms = 0, optimizer_ms = 0, ldi_ms = 0;
+  // The LDI branch's stages (GPU timestamps, ms; LdiBranch's marks), forward then backward.
+  std::vector<std::pair<std::string, double>> ldi_stages;
   // Each term's unweighted value, in the order the terms were added (names: Trainer::losses()).
   std::vector<double> term_values;
 };
