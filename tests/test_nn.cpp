@@ -159,6 +159,20 @@ TEST_CASE("nn: 3x3 and 1x1 convolutions, stride 1 and 2, forward and gradients a
     check_conv(c);
 }
 
+TEST_CASE("nn: the direct 3x3 convolution (CPU drivers) at widths of whole vec4s, edges and partial groups",
+          "[gpu][nn]") {
+  // 3x3 stride-1 layers with 8 or more output channels take the direct kernel on CPU drivers (its
+  // input gradient with 8 or more input channels), rows as vec4s where the width is a multiple of
+  // 4: one column of blocks (w 4), heights not a multiple of its 4 rows, 20 and 9 channels (a
+  // partial group of 16), a 32-channel input; widths 13 and 6 (one value per access, a partial
+  // last column of blocks).
+  for (const ConvCase& c : {ConvCase{5, 8, 3, 1, 10, 12}, ConvCase{9, 20, 3, 1, 7, 8}, ConvCase{16, 16, 3, 1, 6, 4},
+                            ConvCase{32, 8, 3, 1, 3, 8}, ConvCase{9, 12, 3, 1, 5, 13}, ConvCase{8, 8, 3, 1, 9, 6}})
+    check_conv(c);
+  check_conv_batch({8, 12, 3, 1, 5, 8}, 3, 4, true);  // the first 3 images of a batch of 4
+  check_conv_batch({8, 9, 3, 1, 4, 7}, 2, 3, true);
+}
+
 TEST_CASE("nn: a batch of images runs as one convolution, each image padded on its own", "[gpu][nn]") {
   // Images of 9 x 13 pixels: the GEMM's 128-pixel tiles and its vec4 loads straddle images.
   check_conv_batch({3, 5, 3, 1, 9, 13}, 3, 3, true);
@@ -168,29 +182,39 @@ TEST_CASE("nn: a batch of images runs as one convolution, each image padded on i
   check_conv_batch({2, 3, 3, 1, 25, 40}, 5, 5, false);
 }
 
-TEST_CASE("nn: the weight gradient over several pixel splits and the accumulating forms", "[gpu][nn]") {
+namespace {
+
+// Two backward passes of an in_c -> out_c 3x3 convolution over an h x w image, the second adding
+// into the first's dx, weight and bias gradients: each gradient must be twice the reference.
+void check_accumulating(uint32_t in_c, uint32_t out_c, uint32_t h, uint32_t w, uint64_t seed) {
   auto& ctx = test::gpu_context();
-  // 2600 output pixels: two splits of the weight gradient's partial sums.
-  NnTensor x(2, 40, 65);
-  x.v = random_values(x.v.size(), 5);
-  std::vector<double> w = random_values(3 * 2 * 9, 6, 0.5), b = random_values(3, 7);
-  round_to_float(x.v), round_to_float(w), round_to_float(b);
-  const NnTensor y = ref::nn_conv2d(x, w, b, 3, 3, 1);
-  std::vector<double> r = random_values(y.v.size(), 8);
+  INFO("conv " << in_c << "->" << out_c << " " << w << "x" << h);
+  NnTensor x(in_c, h, w);
+  x.v = random_values(x.v.size(), seed);
+  std::vector<double> wt = random_values(size_t(out_c) * in_c * 9, seed + 1, 0.5), b = random_values(out_c, seed + 2);
+  round_to_float(x.v), round_to_float(wt), round_to_float(b);
+  std::vector<double> r = random_values(size_t(out_c) * h * w, seed + 3);
   round_to_float(r);
-  nn::Conv2d conv(ctx, {2, 3, 3, 1}, "conv");
-  conv.set_parameters(to_float(w), to_float(b));
-  nn::Tensor gx = upload(x, "x"), dy(ctx, {3, 40, 65}, "dy"), dx(ctx, gx.shape(), "dx");
+  nn::Conv2d conv(ctx, {in_c, out_c, 3, 1}, "conv");
+  conv.set_parameters(to_float(wt), to_float(b));
+  nn::Tensor gx = upload(x, "x"), dy(ctx, {out_c, h, w}, "dy"), dx(ctx, gx.shape(), "dx");
   dy.upload(to_float(r));
   gpu::Commands cmd(ctx);
   conv.backward(cmd, gx, dy, &dx);
   conv.backward(cmd, gx, dy, &dx, true, true);  // adds the same gradients again
   cmd.submit();
-  auto loss = [&] { return 2.0 * ref::nn_dot(ref::nn_conv2d(x, w, b, 3, 3, 1), r); };
-  require_close(conv.weight_grad().read<float>(w.size()), ref::nn_central_differences(w, loss, 1e-3), 1e-3, "dw");
-  require_close(conv.bias_grad().read<float>(3), ref::nn_central_differences(b, loss, 1e-3), 1e-3, "db");
+  auto loss = [&] { return 2.0 * ref::nn_dot(ref::nn_conv2d(x, wt, b, out_c, 3, 1), r); };
+  require_close(conv.weight_grad().read<float>(wt.size()), ref::nn_central_differences(wt, loss, 1e-3), 1e-3, "dw");
+  require_close(conv.bias_grad().read<float>(out_c), ref::nn_central_differences(b, loss, 1e-3), 1e-3, "db");
   require_close(dx.download(), ref::nn_central_differences(x.v, loss, 1e-3), 1e-3, "dx");
   test::require_no_validation_messages();
+}
+
+}  // namespace
+
+TEST_CASE("nn: the weight gradient over several pixel splits and the accumulating forms", "[gpu][nn]") {
+  check_accumulating(2, 3, 40, 65, 5);  // 2600 output pixels: two splits of the weight gradient's partial sums
+  check_accumulating(8, 4, 6, 12, 9);   // 8 input channels: the direct kernel's input gradient (CPU drivers)
 }
 
 TEST_CASE("nn: the backward is deterministic (no atomics): two runs give the same bits", "[gpu][nn]") {

@@ -40,6 +40,9 @@ std::string kernel(const char* base, uint32_t m) {
   return std::string("nn/") + base + (tiny(m) ? "_tiny" : narrow(m) ? "_narrow" : "");
 }
 
+// Channels rounded up to whole groups of the direct kernel.
+uint32_t pad_group(uint32_t c) { return (c + kDirectGroup - 1) / kDirectGroup * kDirectGroup; }
+
 }  // namespace
 
 Conv2d::Conv2d(gpu::Context& ctx, ConvSpec spec, std::string name) : ctx_(ctx), spec_(spec), name_(std::move(name)) {
@@ -56,6 +59,8 @@ Conv2d::Conv2d(gpu::Context& ctx, ConvSpec spec, std::string name) : ctx_(ctx), 
   weight_grad_ = gpu::Buffer(ctx, weight_count() * 4, name_ + ".weight_grad");
   bias_grad_ = gpu::Buffer(ctx, spec.out_c * 4, name_ + ".bias_grad");
   partial_ = gpu::Buffer(ctx, 16, name_ + ".partial_sums");
+  weight_t_ = gpu::Buffer(ctx, uint64_t(spec.in_c) * 9 * pad_group(spec.out_c) * 4, name_ + ".weight_t");
+  weight_tb_ = gpu::Buffer(ctx, uint64_t(spec.out_c) * 9 * pad_group(spec.in_c) * 4, name_ + ".weight_tb");
   init_he(0);
 }
 
@@ -103,11 +108,36 @@ void Conv2d::set_parameters(const std::vector<float>& weight, const std::vector<
   bias_.write(bias);
 }
 
+// Measured on lavapipe (bench conv, bench train's LDI stages): the direct kernel against the
+// GEMM's gathers of 9 taps per input value, for layers of 8 or more output channels; one channel
+// of a group of 16 would waste the rest of it.
+bool Conv2d::direct(uint32_t channels) const {
+  return ctx_.caps().cpu_driver && spec_.ksize == 3 && spec_.stride == 1 && channels >= 8;
+}
+
+void Conv2d::record_direct(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t in_c, uint32_t out_c,
+                           const Shape& s, bool flip, bool accumulate) const {
+  const gpu::Buffer& wt = flip ? weight_tb_ : weight_t_;
+  WeightTPC tpc{spec_.in_c, spec_.out_c, in_c, pad_group(out_c), flip ? 1u : 0u, 0, 0, 0};
+  cmd.dispatch("nn/conv_weight_t", {{kWeightTBindW, weight_}, {kWeightTBindWT, wt}}, tpc,
+               cmd.linear_groups(gpu::Commands::div_up(uint64_t(tpc.rows) * 9 * tpc.cols, kNnGroupSize)));
+  DirectConvPC pc{};
+  pc.in_c = in_c, pc.out_c = out_c, pc.h = s.h, pc.w = s.w, pc.out_pad = pad_group(out_c);
+  pc.blocks_x = gpu::Commands::div_up(s.w, 4), pc.blocks_y = gpu::Commands::div_up(s.h, kDirectRows);
+  pc.groups = pc.out_pad / kDirectGroup, pc.images = s.n;
+  pc.bias = flip ? 0u : 1u, pc.accumulate = accumulate ? 1u : 0u;
+  const uint64_t blocks = uint64_t(pc.blocks_x) * pc.blocks_y * pc.groups * pc.images;
+  cmd.dispatch(s.w % 4 == 0 ? "nn/conv3x3_direct" : "nn/conv3x3_direct_any",
+               {{kDirectBindX, x.buffer()}, {kDirectBindWT, wt}, {kDirectBindBias, bias_}, {kDirectBindY, y.buffer()}},
+               pc, cmd.linear_groups(gpu::Commands::div_up(blocks, kDirectGroupSize)));
+}
+
 void Conv2d::forward(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t images) const {
   const Shape in = run_shape(x, images), out = output_shape(in);
   if (y.shape().image() != out.image() || y.shape().n < in.n)
     throw std::invalid_argument("conv " + name_ + " output: " + y.name() + " is " + y.shape().str() + ", expected " +
                                 out.str());
+  if (direct(spec_.out_c)) return record_direct(cmd, x, y, spec_.in_c, spec_.out_c, in, false, false);
   const uint32_t taps = spec_.ksize * spec_.ksize;
   ConvPC pc = conv_pc(spec_, in, out, spec_.out_c, uint32_t(out.count() / out.c), spec_.in_c * taps);
   cmd.dispatch(
@@ -129,10 +159,13 @@ void Conv2d::backward(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, con
     const uint32_t taps = spec_.ksize * spec_.ksize;
     ConvPC pc = conv_pc(spec_, in, out, spec_.in_c, uint32_t(in.count() / in.c), spec_.out_c * taps);
     pc.accumulate = accumulate_input ? 1u : 0u;
-    cmd.dispatch(
-        kernel("conv_bwd_input", pc.gemm_m),
-        {{kConvBwdInputBindDy, dy.buffer()}, {kConvBwdInputBindW, weight_}, {kConvBwdInputBindDx, dx->buffer()}}, pc,
-        tile_groups(cmd, pc));
+    if (direct(spec_.in_c))
+      record_direct(cmd, dy, *dx, spec_.out_c, spec_.in_c, in, true, accumulate_input);
+    else
+      cmd.dispatch(
+          kernel("conv_bwd_input", pc.gemm_m),
+          {{kConvBwdInputBindDy, dy.buffer()}, {kConvBwdInputBindW, weight_}, {kConvBwdInputBindDx, dx->buffer()}}, pc,
+          tile_groups(cmd, pc));
   }
   backward_weights(cmd, in, x, dy, accumulate_params);
 }

@@ -1,6 +1,9 @@
 // A 2-D convolution layer (3x3 or 1x1, padding ksize / 2, stride 1 or 2) with its weights, bias
 // and their gradients on the device; forward and backward are recorded into a command batch as
-// tiled implicit-GEMM kernels (shaders/nn/nn_layout.h). Weights are W[out_c][in_c][ky][kx].
+// tiled implicit-GEMM kernels (shaders/nn/nn_layout.h), or on CPU drivers, for 3x3 stride-1
+// layers, as the direct convolution (forward with 8 or more output channels, input gradient with
+// 8 or more input channels; rows read as vec4s where the width is a multiple of 4). Weights are
+// W[out_c][in_c][ky][kx].
 //
 // The weight gradient is deterministic: partial sums per chunk of output pixels, then a second
 // pass adds them in a fixed order (no float atomics).
@@ -61,6 +64,12 @@ class Conv2d {
 
  private:
   void backward_weights(gpu::Commands& cmd, const Shape& in, const Tensor& x, const Tensor& dy, bool accumulate);
+  // Whether the direct kernel runs a pass writing `channels` channels.
+  bool direct(uint32_t channels) const;
+  // The direct kernel from x (in_c channels) to y (out_c), WT from W first (flip: the input
+  // gradient's kernel, into weight_tb_).
+  void record_direct(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t in_c, uint32_t out_c,
+                     const Shape& s, bool flip, bool accumulate) const;
   // The images a pass runs over x (`images`, 0 for all), checked against x's batch.
   Shape run_shape(const Tensor& x, uint32_t images) const;
   uint64_t partial_bytes(const Shape& in, uint32_t* pixels_per_split) const;
@@ -68,6 +77,7 @@ class Conv2d {
   ConvSpec spec_;
   std::string name_;
   gpu::Buffer weight_, bias_, weight_grad_, bias_grad_, partial_;
+  gpu::Buffer weight_t_, weight_tb_;  // the direct kernel's WT: forward, input gradient
 };
 
 }  // namespace evflow::nn

@@ -58,6 +58,38 @@ struct ConvPC {
   uint splits;            // reduce: partial sums to add
 };
 
+// Direct 3x3 convolution, stride 1, padding 1 (nn/conv3x3_direct; CPU drivers, where every
+// buffer access is a loop over the SIMD lanes and the GEMM's gathers of 9 taps per input value
+// cost more than its multiply-adds). One invocation computes a block of 4 x kDirectRows output
+// pixels for kDirectGroup output channels: per input channel it reads each of the block's
+// kDirectRows + 2 input rows as three vec4s (the row's 4 pixels and its neighbours on each side)
+// and the 9 taps' weights of its channels as vec4s, then does 9 x 4 x kDirectRows x kDirectGroup
+// multiply-adds from registers. Rows are read as vec4s where the width is a multiple of 4
+// (nn/conv3x3_direct), else one value at a time (nn/conv3x3_direct_any). The weights are
+// rearranged to WT[ci][tap][co], co padded to kDirectGroup (nn/conv_weight_t): for the forward
+// WT[ci][tap][co] = W[co][ci][tap]; for the input gradient, a convolution of dy,
+// WT[co][tap][ci] = W[co][ci][8 - tap] (the flipped kernel, transposed).
+EVF_CONST(uint, kDirectRows, 4u)
+EVF_CONST(uint, kDirectGroup, 16u)
+EVF_CONST(uint, kDirectGroupSize, 16u)  // invocations per workgroup
+struct DirectConvPC {
+  uint in_c, out_c, h, w;  // input and output channels; both images are h x w
+  uint out_pad;            // out_c rounded up to kDirectGroup (WT's row length)
+  uint blocks_x, blocks_y; // 4-pixel columns and kDirectRows-pixel rows of blocks per image
+  uint groups;             // output channel groups (out_pad / kDirectGroup)
+  uint images;
+  uint bias;               // 1: add bias[co] (the forward)
+  uint accumulate;         // 1: add into y (the input gradient's accumulating form)
+  uint pad0;
+};
+// nn/conv_weight_t: WT from W, one invocation per WT value (zeros in the padding).
+struct WeightTPC {
+  uint in_c, out_c;  // the layer's
+  uint rows, cols;   // WT is [rows][9][cols]: rows = in_c, cols = out_pad (forward) or the reverse
+  uint flip;         // 1: the input gradient's flipped, transposed kernel
+  uint pad0, pad1, pad2;
+};
+
 // Element-wise layers, one invocation per value: ReLU, sigmoid (forward from x, backward from
 // the forward's output y and dy), and x2 nearest up-sampling to out_h x out_w (at most 2 h x 2 w:
 // out(c, y, x) = in(c, y / 2, x / 2); its backward adds the up to four outputs of each input).
@@ -87,6 +119,14 @@ EVF_BIND(kConvBwdInputBindDx, 2u, Dx)
 EVF_BIND(kConvBwdWeightBindX, 0u, X)
 EVF_BIND(kConvBwdWeightBindDy, 1u, Dy)
 EVF_BIND(kConvBwdWeightBindPartial, 2u, Partial)
+// nn/conv3x3_direct
+EVF_BIND(kDirectBindX, 0u, X)
+EVF_BIND(kDirectBindWT, 1u, WeightT)
+EVF_BIND(kDirectBindBias, 2u, Bias)
+EVF_BIND(kDirectBindY, 3u, Y)
+// nn/conv_weight_t
+EVF_BIND(kWeightTBindW, 0u, Weight)
+EVF_BIND(kWeightTBindWT, 1u, WeightT)
 // nn/conv_reduce
 EVF_BIND(kConvReduceBindPartial, 0u, Partial)
 EVF_BIND(kConvReduceBindDw, 1u, Dw)
