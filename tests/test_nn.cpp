@@ -215,6 +215,9 @@ void check_accumulating(uint32_t in_c, uint32_t out_c, uint32_t h, uint32_t w, u
 TEST_CASE("nn: the weight gradient over several pixel splits and the accumulating forms", "[gpu][nn]") {
   check_accumulating(2, 3, 40, 65, 5);  // 2600 output pixels: two splits of the weight gradient's partial sums
   check_accumulating(8, 4, 6, 12, 9);   // 8 input channels: the direct kernel's input gradient (CPU drivers)
+  // 8 output channels: the direct weight gradient (CPU drivers), over 144 blocks of 4 x 4 pixels:
+  // two splits of 128 blocks.
+  check_accumulating(1, 8, 36, 64, 17);
 }
 
 TEST_CASE("nn: the backward is deterministic (no atomics): two runs give the same bits", "[gpu][nn]") {

@@ -40,8 +40,24 @@ std::string kernel(const char* base, uint32_t m) {
   return std::string("nn/") + base + (tiny(m) ? "_tiny" : narrow(m) ? "_narrow" : "");
 }
 
-// Channels rounded up to whole groups of the direct kernel.
-uint32_t pad_group(uint32_t c) { return (c + kDirectGroup - 1) / kDirectGroup * kDirectGroup; }
+// The direct kernels' geometry: the full one, or under GPU-assisted validation the "_checked"
+// builds' small one (nn_layout.h).
+struct DirectGeometry {
+  uint32_t rows, group;
+  const char* suffix;
+};
+DirectGeometry direct_geometry(const gpu::Context& ctx) {
+  if (ctx.options().gpu_validation) return {kDirectRowsChecked, kDirectGroupChecked, "_checked"};
+  return {kDirectRows, kDirectGroup, ""};
+}
+
+// The direct kernel's build for images `width` wide: rows as vec4s or one value per access.
+std::string direct_kernel(const gpu::Context& ctx, const char* base, uint32_t width) {
+  return std::string("nn/") + base + (width % 4 == 0 ? "" : "_any") + direct_geometry(ctx).suffix;
+}
+
+// Channels rounded up to whole groups of `group` (a multiple of 4).
+uint32_t pad_group(uint32_t c, uint32_t group = kDirectGroup) { return (c + group - 1) / group * group; }
 
 }  // namespace
 
@@ -81,15 +97,20 @@ Shape Conv2d::run_shape(const Tensor& x, uint32_t images) const {
   return s.batch(images ? images : s.n);
 }
 
-// The partial sums' bytes for a backward over `in`, and the output pixels per split.
-uint64_t Conv2d::partial_bytes(const Shape& in, uint32_t* pixels_per_split) const {
+// The partial sums' bytes for a backward over `in`, and the split: output pixels per split of the
+// GEMM, or blocks per split of the direct kernel (direct(out_c)); splits double until the sums fit
+// one binding.
+uint64_t Conv2d::partial_bytes(const Shape& in, uint32_t* per_split_count) const {
   const Shape out = output_shape(in);
   const uint64_t per_split = uint64_t(spec_.out_c) * (spec_.in_c * spec_.ksize * spec_.ksize + 1) * 4;
-  const uint64_t pixels = out.count() / out.c;
-  uint32_t pps = kPixelsPerSplit;
-  while (per_split * gpu::Commands::div_up(pixels, pps) > ctx_.caps().max_storage_buffer_range) pps *= 2;
-  if (pixels_per_split) *pixels_per_split = pps;
-  return per_split * gpu::Commands::div_up(pixels, pps);
+  const bool blocks = direct(spec_.out_c);
+  const uint64_t units = blocks ? uint64_t(gpu::Commands::div_up(out.w, 4)) *
+                                      gpu::Commands::div_up(out.h, direct_geometry(ctx_).rows) * out.n
+                                : out.count() / out.c;
+  uint32_t count = blocks ? kDirectBlocksPerSplit : kPixelsPerSplit;
+  while (per_split * gpu::Commands::div_up(units, count) > ctx_.caps().max_storage_buffer_range) count *= 2;
+  if (per_split_count) *per_split_count = count;
+  return per_split * gpu::Commands::div_up(units, count);
 }
 
 void Conv2d::reserve(const Shape& in) { partial_.ensure(partial_bytes(in, nullptr)); }
@@ -118,16 +139,17 @@ bool Conv2d::direct(uint32_t channels) const {
 void Conv2d::record_direct(gpu::Commands& cmd, const Tensor& x, const Tensor& y, uint32_t in_c, uint32_t out_c,
                            const Shape& s, bool flip, bool accumulate) const {
   const gpu::Buffer& wt = flip ? weight_tb_ : weight_t_;
-  WeightTPC tpc{spec_.in_c, spec_.out_c, in_c, pad_group(out_c), flip ? 1u : 0u, 0, 0, 0};
+  const DirectGeometry geo = direct_geometry(ctx_);
+  WeightTPC tpc{spec_.in_c, spec_.out_c, in_c, pad_group(out_c, geo.group), flip ? 1u : 0u, 0, 0, 0};
   cmd.dispatch("nn/conv_weight_t", {{kWeightTBindW, weight_}, {kWeightTBindWT, wt}}, tpc,
                cmd.linear_groups(gpu::Commands::div_up(uint64_t(tpc.rows) * 9 * tpc.cols, kNnGroupSize)));
   DirectConvPC pc{};
-  pc.in_c = in_c, pc.out_c = out_c, pc.h = s.h, pc.w = s.w, pc.out_pad = pad_group(out_c);
-  pc.blocks_x = gpu::Commands::div_up(s.w, 4), pc.blocks_y = gpu::Commands::div_up(s.h, kDirectRows);
-  pc.groups = pc.out_pad / kDirectGroup, pc.images = s.n;
+  pc.in_c = in_c, pc.out_c = out_c, pc.h = s.h, pc.w = s.w, pc.out_pad = tpc.cols;
+  pc.blocks_x = gpu::Commands::div_up(s.w, 4), pc.blocks_y = gpu::Commands::div_up(s.h, geo.rows);
+  pc.groups = pc.out_pad / geo.group, pc.images = s.n;
   pc.bias = flip ? 0u : 1u, pc.accumulate = accumulate ? 1u : 0u;
   const uint64_t blocks = uint64_t(pc.blocks_x) * pc.blocks_y * pc.groups * pc.images;
-  cmd.dispatch(s.w % 4 == 0 ? "nn/conv3x3_direct" : "nn/conv3x3_direct_any",
+  cmd.dispatch(direct_kernel(ctx_, "conv3x3_direct", s.w),
                {{kDirectBindX, x.buffer()}, {kDirectBindWT, wt}, {kDirectBindBias, bias_}, {kDirectBindY, y.buffer()}},
                pc, cmd.linear_groups(gpu::Commands::div_up(blocks, kDirectGroupSize)));
 }
@@ -176,18 +198,36 @@ void Conv2d::backward_weights(gpu::Commands& cmd, const Shape& in, const Tensor&
   const Shape out = output_shape(in);
   const uint32_t n = spec_.in_c * spec_.ksize * spec_.ksize + 1, pixels = uint32_t(out.count() / out.c);
   ConvPC pc = conv_pc(spec_, in, out, spec_.out_c, n, pixels);
-  const uint64_t bytes = partial_bytes(in, &pc.pixels_per_split);
-  pc.splits = gpu::Commands::div_up(pixels, pc.pixels_per_split);
-  if (pc.splits > ctx_.caps().max_workgroup_count[2])
-    throw gpu::Error("conv " + name_ + ": " + std::to_string(pc.splits) + " pixel splits exceed the device grid");
+  uint32_t per_split = 0;
+  const uint64_t bytes = partial_bytes(in, &per_split);
   partial_.ensure(bytes);
-  gpu::Groups g = tile_groups(cmd, pc);
-  g.z = pc.splits;
-  cmd.dispatch(kernel("conv_bwd_weight", pc.gemm_m),
-               {{kConvBwdWeightBindX, x.buffer()},
-                {kConvBwdWeightBindDy, dy.buffer()},
-                {kConvBwdWeightBindPartial, gpu::BufferRef(partial_, 0, bytes)}},
-               pc, g);
+  if (direct(spec_.out_c)) {
+    const DirectGeometry geo = direct_geometry(ctx_);
+    DirectGradPC dp{};
+    dp.in_c = spec_.in_c, dp.out_c = spec_.out_c, dp.h = in.h, dp.w = in.w;
+    dp.blocks_x = gpu::Commands::div_up(in.w, 4), dp.blocks_y = gpu::Commands::div_up(in.h, geo.rows);
+    dp.groups = pad_group(spec_.out_c, geo.group) / geo.group, dp.images = in.n, dp.blocks_per_split = per_split;
+    dp.splits = gpu::Commands::div_up(dp.blocks_x * dp.blocks_y * in.n, per_split);
+    pc.splits = dp.splits;
+    cmd.dispatch(direct_kernel(ctx_, "conv3x3_direct_dw", in.w),
+                 {{kDirectDwBindX, x.buffer()},
+                  {kDirectDwBindDy, dy.buffer()},
+                  {kDirectDwBindPartial, gpu::BufferRef(partial_, 0, bytes)}},
+                 dp,
+                 cmd.linear_groups(gpu::Commands::div_up(uint64_t(dp.splits) * dp.groups * dp.in_c, kDirectGroupSize)));
+  } else {
+    pc.pixels_per_split = per_split;
+    pc.splits = gpu::Commands::div_up(pixels, per_split);
+    if (pc.splits > ctx_.caps().max_workgroup_count[2])
+      throw gpu::Error("conv " + name_ + ": " + std::to_string(pc.splits) + " pixel splits exceed the device grid");
+    gpu::Groups g = tile_groups(cmd, pc);
+    g.z = pc.splits;
+    cmd.dispatch(kernel("conv_bwd_weight", pc.gemm_m),
+                 {{kConvBwdWeightBindX, x.buffer()},
+                  {kConvBwdWeightBindDy, dy.buffer()},
+                  {kConvBwdWeightBindPartial, gpu::BufferRef(partial_, 0, bytes)}},
+                 pc, g);
+  }
   pc.accumulate = accumulate ? 1u : 0u;
   cmd.dispatch("nn/conv_reduce",
                {{kConvReduceBindPartial, gpu::BufferRef(partial_, 0, bytes)},

@@ -1,9 +1,9 @@
 // A 2-D convolution layer (3x3 or 1x1, padding ksize / 2, stride 1 or 2) with its weights, bias
 // and their gradients on the device; forward and backward are recorded into a command batch as
 // tiled implicit-GEMM kernels (shaders/nn/nn_layout.h), or on CPU drivers, for 3x3 stride-1
-// layers, as the direct convolution (forward with 8 or more output channels, input gradient with
-// 8 or more input channels; rows read as vec4s where the width is a multiple of 4). Weights are
-// W[out_c][in_c][ky][kx].
+// layers, as the direct convolution (forward and weight gradient with 8 or more output channels,
+// input gradient with 8 or more input channels; rows read as vec4s where the width is a multiple
+// of 4). Weights are W[out_c][in_c][ky][kx].
 //
 // The weight gradient is deterministic: partial sums per chunk of output pixels, then a second
 // pass adds them in a fixed order (no float atomics).
@@ -72,7 +72,7 @@ class Conv2d {
                      const Shape& s, bool flip, bool accumulate) const;
   // The images a pass runs over x (`images`, 0 for all), checked against x's batch.
   Shape run_shape(const Tensor& x, uint32_t images) const;
-  uint64_t partial_bytes(const Shape& in, uint32_t* pixels_per_split) const;
+  uint64_t partial_bytes(const Shape& in, uint32_t* per_split_count) const;
   gpu::Context& ctx_;
   ConvSpec spec_;
   std::string name_;

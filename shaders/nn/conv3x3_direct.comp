@@ -1,7 +1,7 @@
 #version 450
 // Direct 3x3 convolution, stride 1, padding 1 (nn_layout.h, DirectConvPC): y[b][co][p] =
 // bias[co] + sum over (ci, tap) of WT[ci][tap][co] x[b][ci][p + tap offset] (0 outside the image),
-// written or added. One invocation per block of 4 x kDirectRows pixels and kDirectGroup output
+// written or added. One invocation per block of 4 x kRows pixels and kGroup output
 // channels; see nn_layout.h for why and for WT.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
@@ -21,24 +21,11 @@ layout(std430, binding = kDirectBindWT) readonly buffer WeightT { vec4 wt[]; }; 
 layout(std430, binding = kDirectBindBias) readonly buffer Bias { float bias[]; };
 layout(push_constant) uniform PC { DirectConvPC pc; };
 
-const uint kRows = kDirectRows, kQuads = kDirectGroup / 4u;
 
-// Input row iy of channel plane `plane` around columns [x0, x0 + 4): the row's 4 values shifted by
-// -1, 0 and +1 pixels (the taps kx = 0, 1, 2), zeros outside the image.
+#include "nn/direct_rows.glsl"
+const uint kQuads = kGroup / 4u;
+
 #ifdef EVF_DIRECT_ANY_WIDTH
-void load_row(uint plane, int iy, uint x0, out vec4 taps[3]) {
-  bool row_in = iy >= 0 && iy < int(pc.h);
-  uint row = (plane * pc.h + uint(clamp(iy, 0, int(pc.h) - 1))) * pc.w;
-  float v[6];  // columns x0 - 1 .. x0 + 4
-  [[unroll]] for (uint k = 0u; k < 6u; ++k) {
-    int ix = int(x0 + k) - 1;
-    v[k] = row_in && ix >= 0 && ix < int(pc.w) ? x[row + uint(clamp(ix, 0, int(pc.w) - 1))] : 0.0;
-  }
-  taps[0] = vec4(v[0], v[1], v[2], v[3]);
-  taps[1] = vec4(v[1], v[2], v[3], v[4]);
-  taps[2] = vec4(v[2], v[3], v[4], v[5]);
-}
-
 // Adds or writes the 4 values of output row oy, columns x0 .., of channel plane `plane`.
 void store_row(uint plane, uint oy, uint x0, vec4 v) {
   uint row = (plane * pc.h + oy) * pc.w;
@@ -48,17 +35,6 @@ void store_row(uint plane, uint oy, uint x0, vec4 v) {
   }
 }
 #else
-void load_row(uint plane, int iy, uint x0, out vec4 taps[3]) {
-  bool row_in = iy >= 0 && iy < int(pc.h);
-  uint q = (plane * pc.h + uint(clamp(iy, 0, int(pc.h) - 1))) * (pc.w / 4u) + x0 / 4u;
-  vec4 mid = row_in ? x[q] : vec4(0.0);
-  float left = row_in && x0 > 0u ? x[q - (x0 > 0u ? 1u : 0u)].w : 0.0;
-  float right = row_in && x0 + 4u < pc.w ? x[q + (x0 + 4u < pc.w ? 1u : 0u)].x : 0.0;
-  taps[0] = vec4(left, mid.xyz);
-  taps[1] = mid;
-  taps[2] = vec4(mid.yzw, right);
-}
-
 void store_row(uint plane, uint oy, uint x0, vec4 v) {
   uint q = (plane * pc.h + oy) * (pc.w / 4u) + x0 / 4u;
   y[q] = pc.accumulate != 0u ? y[q] + v : v;
@@ -72,9 +48,9 @@ void main() {
   uint b = i / per_image, r = i - b * per_image;
   uint g = r / (pc.blocks_x * pc.blocks_y), blk = r - g * (pc.blocks_x * pc.blocks_y);
   uint x0 = (blk % pc.blocks_x) * 4u, y0 = (blk / pc.blocks_x) * kRows;
-  vec4 acc[kRows][kDirectGroup];  // [output row][channel of the group], 4 pixels each
+  vec4 acc[kRows][kGroup];  // [output row][channel of the group], 4 pixels each
   [[unroll]] for (uint o = 0u; o < kRows; ++o)
-    [[unroll]] for (uint c = 0u; c < kDirectGroup; ++c) acc[o][c] = vec4(0.0);
+    [[unroll]] for (uint c = 0u; c < kGroup; ++c) acc[o][c] = vec4(0.0);
   uint wq = pc.out_pad / 4u;
   for (uint ci = 0u; ci < pc.in_c; ++ci) {
     vec4 rows[kRows + 2u][3];
@@ -84,12 +60,12 @@ void main() {
       vec4 wv[kQuads];
       [[unroll]] for (uint q = 0u; q < kQuads; ++q) wv[q] = wt[(ci * 9u + tap) * wq + g * kQuads + q];
       [[unroll]] for (uint o = 0u; o < kRows; ++o)
-        [[unroll]] for (uint c = 0u; c < kDirectGroup; ++c)
+        [[unroll]] for (uint c = 0u; c < kGroup; ++c)
           acc[o][c] = fma(vec4(wv[c / 4u][c % 4u]), rows[o + ky][kx], acc[o][c]);
     }
   }
-  [[unroll]] for (uint c = 0u; c < kDirectGroup; ++c) {
-    uint co = g * kDirectGroup + c;
+  [[unroll]] for (uint c = 0u; c < kGroup; ++c) {
+    uint co = g * kGroup + c;
     if (co >= pc.out_c) break;
     float add = pc.bias != 0u ? bias[pc.bias != 0u ? co : 0u] : 0.0;  // index in range either way
     [[unroll]] for (uint o = 0u; o < kRows; ++o) {

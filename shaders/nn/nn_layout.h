@@ -71,6 +71,11 @@ struct ConvPC {
 // WT[co][tap][ci] = W[co][ci][8 - tap] (the flipped kernel, transposed).
 EVF_CONST(uint, kDirectRows, 4u)
 EVF_CONST(uint, kDirectGroup, 16u)
+// The "_checked" builds, for GPU-assisted validation, take blocks of 4 x 1 pixels and groups of 4
+// channels: the same index arithmetic, but the layer's check on every access makes the full
+// kernels (hundreds of live values across as many branches) take minutes to compile on lavapipe.
+EVF_CONST(uint, kDirectRowsChecked, 1u)
+EVF_CONST(uint, kDirectGroupChecked, 4u)
 EVF_CONST(uint, kDirectGroupSize, 16u)  // invocations per workgroup
 struct DirectConvPC {
   uint in_c, out_c, h, w;  // input and output channels; both images are h x w
@@ -81,6 +86,17 @@ struct DirectConvPC {
   uint bias;               // 1: add bias[co] (the forward)
   uint accumulate;         // 1: add into y (the input gradient's accumulating form)
   uint pad0;
+};
+// nn/conv3x3_direct_dw: the weight gradient's partial sums, one invocation per (split, channel
+// group, input channel); a split is blocks_per_split consecutive blocks (image after image).
+EVF_CONST(uint, kDirectBlocksPerSplit, 128u)  // 2048 pixels, as the GEMM's kPixelsPerSplit
+struct DirectGradPC {
+  uint in_c, out_c, h, w;
+  uint blocks_x, blocks_y;  // blocks per image
+  uint groups;              // output channel groups of kDirectGroup
+  uint images;
+  uint blocks_per_split, splits;
+  uint pad0, pad1;
 };
 // nn/conv_weight_t: WT from W, one invocation per WT value (zeros in the padding).
 struct WeightTPC {
@@ -124,6 +140,10 @@ EVF_BIND(kDirectBindX, 0u, X)
 EVF_BIND(kDirectBindWT, 1u, WeightT)
 EVF_BIND(kDirectBindBias, 2u, Bias)
 EVF_BIND(kDirectBindY, 3u, Y)
+// nn/conv3x3_direct_dw
+EVF_BIND(kDirectDwBindX, 0u, X)
+EVF_BIND(kDirectDwBindDy, 1u, Dy)
+EVF_BIND(kDirectDwBindPartial, 2u, Partial)
 // nn/conv_weight_t
 EVF_BIND(kWeightTBindW, 0u, Weight)
 EVF_BIND(kWeightTBindWT, 1u, WeightT)
