@@ -75,8 +75,12 @@ Conv2d::Conv2d(gpu::Context& ctx, ConvSpec spec, std::string name) : ctx_(ctx), 
   weight_grad_ = gpu::Buffer(ctx, weight_count() * 4, name_ + ".weight_grad");
   bias_grad_ = gpu::Buffer(ctx, spec.out_c * 4, name_ + ".bias_grad");
   partial_ = gpu::Buffer(ctx, 16, name_ + ".partial_sums");
-  weight_t_ = gpu::Buffer(ctx, uint64_t(spec.in_c) * 9 * pad_group(spec.out_c) * 4, name_ + ".weight_t");
-  weight_tb_ = gpu::Buffer(ctx, uint64_t(spec.out_c) * 9 * pad_group(spec.in_c) * 4, name_ + ".weight_tb");
+  // The direct kernels' rearranged weights, where they can run (placeholders elsewhere).
+  const bool any_direct = direct(spec.out_c) || direct(spec.in_c);
+  weight_t_ =
+      gpu::Buffer(ctx, any_direct ? uint64_t(spec.in_c) * 9 * pad_group(spec.out_c) * 4 : 16, name_ + ".weight_t");
+  weight_tb_ =
+      gpu::Buffer(ctx, any_direct ? uint64_t(spec.out_c) * 9 * pad_group(spec.in_c) * 4 : 16, name_ + ".weight_tb");
   init_he(0);
 }
 
