@@ -29,6 +29,13 @@ static double median(std::vector<double> v) {
   return v.empty() ? 0 : v[v.size() / 2];
 }
 
+// Named stage times in recording order, each the median of its runs, as JSON members.
+static void print_stages_json(const std::vector<std::string>& order,
+                              std::map<std::string, std::vector<double>>& stages) {
+  for (size_t i = 0; i < order.size(); ++i)
+    std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
+}
+
 // Stage times (GPU timestamps) of repeated runs: each stage's samples in first-seen order, and
 // each run's GPU total and wall time.
 struct StageSamples {
@@ -116,8 +123,7 @@ static int bench_raster(ArgParser& p) {
         "{\"bench\": \"raster\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": %zu, "
         "\"sh_degree\": %d, \"intersections\": %u, \"repeats\": %d, \"stages_ms\": {",
         ctx.caps().name.c_str(), W, H, N, degree, rs.num_intersections(), repeats);
-    for (size_t i = 0; i < order.size(); ++i)
-      std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
+    print_stages_json(order, stages);
     // Minima too: on a machine shared with other work the fastest repeat is the least disturbed.
     std::printf("}, \"stages_min_ms\": {");
     for (size_t i = 0; i < order.size(); ++i)
@@ -155,6 +161,14 @@ static Checkpoint bench_start(const std::string& splats, const TrainConfig& cfg)
     start.cloud = load_splats(splats);
   }
   return start;
+}
+
+// Named stage times in recording order, each the median of its runs, as one line of text.
+static void print_stages_text(const char* title, const std::vector<std::string>& order,
+                              std::map<std::string, std::vector<double>>& stages) {
+  std::printf("  %s:", title);
+  for (auto& name : order) std::printf(" %s %.1f,", name.c_str(), median(stages[name]));
+  std::printf(" ms\n");
 }
 
 // Training steps (sharp views rendered from a synthetic ground-truth cloud, or a dataset folder
@@ -231,11 +245,9 @@ static int bench_train(ArgParser& p) {
         "\"optimizer\": %.2f, \"ldi\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
         method.c_str(), ctx.caps().name.c_str(), W, H, count, steps, host_mib, device_mib, submits, transfers,
         1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), median(ldi), m);
-    for (size_t i = 0; i < order.size(); ++i)
-      std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
+    print_stages_json(order, stages);
     std::printf("}, \"ldi_stages_ms\": {");
-    for (size_t i = 0; i < ldi_order.size(); ++i)
-      std::printf("%s\"%s\": %.3f", i ? ", " : "", ldi_order[i].c_str(), median(ldi_stages[ldi_order[i]]));
+    print_stages_json(ldi_order, ldi_stages);
     std::printf("}}\n");
   } else {
     std::printf("train bench (%s) on %s: %ux%u, %u Gaussians, one view per step, median of %d steps\n", method.c_str(),
@@ -244,14 +256,8 @@ static int bench_train(ArgParser& p) {
         "  rasterize forward   %9.2f ms\n  loss terms          %9.2f ms\n  rasterize backward  %9.2f ms\n"
         "  optimizer (Adam)    %9.2f ms\n  LDI branch          %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
         median(fwd), median(loss), median(bwd), median(opt), median(ldi), m, 1000.0 / m);
-    std::printf("  rasterizer stages:");
-    for (auto& name : order) std::printf(" %s %.1f,", name.c_str(), median(stages[name]));
-    std::printf(" ms\n");
-    if (!ldi_order.empty()) {
-      std::printf("  LDI branch stages:");
-      for (auto& name : ldi_order) std::printf(" %s %.1f,", name.c_str(), median(ldi_stages[name]));
-      std::printf(" ms\n");
-    }
+    print_stages_text("rasterizer stages", order, stages);
+    if (!ldi_order.empty()) print_stages_text("LDI branch stages", ldi_order, ldi_stages);
     std::printf("  peak memory: host %.1f MiB (the process's resident set), device %.1f MiB (buffers)\n", host_mib,
                 device_mib);
     std::printf("  round trips per step: %.1f submits, %.1f host-device copies\n", submits, transfers);
@@ -336,8 +342,7 @@ static int bench_sim(ArgParser& p) {
         "{\"bench\": \"sim\", \"device\": \"%s\", \"scene\": \"%s\", \"triangles\": %zu, \"width\": %u, "
         "\"height\": %u, \"frames\": %zu, \"stages_ms\": {",
         ctx.caps().name.c_str(), scene.source.c_str(), scene.triangle_count(), sp.width, sp.height, frames);
-    for (size_t i = 0; i < order.size(); ++i)
-      std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(), median(stages[order[i]]));
+    print_stages_json(order, stages);
     std::printf("}, \"gpu_total_ms\": %.3f, \"wall_ms\": %.3f}\n", median(totals), median(walls));
   } else {
     std::printf("sim bench on %s: scene %s (%zu triangles), %ux%u, median of %zu frames\n", ctx.caps().name.c_str(),

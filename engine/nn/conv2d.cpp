@@ -182,16 +182,17 @@ void Conv2d::backward(gpu::Commands& cmd, const Tensor& x, const Tensor& dy, con
     if (dx->shape().image() != in.image() || dx->shape().n < in.n)
       throw std::invalid_argument("conv " + name_ + " input gradient: " + dx->name() + " is " + dx->shape().str() +
                                   ", expected " + in.str());
-    const uint32_t taps = spec_.ksize * spec_.ksize;
-    ConvPC pc = conv_pc(spec_, in, out, spec_.in_c, uint32_t(in.count() / in.c), spec_.out_c * taps);
-    pc.accumulate = accumulate_input ? 1u : 0u;
-    if (direct(spec_.in_c))
+    if (direct(spec_.in_c)) {
       record_direct(cmd, dy, *dx, spec_.out_c, spec_.in_c, in, true, accumulate_input);
-    else
+    } else {
+      const uint32_t taps = spec_.ksize * spec_.ksize;
+      ConvPC pc = conv_pc(spec_, in, out, spec_.in_c, uint32_t(in.count() / in.c), spec_.out_c * taps);
+      pc.accumulate = accumulate_input ? 1u : 0u;
       cmd.dispatch(
           kernel("conv_bwd_input", pc.gemm_m),
           {{kConvBwdInputBindDy, dy.buffer()}, {kConvBwdInputBindW, weight_}, {kConvBwdInputBindDx, dx->buffer()}}, pc,
           tile_groups(cmd, pc));
+    }
   }
   backward_weights(cmd, in, x, dy, accumulate_params);
 }

@@ -21,7 +21,6 @@ layout(std430, binding = kDirectBindWT) readonly buffer WeightT { vec4 wt[]; }; 
 layout(std430, binding = kDirectBindBias) readonly buffer Bias { float bias[]; };
 layout(push_constant) uniform PC { DirectConvPC pc; };
 
-
 #include "nn/direct_rows.glsl"
 const uint kQuads = kGroup / 4u;
 
