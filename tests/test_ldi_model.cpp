@@ -1,7 +1,7 @@
 // The learnable double integral (engine/ldi/ldi_model.h): the frames and double integrals
 // against the double-precision reference (tests/reference/ldi_reference.h), the network's weight
-// gradients of both backward modes against central differences of that reference, the neutral
-// initialisation, the checks on bad input, and the whole-view evaluation in tiles (full_view.h).
+// gradients of both backward modes (and of the frames with the anchor) against central differences of that reference,
+// the neutral initialisation, the checks on bad input, and the whole-view evaluation in tiles (full_view.h).
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -154,6 +154,39 @@ TEST_CASE("LDI: frames against the double reference, weight gradients against ce
       require_close(conv.bias_grad().read<float>(c.net.bias[l].size()),
                     ref::nn_central_differences(c.net.bias[l], loss, 1e-5), 2e-3, "db");
     }
+  }
+  SECTION("from the frames' gradient and the anchor's regression together") {
+    const std::vector<double> r = uniform(9 * 20, rng, -1.0, 1.0), d = uniform(3 * 20, rng, 0.5, 2.0);
+    std::vector<gpu::Buffer> grads;
+    std::vector<const gpu::Buffer*> ptrs;
+    for (uint32_t i = 0; i < 3; ++i) {
+      grads.emplace_back(ctx, 60 * 4, "frame_grad");
+      grads.back().write(to_float(std::vector<double>(r.begin() + i * 60, r.begin() + (i + 1) * 60)));
+    }
+    for (auto& g : grads) ptrs.push_back(&g);
+    gpu::Buffer target(ctx, d.size() * 4, "anchor");
+    target.write(to_float(d));
+    model.backward_from_frames(cmd, ptrs, 0.5f, {&target, 0.75f});
+    cmd.submit();
+    auto loss = [&] {
+      const ref::LdiFrames f = ref::ldi_frames(c.net, c.events, 0.0, 1.0, c.times, c.crop, c.blurry);
+      const auto frames = flatten(f.frames), e = flatten(f.integral);
+      double s = 0;
+      for (size_t i = 0; i < frames.size(); ++i) s += 0.5 * r[i] * frames[i];
+      for (size_t i = 0; i < e.size(); ++i) s += 0.75 * std::pow(std::log(e[i]) - std::log(d[i]), 2);
+      return s;
+    };
+    for (size_t l = 0; l + 1 < c.net.widths.size(); ++l) {
+      INFO("layer " << l);
+      nn::Conv2d& conv = model.network().layer(l);
+      require_close(conv.weight_grad().read<float>(c.net.weight[l].size()),
+                    ref::nn_central_differences(c.net.weight[l], loss, 1e-5), 2e-3, "dW");
+      require_close(conv.bias_grad().read<float>(c.net.bias[l].size()),
+                    ref::nn_central_differences(c.net.bias[l], loss, 1e-5), 2e-3, "db");
+    }
+    gpu::Buffer short_target(ctx, 2 * 20 * 4, "short anchor");
+    CHECK_THROWS_WITH(model.backward_from_frames(cmd, ptrs, 1.0f, {&short_target, 1.0f}),
+                      Catch::Contains("the anchor holds fewer than 3 planes"));
   }
   test::require_no_validation_messages();
 }

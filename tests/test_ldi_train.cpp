@@ -13,12 +13,14 @@
 #include <set>
 
 #include "camera/trajectory.h"
+#include "events/edi.h"
 #include "events/event_model.h"
 #include "exposure_sim.h"
 #include "gpu_fixture.h"
 #include "splat/synthetic.h"
 #include "train/synthetic_dataset.h"
 #include "train/trainer.h"
+#include "train/training_data.h"
 
 using namespace evflow;
 
@@ -276,6 +278,56 @@ TEST_CASE("LDI branch: joint_ldi_share scales the network's side of L_joint and 
   for (double s : {-0.1, 1.5, std::nan("")}) {
     bad.joint_ldi_share = s;
     CHECK_THROWS_WITH(Trainer(ctx, data, bad), Catch::Contains("joint_ldi_share must be in [0, 1]"));
+  }
+  test::require_no_validation_messages();
+}
+
+namespace {
+
+// The mean over view 0's pixels and the branch's frame times of (log E - log D)^2, E the LDI's
+// double integral over the whole view (from its frames: E = B / C), D EDI's with the branch's
+// thresholds.
+double anchor_error(gpu::Context& ctx, Trainer& t, const io::Dataset& data, const TrainConfig& cfg) {
+  gpu::Commands cmd(ctx);
+  const std::vector<std::vector<float>> frames = t.ldi()->view_frames(cmd, 0);
+  const auto [pos, neg] = event_thresholds(data, cfg);
+  const io::View& v = data.train[0];
+  const events::EdiIntegrator edi(data.events, v.exposure_start, v.exposure_end, {pos, neg, {}, {}});
+  const std::vector<double> times = t.ldi()->frame_times(0);
+  const std::vector<float> blurry = io::planar_rgb(v.blurry);
+  double s = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < times.size(); ++i) {
+    const std::vector<double> d = edi.double_integral(times[i]);
+    for (size_t p = 0; p < d.size(); ++p, ++n)
+      s += std::pow(std::log(double(blurry[p]) / frames[i][p]) - std::log(d[p]), 2);
+  }
+  return s / double(n);
+}
+
+}  // namespace
+
+TEST_CASE("LDI branch: the anchor draws the network to EDI's double integral, and nothing else does here",
+          "[gpu][train][ldi]") {
+  auto& ctx = test::gpu_context();
+  const io::Dataset data = drift_dataset(ctx);
+  TrainConfig off = ldi_config();  // He initialisation, no pre-fit
+  off.ldi_blur_weight = off.ldi_event_weight = off.joint_weight = 0.0;
+  off.ldi_lr = 1e-2;
+  TrainConfig on = off;
+  on.ldi_anchor_weight = 1.0;
+  Trainer a(ctx, data, on), b(ctx, data, off);
+  const double start = anchor_error(ctx, a, data, on);
+  REQUIRE(start == Approx(anchor_error(ctx, b, data, off)));
+  for (int s = 0; s < 20; ++s) a.step(), b.step();
+  const double anchored = anchor_error(ctx, a, data, on), free = anchor_error(ctx, b, data, off);
+  INFO("log-E error to EDI: " << start << " at the start, " << anchored << " anchored, " << free << " without");
+  CHECK(free == Approx(start));
+  CHECK(anchored < 0.5 * start);
+  TrainConfig bad = on;
+  for (double w : {-1.0, std::nan("")}) {
+    bad.ldi_anchor_weight = w;
+    CHECK_THROWS_WITH(Trainer(ctx, data, bad), Catch::Contains("ldi_anchor_weight must be a finite weight >= 0"));
   }
   test::require_no_validation_messages();
 }

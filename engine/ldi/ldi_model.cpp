@@ -116,7 +116,7 @@ void LdiModel::forward(gpu::Commands& cmd, size_t view, const std::vector<double
   for (uint32_t i = 0; i < frames(); ++i) combine(cmd, i);
 }
 
-shaderio::LdiCombinePC LdiModel::combine_pc(uint32_t i, uint32_t mode, float scale) const {
+shaderio::LdiCombinePC LdiModel::combine_pc(uint32_t i, uint32_t mode, float scale, float anchor) const {
   return {uint32_t(pixels()),
           i,
           float(weight(i, Side::Before)),
@@ -124,7 +124,11 @@ shaderio::LdiCombinePC LdiModel::combine_pc(uint32_t i, uint32_t mode, float sca
           mode,
           scale,
           call_of(i, Side::Before),
-          call_of(i, Side::After)};
+          call_of(i, Side::After),
+          anchor,
+          0,
+          0,
+          0};
 }
 
 void LdiModel::combine(gpu::Commands& cmd, uint32_t i) {
@@ -136,32 +140,41 @@ void LdiModel::combine(gpu::Commands& cmd, uint32_t i) {
                combine_pc(i, 0, 1.0f), cmd.linear_groups(gpu::Commands::div_up(pixels(), shaderio::kLdiGroupSize)));
 }
 
-void LdiModel::combine_bwd(gpu::Commands& cmd, uint32_t i, uint32_t mode, const gpu::Buffer& grads, float scale) {
+// Without an anchor its binding holds `grads` (never read).
+void LdiModel::combine_bwd(gpu::Commands& cmd, uint32_t i, uint32_t mode, const gpu::Buffer& grads, float scale,
+                           const LdiAnchor& anchor) {
   cmd.dispatch("ldi/combine_bwd",
                {{shaderio::kLdiCombineBwdBindSides, sides_},
                 {shaderio::kLdiCombineBwdBindBlurry, *blurry_},
                 {shaderio::kLdiCombineBwdBindGrads, grads},
-                {shaderio::kLdiCombineBwdBindSideGrads, side_grads_}},
-               combine_pc(i, mode, scale), cmd.linear_groups(gpu::Commands::div_up(pixels(), shaderio::kLdiGroupSize)));
+                {shaderio::kLdiCombineBwdBindSideGrads, side_grads_},
+                {shaderio::kLdiCombineBwdBindAnchor, anchor.target ? *anchor.target : grads}},
+               combine_pc(i, mode, scale, anchor.target ? anchor.scale : 0.0f),
+               cmd.linear_groups(gpu::Commands::div_up(pixels(), shaderio::kLdiGroupSize)));
 }
 
-void LdiModel::backward_from_frames(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads,
-                                    float scale) {
+void LdiModel::require_planes(const gpu::Buffer& b, uint32_t planes, const std::string& what) const {
+  if (b.size() < planes * pixels() * 4)
+    throw std::invalid_argument("LDI: " + what + " holds fewer than " + std::to_string(planes) + " planes");
+}
+
+void LdiModel::backward_from_frames(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads, float scale,
+                                    const LdiAnchor& anchor) {
   if (!blurry_) throw std::logic_error("LDI: backward before forward");
   if (frame_grads.size() != frames())
     throw std::invalid_argument("LDI: " + std::to_string(frame_grads.size()) + " frame gradients for " +
                                 std::to_string(frames()) + " frames");
+  if (anchor.target) require_planes(*anchor.target, frames(), "the anchor");
   for (uint32_t i = 0; i < frames(); ++i) {
-    if (frame_grads[i]->size() < 3 * pixels() * 4)
-      throw std::invalid_argument("LDI: frame gradient " + std::to_string(i) + " holds fewer than 3 planes");
-    combine_bwd(cmd, i, shaderio::kLdiFromFrames, *frame_grads[i], scale);
+    require_planes(*frame_grads[i], 3, "frame gradient " + std::to_string(i));
+    combine_bwd(cmd, i, shaderio::kLdiFromFrames, *frame_grads[i], scale, anchor);
   }
   backward_calls(cmd);
 }
 
 void LdiModel::backward_from_target(gpu::Commands& cmd, const gpu::Buffer& target, float scale) {
   if (!blurry_) throw std::logic_error("LDI: backward before forward");
-  if (target.size() < frames() * pixels() * 4) throw std::invalid_argument("LDI: the target holds fewer than F planes");
+  require_planes(target, frames(), "the target");
   for (uint32_t i = 0; i < frames(); ++i) combine_bwd(cmd, i, shaderio::kLdiFromTarget, target, scale);
   backward_calls(cmd);
 }

@@ -32,6 +32,13 @@ namespace evflow::ldi {
 // The bias of the last layer that makes E = 1 where a side has no events (B / E = B).
 float neutral_bias();
 
+// A regression of log E to a target D added to a backward from the frames: scale * sum
+// (log E(t_i) - log D_i)^2 (training's tie to EDI's integral, train/ldi_branch.h).
+struct LdiAnchor {
+  const gpu::Buffer* target = nullptr;  // D, F x crop
+  float scale = 0;
+};
+
 class LdiModel {
  public:
   // widths: 32, the hidden layers' widths, 1. crop_w x crop_h: the size of every crop it runs on;
@@ -69,8 +76,9 @@ class LdiModel {
   // Records the weight gradients (written, not added) of the last forward's calls, from
   // d(loss)/d(frame i) (3 x crop each, scaled by `scale`), or, with `target`, of the regression
   // scale * sum (log E(t_i) - log D_i)^2 to D (F x crop). Record after the forward, before the
-  // next forward.
-  void backward_from_frames(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads, float scale = 1.0f);
+  // next forward. An anchor adds its regression's gradient to the frames' (LdiAnchor).
+  void backward_from_frames(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads, float scale = 1.0f,
+                            const LdiAnchor& anchor = {});
   void backward_from_target(gpu::Commands& cmd, const gpu::Buffer& target, float scale);
 
   void add_to(Adam& adam, float lr) { net_.add_to(adam, lr); }
@@ -83,9 +91,11 @@ class LdiModel {
     uint32_t frame;
     Side side;
   };
-  shaderio::LdiCombinePC combine_pc(uint32_t i, uint32_t mode, float scale) const;
+  shaderio::LdiCombinePC combine_pc(uint32_t i, uint32_t mode, float scale, float anchor = 0) const;
   void combine(gpu::Commands& cmd, uint32_t i);
-  void combine_bwd(gpu::Commands& cmd, uint32_t i, uint32_t mode, const gpu::Buffer& grads, float scale);
+  void combine_bwd(gpu::Commands& cmd, uint32_t i, uint32_t mode, const gpu::Buffer& grads, float scale,
+                   const LdiAnchor& anchor = {});
+  void require_planes(const gpu::Buffer& b, uint32_t planes, const std::string& what) const;
   uint32_t chunk_size(uint32_t first) const;
   void run_chunk(gpu::Commands& cmd, uint32_t first);
   void backward_calls(gpu::Commands& cmd);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <random>
 #include <stdexcept>
@@ -67,6 +68,7 @@ LdiBranch::LdiBranch(gpu::Context& ctx, const io::Dataset& data, const TrainConf
     *b = gpu::Buffer(ctx, values_ * 4, "ldi_crop_image");
   for (auto* list : {&grad_, &ldi_ls_, &gs_ls_, &g_ldi_ls_, &g_gs_ls_, &g_render_})
     for (uint32_t i = 0; i < F; ++i) list->emplace_back(ctx, values_ * 4, "ldi_frame_image");
+  make_anchor_targets();
   adam_ = std::make_unique<Adam>(ctx, AdamOptions{0.9, 0.999, 1e-8});
   model_->add_to(*adam_, float(cfg.ldi_lr));
   if (state)
@@ -92,6 +94,25 @@ void LdiBranch::initialise() {
                "ldi: initialised to EDI (thresholds %.3g / %.3g): %u steps, log-E regression %.4g -> %.4g in %.1f s\n",
                pos, neg, r.steps, r.first_loss, r.last_loss,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+}
+
+// The anchor's targets (ldi_anchor_weight > 0): EDI's double integral of every view at its
+// frames' times, with the pre-fit's thresholds.
+void LdiBranch::make_anchor_targets() {
+  if (cfg_.ldi_anchor_weight < 0 || !std::isfinite(cfg_.ldi_anchor_weight))
+    throw std::invalid_argument("ldi_anchor_weight must be a finite weight >= 0");
+  if (cfg_.ldi_anchor_weight == 0) return;
+  const auto [pos, neg] = event_thresholds(data_, cfg_);
+  const events::EdiThresholds th{pos, neg, {}, {}};
+  for (uint32_t v = 0; v < data_.train.size(); ++v) {
+    const events::EdiIntegrator edi(data_.events, data_.train[v].exposure_start, data_.train[v].exposure_end, th);
+    std::vector<float> d;
+    for (double t : frame_times(v))
+      for (double x : edi.double_integral(t)) d.push_back(float(x));
+    anchor_.emplace_back(ctx_, d.size() * 4, "ldi_anchor");
+    anchor_.back().write(d);
+  }
+  anchor_crop_ = gpu::Buffer(ctx_, frame_u_.size() * model_->pixels() * 4, "ldi_anchor_crop");
 }
 
 std::vector<std::pair<LossTerm*, bool>> LdiBranch::terms() {
@@ -125,6 +146,7 @@ void LdiBranch::record(gpu::Commands& cmd, uint32_t view, uint32_t step, const s
   crop_ = choose_crop(step);
   ldi::record_crop(cmd, blurry_[view], W, H, 3, crop_, blurry_crop_);
   ldi::record_crop(cmd, target_[view], W, H, 3, crop_, target_crop_);
+  if (!anchor_.empty()) ldi::record_crop(cmd, anchor_[view], W, H, uint32_t(frame_u_.size()), crop_, anchor_crop_);
   cmd.mark("ldi crops");
   model_->forward(cmd, view, frame_times(view), crop_, blurry_crop_);
   cmd.mark("ldi frames");
@@ -235,7 +257,10 @@ void LdiBranch::backward(gpu::Commands& cmd, const ImageModel& image_model) {
     grads.push_back(&grad_[i]);
   }
   cmd.mark("ldi joint to renders");
-  model_->backward_from_frames(cmd, grads);
+  ldi::LdiAnchor anchor;
+  if (!anchor_.empty())
+    anchor = {&anchor_crop_, float(cfg_.ldi_anchor_weight / double(model_->frames() * model_->pixels()))};
+  model_->backward_from_frames(cmd, grads, 1.0f, anchor);
   adam_->step(cmd);
   cmd.mark("ldi adam");
 }

@@ -8,6 +8,9 @@
 //   L_joint     (1/(2N+1)) sum_i L(C_ldi(t_i), C_gs(t_i)) in loss_space, into the renders and
 //               (joint_ldi_share of it) the LDI frames, on from joint_from (once the splats'
 //               exposures run the right way)
+//   anchor      ldi_anchor_weight * the mean over the crop and frames of (log E(t_i) - log D(t_i))^2,
+//               D EDI's double integral with the dataset's thresholds (the pre-fit's regression,
+//               kept as a prior: the network may move from EDI where its terms say so, not drift)
 //
 // record() runs in the trainer's loss stage (after the image model's forward); backward() after
 // the image model's render gradients: it adds the joint loss's gradients into the renders' and
@@ -75,6 +78,7 @@ class LdiBranch {
   void record_joint(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const ImageModel& im);
   void record_events(gpu::Commands& cmd, uint32_t view, uint64_t seed);
   void colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y);
+  void make_anchor_targets();
 
   gpu::Context& ctx_;
   const io::Dataset& data_;
@@ -90,6 +94,8 @@ class LdiBranch {
   std::unique_ptr<Adam> adam_;
   std::unique_ptr<ldi::FullViewFrames> full_view_;  // view_frames(), made at its first call
   std::vector<gpu::Buffer> blurry_, target_;        // per view: linear, and in loss_space
+  std::vector<gpu::Buffer> anchor_;                 // per view: EDI's D at the frames' times, F x H x W
+  gpu::Buffer anchor_crop_;                         // F x crop
   ldi::Crop crop_;
   uint32_t view_ = 0;
   bool joint_on_ = false;

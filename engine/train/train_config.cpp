@@ -404,6 +404,10 @@ std::vector<Setting> ldi_settings() {
             "the share of L_joint's gradient that reaches the LDI frames: 1, the paper's Eq. 10 (both sides); 0, "
             "the joint loss teaches the splats only and the LDI learns from its own terms ([ldi.md](ldi.md)); in "
             "[0, 1]"),
+      field("ldi_anchor_weight", &TrainConfig::ldi_anchor_weight,
+            "weight of the LDI's anchor to EDI: the pre-fit's regression (log E - log D)^2 to EDI's double "
+            "integral with the dataset's thresholds, at the frames' times over the crop, kept as a term in training "
+            "([ldi.md](ldi.md)); 0: off"),
       field("ldi_lr", &TrainConfig::ldi_lr, "the LDI network's Adam learning rate (eps 1e-8), as EVDI"),
       field("ldi_init_steps", &TrainConfig::ldi_init_steps,
             "steps of the initialisation to EDI before training: the network regressed to EDI's double integral "

@@ -58,7 +58,9 @@ struct LdiCropPC {
 //   x = w1 a + w2 b,  E = softplus(x) + kLdiFloor,  C[c] = B[c] / E  (B: the blurry crop, linear).
 // ldi/combine writes E (plane i of `integral`) and C (frame i's own 3-plane buffer).
 // ldi/combine_bwd writes d/da and d/db (planes `before`, `after` of `side_grads`) from `grads`:
-//   mode kLdiFromFrames: d/dC (frame i's own 3-plane buffer), scaled by `scale`;
+//   mode kLdiFromFrames: d/dC (frame i's own 3-plane buffer), scaled by `scale`, plus, where
+//                        `anchor` is not 0, anchor * d/dE of the regression below to plane i
+//                        of `Anchor` (the anchor to EDI's integral in training);
 //   mode kLdiFromTarget: the regression (log E - log D)^2 to the target D (plane i), scaled by
 //                        `scale` (1 / the number of regressed values).
 EVF_CONST(float, kLdiFloor, 1e-3)
@@ -74,6 +76,8 @@ struct LdiCombinePC {
   float scale;
   uint before;  // planes of the sides (network calls), or kLdiNoSide
   uint after;
+  float anchor;
+  uint pad0, pad1, pad2;
 };
 
 // ldi/mean_values: values[dst] = scale * sum over k < count of src[first + k * stride] (the mean
@@ -106,6 +110,7 @@ EVF_BIND(kLdiCombineBwdBindSides, 0u, Sides)
 EVF_BIND(kLdiCombineBwdBindBlurry, 1u, Blurry)
 EVF_BIND(kLdiCombineBwdBindGrads, 2u, Grads)
 EVF_BIND(kLdiCombineBwdBindSideGrads, 3u, SideGrads)
+EVF_BIND(kLdiCombineBwdBindAnchor, 4u, Anchor)
 // ldi/mean_values
 EVF_BIND(kLdiMeanBindSrc, 0u, Src)
 EVF_BIND(kLdiMeanBindValues, 1u, Values)
