@@ -94,6 +94,7 @@ TEST_CASE("LDI branch: the joint loss's gradient reaches the LDI weights and the
   TrainConfig cfg = ldi_config();
   cfg.ldi_blur_weight = 0;  // the joint loss alone on the LDI
   cfg.ldi_event_weight = 0;
+  cfg.ldi_anchor_weight = 0;  // its value is not in the step's loss
   Checkpoint start{0, drift_truth(), {}};
   for (size_t i = 0; i < start.cloud.sh.size(); ++i) start.cloud.sh[i] += 0.3f * float((i % 7) / 6.0 - 0.5);
   start.ldi = Trainer(ctx, data, cfg).checkpoint().ldi;  // the He-initialised network
@@ -312,7 +313,7 @@ TEST_CASE("LDI branch: the anchor draws the network to EDI's double integral, an
   auto& ctx = test::gpu_context();
   const io::Dataset data = drift_dataset(ctx);
   TrainConfig off = ldi_config();  // He initialisation, no pre-fit
-  off.ldi_blur_weight = off.ldi_event_weight = off.joint_weight = 0.0;
+  off.ldi_blur_weight = off.ldi_event_weight = off.joint_weight = off.ldi_anchor_weight = 0.0;
   off.ldi_lr = 1e-2;
   TrainConfig on = off;
   on.ldi_anchor_weight = 1.0;

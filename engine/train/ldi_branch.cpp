@@ -45,7 +45,11 @@ LdiBranch::LdiBranch(gpu::Context& ctx, const io::Dataset& data, const TrainConf
   const ImageShape shape{3, ch, cw};
   blur_ = std::make_unique<BlendLoss>(ctx, shape, float(cfg.ssim_lambda), float(cfg.ldi_blur_weight));
   blur_->set_name("ldi_blur");
-  joint_ = std::make_unique<ldi::JointLoss>(ctx, shape, float(cfg.ssim_lambda), float(cfg.joint_weight));
+  // L_joint is a mean over the crop: scaled by the crop's share of the view, each render pixel it
+  // reaches weighs what it would in the paper's L_joint over whole images (beside L_blur^gs, a
+  // mean over the whole view).
+  const double crop_share = double(cw) * ch / (double(W) * H);
+  joint_ = std::make_unique<ldi::JointLoss>(ctx, shape, float(cfg.ssim_lambda), float(cfg.joint_weight * crop_share));
   if (cfg.ldi_event_weight > 0) {
     crop_events_ = std::make_unique<ldi::CropEvents>(*events_, cw, ch);
     const auto [pos, neg] = event_thresholds(data, cfg);

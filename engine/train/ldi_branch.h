@@ -6,8 +6,9 @@
 //   L_blur^ldi  the frames' mean against the blurry input (the trainer's image loss, loss_space)
 //   L_ev^ldi    the event loss on the LDI frames, on from the first step at a constant weight
 //   L_joint     (1/(2N+1)) sum_i L(C_ldi(t_i), C_gs(t_i)) in loss_space, into the renders and
-//               (joint_ldi_share of it) the LDI frames, on from joint_from (once the splats'
-//               exposures run the right way)
+//               (joint_ldi_share of it) the LDI frames, on from joint_from; weighted by
+//               joint_weight times the crop's share of the view (per render pixel the weight
+//               of the paper's L_joint over whole images)
 //   anchor      ldi_anchor_weight * the mean over the crop and frames of (log E(t_i) - log D(t_i))^2,
 //               D EDI's double integral with the dataset's thresholds (the pre-fit's regression,
 //               kept as a prior: the network may move from EDI where its terms say so, not drift)

@@ -395,11 +395,11 @@ std::vector<Setting> ldi_settings() {
             "L_ev^gs); on from the first step at this constant weight (the splats' schedule does not apply); 0: off"),
       field("joint_weight", &TrainConfig::joint_weight,
             "weight of L_joint (paper Eq. 10): the image loss between each LDI frame and the render at its time, "
-            "gradients into both; 0: off"),
+            "gradients into both, times the crop's share of the view (`ldi_crop`), so that per render pixel it weighs "
+            "what the paper's L_joint over whole images does; 0: off"),
       field("joint_from", &TrainConfig::joint_from,
-            "L_joint is on from this fraction of the run: before the splats' time-direction check ends "
-            "(`event_flip_until`) a view's renders may run backwards against the LDI frames, and the joint loss "
-            "then pulls both towards the blurry image ([ldi.md](ldi.md))"),
+            "L_joint is on from this fraction of the run (0: from the first step, where the LDI frames, which run "
+            "forwards in time from their pre-fit, set each exposure's direction: [ldi.md](ldi.md))"),
       field("joint_ldi_share", &TrainConfig::joint_ldi_share,
             "the share of L_joint's gradient that reaches the LDI frames: 1, the paper's Eq. 10 (both sides); 0, "
             "the joint loss teaches the splats only and the LDI learns from its own terms ([ldi.md](ldi.md)); in "
@@ -407,7 +407,7 @@ std::vector<Setting> ldi_settings() {
       field("ldi_anchor_weight", &TrainConfig::ldi_anchor_weight,
             "weight of the LDI's anchor to EDI: the pre-fit's regression (log E - log D)^2 to EDI's double "
             "integral with the dataset's thresholds, at the frames' times over the crop, kept as a term in training "
-            "([ldi.md](ldi.md)); 0: off"),
+            "([ldi.md](ldi.md)); 0: off (the network then drifts from EDI, losing contrast)"),
       field("ldi_lr", &TrainConfig::ldi_lr, "the LDI network's Adam learning rate (eps 1e-8), as EVDI"),
       field("ldi_init_steps", &TrainConfig::ldi_init_steps,
             "steps of the initialisation to EDI before training: the network regressed to EDI's double integral "

@@ -83,9 +83,9 @@ struct TrainConfig {
   std::vector<uint32_t> ldi_widths{32, 16, 16, 1};
   uint32_t ldi_crop = 48;
   double ldi_blur_weight = 1.0, ldi_event_weight = 0.1, joint_weight = 1.0;
-  double joint_from = 0.8;
+  double joint_from = 0.0;
   double joint_ldi_share = 1.0;
-  double ldi_anchor_weight = 0.0;
+  double ldi_anchor_weight = 1.0;
   double ldi_lr = 1e-3;
   uint32_t ldi_init_steps = 300;
   double ldi_init_lr = 3e-3;
