@@ -106,6 +106,7 @@ void LdiBranch::make_anchor_targets() {
   if (cfg_.ldi_anchor_weight < 0 || !std::isfinite(cfg_.ldi_anchor_weight))
     throw std::invalid_argument("ldi_anchor_weight must be a finite weight >= 0");
   if (cfg_.ldi_anchor_weight == 0) return;
+  const auto start = std::chrono::steady_clock::now();
   const auto [pos, neg] = event_thresholds(data_, cfg_);
   const events::EdiThresholds th{pos, neg, {}, {}};
   for (uint32_t v = 0; v < data_.train.size(); ++v) {
@@ -117,6 +118,9 @@ void LdiBranch::make_anchor_targets() {
     anchor_.back().write(d);
   }
   anchor_crop_ = gpu::Buffer(ctx_, frame_u_.size() * model_->pixels() * 4, "ldi_anchor_crop");
+  std::fprintf(stderr, "ldi: anchor to EDI (weight %g): %zu views x %zu frame times in %.1f s\n",
+               cfg_.ldi_anchor_weight, anchor_.size(), frame_u_.size(),
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
 std::vector<std::pair<LossTerm*, bool>> LdiBranch::terms() {
