@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include "events/gpu_events.h"
@@ -79,6 +80,28 @@ std::vector<double> flatten(const std::vector<ref::NnTensor>& ts) {
   return v;
 }
 
+// `frames` buffers of `values` values each, consecutive parts of r.
+std::vector<gpu::Buffer> frame_grads(gpu::Context& ctx, const std::vector<double>& r, uint32_t frames, size_t values) {
+  std::vector<gpu::Buffer> grads;
+  for (uint32_t i = 0; i < frames; ++i) {
+    grads.emplace_back(ctx, values * 4, "frame_grad");
+    grads.back().write(to_float(std::vector<double>(r.begin() + i * values, r.begin() + (i + 1) * values)));
+  }
+  return grads;
+}
+
+// Every layer's weight and bias gradients against central differences of `loss`, which reads `net`.
+void require_weight_grads(ldi::LdiModel& model, ref::LdiNet& net, const std::function<double()>& loss) {
+  for (size_t l = 0; l + 1 < net.widths.size(); ++l) {
+    INFO("layer " << l);
+    nn::Conv2d& conv = model.network().layer(l);
+    require_close(conv.weight_grad().read<float>(net.weight[l].size()),
+                  ref::nn_central_differences(net.weight[l], loss, 1e-5), 2e-3, "dW");
+    require_close(conv.bias_grad().read<float>(net.bias[l].size()),
+                  ref::nn_central_differences(net.bias[l], loss, 1e-5), 2e-3, "db");
+  }
+}
+
 }  // namespace
 
 TEST_CASE("LDI: frames against the double reference, weight gradients against central differences", "[ldi][gpu]") {
@@ -110,12 +133,8 @@ TEST_CASE("LDI: frames against the double reference, weight gradients against ce
   std::mt19937 rng(11);
   SECTION("from the frames' gradient") {
     const std::vector<double> r = uniform(9 * 20, rng, -1.0, 1.0);
-    std::vector<gpu::Buffer> grads;
+    const std::vector<gpu::Buffer> grads = frame_grads(ctx, r, 3, 60);
     std::vector<const gpu::Buffer*> ptrs;
-    for (uint32_t i = 0; i < 3; ++i) {
-      grads.emplace_back(ctx, 60 * 4, "frame_grad");
-      grads.back().write(to_float(std::vector<double>(r.begin() + i * 60, r.begin() + (i + 1) * 60)));
-    }
     for (auto& g : grads) ptrs.push_back(&g);
     model.backward_from_frames(cmd, ptrs, 0.5f);
     cmd.submit();
@@ -125,14 +144,7 @@ TEST_CASE("LDI: frames against the double reference, weight gradients against ce
       for (size_t i = 0; i < f.size(); ++i) s += 0.5 * r[i] * f[i];
       return s;
     };
-    for (size_t l = 0; l + 1 < c.net.widths.size(); ++l) {
-      INFO("layer " << l);
-      nn::Conv2d& conv = model.network().layer(l);
-      require_close(conv.weight_grad().read<float>(c.net.weight[l].size()),
-                    ref::nn_central_differences(c.net.weight[l], loss, 1e-5), 2e-3, "dW");
-      require_close(conv.bias_grad().read<float>(c.net.bias[l].size()),
-                    ref::nn_central_differences(c.net.bias[l], loss, 1e-5), 2e-3, "db");
-    }
+    require_weight_grads(model, c.net, loss);
   }
   SECTION("from the regression of log E to a target") {
     const std::vector<double> d = uniform(3 * 20, rng, 0.5, 2.0);
@@ -146,23 +158,12 @@ TEST_CASE("LDI: frames against the double reference, weight gradients against ce
       for (size_t i = 0; i < e.size(); ++i) s += 0.25 * std::pow(std::log(e[i]) - std::log(d[i]), 2);
       return s;
     };
-    for (size_t l = 0; l + 1 < c.net.widths.size(); ++l) {
-      INFO("layer " << l);
-      nn::Conv2d& conv = model.network().layer(l);
-      require_close(conv.weight_grad().read<float>(c.net.weight[l].size()),
-                    ref::nn_central_differences(c.net.weight[l], loss, 1e-5), 2e-3, "dW");
-      require_close(conv.bias_grad().read<float>(c.net.bias[l].size()),
-                    ref::nn_central_differences(c.net.bias[l], loss, 1e-5), 2e-3, "db");
-    }
+    require_weight_grads(model, c.net, loss);
   }
   SECTION("from the frames' gradient and the anchor's regression together") {
     const std::vector<double> r = uniform(9 * 20, rng, -1.0, 1.0), d = uniform(3 * 20, rng, 0.5, 2.0);
-    std::vector<gpu::Buffer> grads;
+    const std::vector<gpu::Buffer> grads = frame_grads(ctx, r, 3, 60);
     std::vector<const gpu::Buffer*> ptrs;
-    for (uint32_t i = 0; i < 3; ++i) {
-      grads.emplace_back(ctx, 60 * 4, "frame_grad");
-      grads.back().write(to_float(std::vector<double>(r.begin() + i * 60, r.begin() + (i + 1) * 60)));
-    }
     for (auto& g : grads) ptrs.push_back(&g);
     gpu::Buffer target(ctx, d.size() * 4, "anchor");
     target.write(to_float(d));
@@ -176,14 +177,7 @@ TEST_CASE("LDI: frames against the double reference, weight gradients against ce
       for (size_t i = 0; i < e.size(); ++i) s += 0.75 * std::pow(std::log(e[i]) - std::log(d[i]), 2);
       return s;
     };
-    for (size_t l = 0; l + 1 < c.net.widths.size(); ++l) {
-      INFO("layer " << l);
-      nn::Conv2d& conv = model.network().layer(l);
-      require_close(conv.weight_grad().read<float>(c.net.weight[l].size()),
-                    ref::nn_central_differences(c.net.weight[l], loss, 1e-5), 2e-3, "dW");
-      require_close(conv.bias_grad().read<float>(c.net.bias[l].size()),
-                    ref::nn_central_differences(c.net.bias[l], loss, 1e-5), 2e-3, "db");
-    }
+    require_weight_grads(model, c.net, loss);
     gpu::Buffer short_target(ctx, 2 * 20 * 4, "short anchor");
     CHECK_THROWS_WITH(model.backward_from_frames(cmd, ptrs, 1.0f, {&short_target, 1.0f}),
                       Catch::Contains("the anchor holds fewer than 3 planes"));
