@@ -81,22 +81,27 @@ LdiBranch::LdiBranch(gpu::Context& ctx, const io::Dataset& data, const TrainConf
     initialise();
 }
 
+// The dataset's thresholds (training_data.h) as EDI's, for the pre-fit and the anchor.
+events::EdiThresholds LdiBranch::edi_thresholds() const {
+  const auto [pos, neg] = event_thresholds(data_, cfg_);
+  return {pos, neg, {}, {}};
+}
+
 // He initialisation, then the pre-fit to EDI's double integral with the dataset's thresholds.
 void LdiBranch::initialise() {
   model_->init(cfg_.seed * 0x9E3779B97F4A7C15ull + 0x1D1);
   if (cfg_.ldi_init_steps == 0) return;
   const auto start = std::chrono::steady_clock::now();
-  const auto [pos, neg] = event_thresholds(data_, cfg_);
   ldi::PrefitOptions o;
   o.steps = cfg_.ldi_init_steps;
   o.frames = std::min<uint32_t>(2, model_->max_frames());
   o.lr = float(cfg_.ldi_init_lr);
   o.seed = cfg_.seed;
-  o.thresholds = events::EdiThresholds{pos, neg, {}, {}};
+  o.thresholds = edi_thresholds();
   const ldi::PrefitReport r = ldi::prefit_to_edi(ctx_, *model_, data_.events, *events_, o);
   std::fprintf(stderr,
                "ldi: initialised to EDI (thresholds %.3g / %.3g): %u steps, log-E regression %.4g -> %.4g in %.1f s\n",
-               pos, neg, r.steps, r.first_loss, r.last_loss,
+               o.thresholds.pos, o.thresholds.neg, r.steps, r.first_loss, r.last_loss,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
@@ -107,8 +112,7 @@ void LdiBranch::make_anchor_targets() {
     throw std::invalid_argument("ldi_anchor_weight must be a finite weight >= 0");
   if (cfg_.ldi_anchor_weight == 0) return;
   const auto start = std::chrono::steady_clock::now();
-  const auto [pos, neg] = event_thresholds(data_, cfg_);
-  const events::EdiThresholds th{pos, neg, {}, {}};
+  const events::EdiThresholds th = edi_thresholds();
   for (uint32_t v = 0; v < data_.train.size(); ++v) {
     const events::EdiIntegrator edi(data_.events, data_.train[v].exposure_start, data_.train[v].exposure_end, th);
     std::vector<float> d;

@@ -23,6 +23,7 @@
 #include <utility>
 #include <vector>
 
+#include "events/edi.h"
 #include "events/gpu_events.h"
 #include "io/dataset.h"
 #include "ldi/crop_events.h"
@@ -80,6 +81,7 @@ class LdiBranch {
   void record_events(gpu::Commands& cmd, uint32_t view, uint64_t seed);
   void colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y);
   void make_anchor_targets();
+  events::EdiThresholds edi_thresholds() const;
 
   gpu::Context& ctx_;
   const io::Dataset& data_;
