@@ -333,6 +333,10 @@ void Rasterizer::check_backward(const RenderState& st, const GaussianBuffers& pa
     throw gpu::Error("Rasterizer::backward: v_rgb / v_alpha are smaller than the image");
 }
 
+// Bytes of per-intersection gradient plane k for `isects` intersections: two vec4 planes and a
+// float plane (splat_layout.h).
+static uint64_t isect_grad_bytes(size_t k, uint64_t isects) { return std::max<uint64_t>(isects, 1) * (k < 2 ? 16 : 4); }
+
 // The backward's scratch for renders of `n` Gaussians with up to `isects` intersections.
 void Rasterizer::ensure_backward_buffers(size_t n, uint64_t isects) {
   const uint64_t max_range = ctx_.caps().max_storage_buffer_range;
@@ -340,8 +344,7 @@ void Rasterizer::ensure_backward_buffers(size_t n, uint64_t isects) {
     throw gpu::Error(std::to_string(isects) +
                      " tile intersections exceed, in the backward pass, the storage binding limit of " +
                      ctx_.caps().name + " (" + std::to_string(max_range / 16) + " at most)");
-  for (size_t k = 0; k < isect_grad_.size(); ++k)  // two vec4 planes and a float plane
-    isect_grad_[k].ensure(std::max<uint64_t>(isects, 1) * (k < 2 ? 16 : 4));
+  for (size_t k = 0; k < isect_grad_.size(); ++k) isect_grad_[k].ensure(isect_grad_bytes(k, isects));
   grad2d_norm_.ensure(n * 4);
   pose_partial_.ensure(uint64_t(std::max<uint32_t>(gpu::Commands::div_up(n, kProjectGroupSize), 1)) * 24);
 }
@@ -353,6 +356,10 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
   auto plane = [&](int k) { return gpu::BufferRef(isect_grad_[k]); };
   const std::string raster_bwd =
       "splat/rasterize_bwd" + block_suffix_ + (ctx_.caps().shared_float_atomic_add ? "" : "_cas");
+  // The compositing backward writes only the slots it visits (Gaussians in front of its tile's
+  // last blended one); the others keep these zeros. A fill is a sequential write: far cheaper
+  // than the kernel's scattered zero stores (lavapipe, bench raster 100k: backward -6 ms).
+  for (size_t k = 0; k < isect_grad_.size(); ++k) cmd_.fill(isect_grad_[k], 0u, 0, isect_grad_bytes(k, st.num_isects_));
   cmd_.dispatch(raster_bwd,
                 {{kRasterBindRanges, st.tile_range_},
                  {kRasterBindSlots, st.sorted_slots()},

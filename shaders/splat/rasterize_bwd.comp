@@ -62,8 +62,8 @@ void main() {
   vec3 S = pc.background.rgb * T_final;  // colour of everything behind the current Gaussian
   uint lid = gl_LocalInvocationIndex;
   uint count = range.y - range.x;
-  // Gaussians at or past the tile's largest `last` blended into no pixel: their slots get zeros
-  // without being visited.
+  // Gaussians at or past the tile's largest `last` blended into no pixel: neither loaded nor
+  // visited, their slots keep the zeros the host filled the gradient planes with.
   if (lid == 0) tile_last = range.x;
   barrier();
   atomicMax(tile_last, last);
@@ -73,10 +73,11 @@ void main() {
     uint start = range.x + (nb - 1u) * 256u;
     uint n = min(256u, range.y - start);
     barrier();
-    if (lid < n) load_batch_entry(lid, start + lid);
+    uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
+    if (lid < n_load) load_batch_entry(lid, start + lid);
     for (uint k = 0; k < 9; ++k) acc_zero(lid * 9 + k);
     barrier();
-    uint n_visit = start < visit_end ? min(n, visit_end - start) : 0u;
+    uint n_visit = n_load;
     // Per-lane adds need no uniform control flow, so each pixel starts at its own last Gaussian
     // (CPU drivers then run a SIMD vector only as far as its furthest pixel); the subgroup
     // reduction needs every lane at the same j.
@@ -138,7 +139,7 @@ void main() {
       }
     }
     barrier();
-    if (lid < n) {
+    if (lid < n_load) {
       uint slot = batch_slot[lid], o = lid * 9;
       slot_grad_a[slot] = vec4(acc_get(o), acc_get(o + 1), acc_get(o + 2), acc_get(o + 3));
       slot_grad_b[slot] = vec4(acc_get(o + 4), acc_get(o + 5), acc_get(o + 6), acc_get(o + 7));

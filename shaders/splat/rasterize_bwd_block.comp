@@ -144,8 +144,8 @@ void main() {
   EVF_RUNS(EVF_INIT)
 #define EVF_ACC(i) accumulate(r##i, g, cx, cy + float(i), a.xy, conic, b.y, col, start + j);
   uint count = range.y - range.x;
-  // Gaussians at or past the tile's largest `last` blended into no pixel: their slots get zeros
-  // without being visited.
+  // Gaussians at or past the tile's largest `last` blended into no pixel: neither loaded nor
+  // visited, their slots keep the zeros the host filled the gradient planes with.
   if (lid == 0) tile_last = range.x;
   barrier();
   atomicMax(tile_last, last);
@@ -155,7 +155,7 @@ void main() {
     uint start = range.x + (nb - 1u) * EVF_BATCH;
     uint n = min(uint(EVF_BATCH), range.y - start);
     barrier();
-    // Entries at or past visit_end are neither loaded nor visited (their slots get zeros).
+    // Entries at or past visit_end are neither loaded nor visited nor written.
     uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
     for (uint k = lid; k < n_load; k += EVF_THREADS)
       for (uint q = 0; q < 3; ++q) acc_zero(k * 3 + q);
@@ -198,12 +198,6 @@ void main() {
       slot_grad_a[slot] = acc_get(3 * k);
       slot_grad_b[slot] = acc_get(3 * k + 1);
       slot_grad_c[slot] = acc_get(3 * k + 2).x;
-    }
-    for (uint k = n_load + lid; k < n; k += EVF_THREADS) {
-      uint slot = slot_from_isect[start + k];
-      slot_grad_a[slot] = vec4(0.0);
-      slot_grad_b[slot] = vec4(0.0);
-      slot_grad_c[slot] = 0.0;
     }
   }
 }
