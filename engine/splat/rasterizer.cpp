@@ -384,7 +384,6 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
                  {kParamBindQuats, params.quats},
                  {kParamBindOpacities, params.opacity_logits},
                  {kProjectBwdBindOffsets, st.isect_offset_},
-                 {kProjectBwdBindGid, st.gaussian_id_from_slot_},
                  {kProjectBwdBindG0, plane(0)},
                  {kProjectBwdBindG1, plane(1)},
                  {kProjectBwdBindG2, plane(2)},

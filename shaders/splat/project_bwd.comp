@@ -13,7 +13,6 @@ layout(local_size_x = kProjectGroupSize) in;
 #define EVF_PARAMS_NO_SH
 #include "splat/params.glsl"
 layout(std430, binding = kProjectBwdBindOffsets) readonly buffer Offsets { uint isect_offset[]; };
-layout(std430, binding = kProjectBwdBindGid) readonly buffer Gid { uint gaussian_id_from_slot[]; };
 // Per-slot gradients (splat_layout.h): (v_mean2d.xy, v_conic.xy), (v_conic.z, v_opacity, v_rgb.rg), v_rgb.b.
 layout(std430, binding = kProjectBwdBindG0) readonly buffer G0 { vec4 slot_grad_a[]; };
 layout(std430, binding = kProjectBwdBindG1) readonly buffer G1 { vec4 slot_grad_b[]; };
@@ -69,8 +68,9 @@ void main() {
     vec3 v_conic = vec3(0.0), v_color = vec3(0.0);
     float v_opac = 0.0;
     uint begin = isect_offset[g], end = isect_offset[g + 1];
+    // Slots the compositing did not visit, and any emit left unused (sorted past every tile),
+    // hold the zeros the gradient planes were filled with.
     for (uint s = begin; s < end; ++s) {
-      if (gaussian_id_from_slot[s] != g) continue;
       vec4 ga = slot_grad_a[s], gb = slot_grad_b[s];
       v_mean2d += ga.xy;
       v_conic += vec3(ga.zw, gb.x);

@@ -73,7 +73,6 @@ EVF_BIND(kProjectBindCount, 12u, Count)
 EVF_BIND(kProjectBindDColor, 13u, DColor)
 // splat/project_bwd
 EVF_BIND(kProjectBwdBindOffsets, 8u, Offsets)
-EVF_BIND(kProjectBwdBindGid, 9u, Gid)
 // Per-slot gradients of the compositing, written by rasterize_bwd*, summed per Gaussian here:
 // G0[slot] = (v_mean2d.xy, v_conic.xy), G1[slot] = (v_conic.z, v_opacity, v_rgb.rg) as vec4s,
 // G2[slot] = v_rgb.b (three accesses per slot: CPU drivers loop over the lanes for each).
