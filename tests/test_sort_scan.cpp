@@ -48,7 +48,7 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
   for (uint32_t digit_bits : {4u, 8u, 0u})
     for (uint32_t items : {16u, 128u, 7u, 4096u, 0u})
       for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{
-               {1, 8}, {17, 4}, {4096, 12}, {4097, 32}, {16385, 8}, {70000, 16}, {250000, 20}, {600000, 32}}) {
+               {1, 8}, {300, 0}, {17, 4}, {4096, 12}, {4097, 32}, {16385, 8}, {70000, 16}, {250000, 20}, {600000, 32}}) {
         sort.set_digit_bits(digit_bits);
         sort.set_items(items);
         std::vector<uint32_t> keys(n), vals(n);
@@ -58,21 +58,30 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
         gpu::Buffer bk(ctx, n * 4ull, "keys"), bv(ctx, n * 4ull, "values");
         bk.write(keys);
         bv.write(vals);
-        gpu::Commands cmd(ctx);
-        auto [sk, sv] = sort.record(cmd, bk, bv, n, bits);
-        cmd.submit();
-        auto gk = sk->read<uint32_t>(n);
-        auto gv = sv->read<uint32_t>(n);
         const uint32_t mask = bits >= 32 ? 0xFFFFFFFFu : ((1u << bits) - 1u);
         // Expected: stable sort of indices by (key & mask). Bits above are not sorted on.
         std::vector<uint32_t> order(n);
         std::iota(order.begin(), order.end(), 0u);
         std::stable_sort(order.begin(), order.end(),
                          [&](uint32_t a, uint32_t b) { return (keys[a] & mask) < (keys[b] & mask); });
-        bool ok = true;
-        for (uint32_t i = 0; i < n; ++i) ok = ok && gv[i] == order[i] && gk[i] == keys[order[i]];
-        INFO("n = " << n << ", bits = " << bits << ", items " << items << ", digit bits " << digit_bits);
-        REQUIRE(ok);
+        // record sorts the given values; record_order makes the permutation itself (the values'
+        // buffer holds junk first, to show it is not read).
+        for (bool make_order : {false, true}) {
+          gpu::Commands cmd(ctx);
+          gpu::Buffer k_alt(ctx, 4, "keys_alt"), v_alt(ctx, 4, "values_alt");
+          if (make_order) bv.write(std::vector<uint32_t>(n, 0xDEADBEEFu));
+          auto [sk, sv] =
+              make_order ? sort.record_order(cmd, bk, bv, k_alt, v_alt, n, bits) : sort.record(cmd, bk, bv, n, bits);
+          cmd.submit();
+          auto gk = sk->read<uint32_t>(n);
+          auto gv = sv->read<uint32_t>(n);
+          bool ok = true;
+          for (uint32_t i = 0; i < n; ++i) ok = ok && gv[i] == order[i] && gk[i] == keys[order[i]];
+          INFO("n = " << n << ", bits = " << bits << ", items " << items << ", digit bits " << digit_bits
+                      << (make_order ? ", record_order" : ", record"));
+          REQUIRE(ok);
+          if (!make_order) bk.write(keys);  // an even pass count sorted the caller's buffer in place
+        }
       }
   CHECK_THROWS_WITH(sort.set_digit_bits(5), Catch::Contains("4 or 8"));
   test::require_no_validation_messages();

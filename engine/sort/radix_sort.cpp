@@ -57,32 +57,61 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record(gpu::Command
                                                                     gpu::Buffer& values_alt, uint32_t n,
                                                                     uint32_t bits) {
   if (n <= 1 || bits == 0) return {&keys, &values};
+  return record_passes(cmd, keys, values, keys_alt, values_alt, n, bits, false);
+}
+
+std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record_order(gpu::Commands& cmd, const gpu::Buffer& keys,
+                                                                          gpu::Buffer& order, gpu::Buffer& keys_alt,
+                                                                          gpu::Buffer& order_alt, uint32_t n,
+                                                                          uint32_t bits) {
+  order.ensure(std::max<uint64_t>(n, 1) * 4);
+  if (n <= 1) {  // nothing to sort: the permutation of one key
+    if (n == 1) cmd.fill(order, 0u, 0, 4);
+    return {&keys, &order};
+  }
+  return record_passes(cmd, keys, order, keys_alt, order_alt, n, bits, true);
+}
+
+std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record_passes(gpu::Commands& cmd, const gpu::Buffer& keys,
+                                                                           const gpu::Buffer& values,
+                                                                           gpu::Buffer& keys_alt,
+                                                                           gpu::Buffer& values_alt, uint32_t n,
+                                                                           uint32_t bits, bool order) {
   keys_alt.ensure(uint64_t(n) * 4);
   values_alt.ensure(uint64_t(n) * 4);
   const uint32_t items = items_for(n);
   const uint32_t blocks = gpu::Commands::div_up(n, group_size() * items);
   const uint32_t n_counts = blocks * bins();
   const uint32_t digit_bits = wide_ ? 8u : 4u;
-  const char* count_kernel = wide_ ? "sort/radix_count_wide" : "sort/radix_count";
-  const char* scatter_kernel = wide_ ? "sort/radix_scatter_wide" : "sort/radix_scatter";
+  const std::string count_kernel = wide_ ? "sort/radix_count_wide" : "sort/radix_count";
+  const std::string scatter_kernel = wide_ ? "sort/radix_scatter_wide" : "sort/radix_scatter";
   reserve(n);
   const gpu::Buffer* kin = &keys;
   const gpu::Buffer* vin = &values;
   const gpu::Buffer* kout = &keys_alt;
   const gpu::Buffer* vout = &values_alt;
-  for (uint32_t shift = 0; shift < bits; shift += digit_bits) {
-    const uint32_t width = std::min(digit_bits, bits - shift);
+  // At least one pass when making the permutation (a digit of 0 bits keeps the input order).
+  for (uint32_t shift = 0; shift < bits || (order && shift == 0); shift += digit_bits) {
+    const uint32_t width = std::min(digit_bits, bits - std::min(bits, shift));
     SortPC pc{n, shift, blocks, items, (1u << width) - 1u};
     cmd.dispatch(count_kernel, {{kRadixCountBindKeys, *kin}, {kRadixCountBindCounts, counts_}}, pc,
                  cmd.linear_groups(blocks));
     scan_.record(cmd, counts_, counts_, n_counts, n_counts);
-    cmd.dispatch(scatter_kernel,
-                 {{kRadixScatterBindKeysIn, *kin},
-                  {kRadixScatterBindValuesIn, *vin},
-                  {kRadixScatterBindKeysOut, *kout},
-                  {kRadixScatterBindValuesOut, *vout},
-                  {kRadixScatterBindOffsets, counts_}},
-                 pc, cmd.linear_groups(blocks));
+    if (order && shift == 0)
+      cmd.dispatch(scatter_kernel + "_order",
+                   {{kRadixScatterBindKeysIn, *kin},
+                    {kRadixScatterBindKeysOut, *kout},
+                    {kRadixScatterBindValuesOut, *vout},
+                    {kRadixScatterBindOffsets, counts_}},
+                   pc, cmd.linear_groups(blocks));
+    else
+      cmd.dispatch(scatter_kernel,
+                   {{kRadixScatterBindKeysIn, *kin},
+                    {kRadixScatterBindValuesIn, *vin},
+                    {kRadixScatterBindKeysOut, *kout},
+                    {kRadixScatterBindValuesOut, *vout},
+                    {kRadixScatterBindOffsets, counts_}},
+                   pc, cmd.linear_groups(blocks));
     std::swap(kin, kout);
     std::swap(vin, vout);
   }

@@ -27,12 +27,23 @@ class RadixSort {
   std::pair<const gpu::Buffer*, const gpu::Buffer*> record(gpu::Commands& cmd, const gpu::Buffer& keys,
                                                            const gpu::Buffer& values, gpu::Buffer& keys_alt,
                                                            gpu::Buffer& values_alt, uint32_t n, uint32_t bits);
+  // Sorts the keys and makes their sorting permutation in the values: value i = the input index
+  // of the i-th key in sorted order (stable), never read from `order` (the first pass computes
+  // the indices). Ping-pongs with the caller's buffers as above, each grown to n values.
+  std::pair<const gpu::Buffer*, const gpu::Buffer*> record_order(gpu::Commands& cmd, const gpu::Buffer& keys,
+                                                                 gpu::Buffer& order, gpu::Buffer& keys_alt,
+                                                                 gpu::Buffer& order_alt, uint32_t n, uint32_t bits);
   // Grows the internal scratch for sorts of n keys. Recording several sorts into one command
   // buffer must reserve for each size first: a buffer grown while recording would free one the
   // earlier sorts' commands still use.
   void reserve(uint32_t n);
 
  private:
+  // The passes of both records; `order`: the first pass takes the keys' indices as values.
+  std::pair<const gpu::Buffer*, const gpu::Buffer*> record_passes(gpu::Commands& cmd, const gpu::Buffer& keys,
+                                                                  const gpu::Buffer& values, gpu::Buffer& keys_alt,
+                                                                  gpu::Buffer& values_alt, uint32_t n, uint32_t bits,
+                                                                  bool order);
   uint32_t items_for(uint32_t n) const;
   uint32_t group_size() const;
   uint32_t bins() const;

@@ -258,7 +258,6 @@ void Rasterizer::record_raster(RenderState& st) {
   const uint32_t m = st.num_isects_;
   const ProjectPC& pp = st.project_pc_;
   st.keys_.ensure(uint64_t(m) * 4);
-  st.slot_from_isect_.ensure(uint64_t(m) * 4);
   st.gaussian_id_from_slot_.ensure(uint64_t(m) * 4);
   if (m) {
     cmd_.dispatch("splat/emit",
@@ -267,13 +266,12 @@ void Rasterizer::record_raster(RenderState& st) {
                    {kEmitBindRect, st.tile_rect_},
                    {kEmitBindOffsets, st.isect_offset_},
                    {kEmitBindKeys, st.keys_},
-                   {kEmitBindValues, st.slot_from_isect_},
                    {kEmitBindGid, st.gaussian_id_from_slot_}},
                   pp, cmd_.linear_groups(gpu::Commands::div_up(n, kProjectGroupSize)));
   }
   cmd_.mark("emit");
   auto [sorted_keys, sorted_slots] =
-      sort_.record(cmd_, st.keys_, st.slot_from_isect_, st.keys_alt_, st.slots_alt_, m, st.sort_bits_);
+      sort_.record_order(cmd_, st.keys_, st.slot_from_isect_, st.keys_alt_, st.slots_alt_, m, st.sort_bits_);
   st.sorted_in_alt_ = sorted_slots == &st.slots_alt_;
   cmd_.mark("sort");
   cmd_.fill(st.tile_range_, 0);

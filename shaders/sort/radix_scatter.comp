@@ -12,7 +12,16 @@
 layout(local_size_x = EVF_SORT_GROUP) in;
 // Read four pairs per access where it can (CPU drivers loop over the lanes for every access).
 layout(std430, binding = kRadixScatterBindKeysIn) readonly buffer KeysIn { uvec4 keys_in[]; };
+#ifdef EVF_SORT_ORDER
+// The "_order" builds (a first pass that makes the sort's permutation): each pair's value is its
+// key's index, computed instead of read, so that nobody writes or reads an identity array.
+uvec4 value4_in(uint i) { return uvec4(i) + uvec4(0u, 1u, 2u, 3u); }
+uint value_in(uint i) { return i; }
+#else
 layout(std430, binding = kRadixScatterBindValuesIn) readonly buffer ValuesIn { uvec4 values_in[]; };
+uvec4 value4_in(uint i) { return values_in[i >> 2u]; }
+uint value_in(uint i) { return values_in[i >> 2u][i & 3u]; }
+#endif
 layout(std430, binding = kRadixScatterBindKeysOut) writeonly buffer KeysOut { uint keys_out[]; };
 layout(std430, binding = kRadixScatterBindValuesOut) writeonly buffer ValuesOut { uint values_out[]; };
 layout(std430, binding = kRadixScatterBindOffsets) readonly buffer Offsets { uint global_offset[]; };  // scanned counts
@@ -65,7 +74,7 @@ void main() {
   for (uint d = 0; d < EVF_SORT_BINS; ++d)
     dest[d] = global_offset[d * pc.num_blocks + block] + table[d * EVF_SORT_GROUP + lid] - table[d * EVF_SORT_GROUP];
   for (uint i = base; i < end4; i += 4u) {
-    uvec4 key = keys_in[i >> 2u], value = values_in[i >> 2u];
+    uvec4 key = keys_in[i >> 2u], value = value4_in(i);
     for (uint c = 0u; c < 4u; ++c) {
       uint d = (key[c] >> pc.shift) & pc.digit_mask;
       uint o = dest[d];
@@ -80,6 +89,6 @@ void main() {
     uint o = dest[d];
     dest[d] = o + 1;
     keys_out[o] = key;
-    values_out[o] = values_in[i >> 2u][i & 3u];
+    values_out[o] = value_in(i);
   }
 }

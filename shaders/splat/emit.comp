@@ -1,6 +1,7 @@
 #version 450
-// Key emission: one invocation per Gaussian. Writes one (key, slot) pair per tile its support
-// meets, at slots [offset[g], offset[g+1]) — the same exact test as project.comp counted.
+// Key emission: one invocation per Gaussian. Writes one key per tile its support meets, at slots
+// [offset[g], offset[g+1]) — the same exact test as project.comp counted — and the slot's
+// Gaussian. The sort makes the slots' order itself (RadixSort::record_order): no value is written.
 // key = tile id << depth_bits | top bits of the depth remapped to [1, 2).
 #extension GL_GOOGLE_include_directive : require
 #include "splat/splat_layout.h"
@@ -12,7 +13,6 @@ layout(std430, binding = kEmitBindProjB) readonly buffer ProjB { vec4 proj_misc[
 layout(std430, binding = kEmitBindRect) readonly buffer Rect { uvec4 tile_rect[]; };
 layout(std430, binding = kEmitBindOffsets) readonly buffer Offsets { uint isect_offset[]; };   // [N+1]
 layout(std430, binding = kEmitBindKeys) writeonly buffer Keys { uint keys[]; };
-layout(std430, binding = kEmitBindValues) writeonly buffer Values { uint slot_from_isect[]; };
 layout(std430, binding = kEmitBindGid) writeonly buffer Gid { uint gaussian_id_from_slot[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
 
@@ -34,14 +34,12 @@ void main() {
       vec2 lo = vec2(tx * kTileSize, ty * kTileSize) + 0.5, hi = lo + float(kTileSize - 1);
       if (slot < end && ellipse_meets_rect(mean2d, conic, q_max, lo, hi)) {
         keys[slot] = ((ty * pc.tiles_x + tx) << pc.depth_bits) | depth_key;
-        slot_from_isect[slot] = slot;
         gaussian_id_from_slot[slot] = g;
         slot++;
       }
     }
   for (; slot < end; ++slot) {  // only if the two passes disagreed: never read as a tile
     keys[slot] = pc.sentinel_key;
-    slot_from_isect[slot] = slot;
     gaussian_id_from_slot[slot] = 0xFFFFFFFFu;
   }
 }

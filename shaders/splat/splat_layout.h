@@ -50,7 +50,6 @@ EVF_BIND(kEmitBindProjB, 1u, ProjB)
 EVF_BIND(kEmitBindRect, 2u, Rect)
 EVF_BIND(kEmitBindOffsets, 3u, Offsets)
 EVF_BIND(kEmitBindKeys, 4u, Keys)
-EVF_BIND(kEmitBindValues, 5u, Values)
 EVF_BIND(kEmitBindGid, 6u, Gid)
 // splat/project, splat/project_bwd
 EVF_BIND(kParamBindMeans, 0u, Means)
