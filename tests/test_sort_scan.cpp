@@ -47,8 +47,15 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
   // (smaller blocks for short inputs).
   for (uint32_t digit_bits : {4u, 8u, 0u})
     for (uint32_t items : {16u, 128u, 7u, 4096u, 0u})
-      for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{
-               {1, 8}, {300, 0}, {17, 4}, {4096, 12}, {4097, 32}, {16385, 8}, {70000, 16}, {250000, 20}, {600000, 32}}) {
+      for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{{1, 8},
+                                                                       {300, 0},
+                                                                       {17, 4},
+                                                                       {4096, 12},
+                                                                       {4097, 32},
+                                                                       {16385, 8},
+                                                                       {70000, 16},
+                                                                       {250000, 20},
+                                                                       {600000, 32}}) {
         sort.set_digit_bits(digit_bits);
         sort.set_items(items);
         std::vector<uint32_t> keys(n), vals(n);
