@@ -151,6 +151,46 @@ TEST_CASE("binned events: on bin edges the event loss equals the stream's, betwe
   test::require_no_validation_messages();
 }
 
+TEST_CASE("binned events: views with the same window keep their own counts, kept or shared", "[events][loss]") {
+  auto& ctx = test::gpu_context();
+  const uint32_t W = 12, H = 8, F = 7, bins = 6;
+  std::vector<float> counts = bin_stream(random_stream(W, H, 800, 8), bins);
+  const std::vector<float> second = bin_stream(random_stream(W, H, 800, 9), bins);
+  counts.insert(counts.end(), second.begin(), second.end());  // shape [2, bins, W*H]
+  const EventWindow w{0.0, 1.0};
+  BinnedEvents binned(ctx, counts, bins, W, H, {w, w}, "test bins");
+  const size_t n = size_t(W) * H * 3, planes = size_t(F - 1) * 2 * W * H;
+  std::vector<gpu::Buffer> rgb;
+  for (uint32_t i = 0; i < F; ++i) {
+    rgb.emplace_back(ctx, n * 4, "frame");
+    rgb.back().write(std::vector<float>(n, 0.5f));
+  }
+  ExposureFrames f;
+  f.width = W, f.height = H, f.t0 = w.t0, f.t1 = w.t1;
+  f.u = ExposureTrajectory::virtual_times(3);
+  for (uint32_t i = 0; i < F; ++i) f.rgb.push_back(&rgb[i]);
+  gpu::Commands cmd(ctx);
+  auto counts_of = [&](EventLoss& loss, uint32_t view) {
+    f.view = view;
+    loss.record_value(cmd, f);
+    cmd.submit();
+    return loss.counts().read<float>(planes);
+  };
+  EventLoss fresh(ctx, binned, 1.0f);
+  const std::vector<float> view1 = counts_of(fresh, 1);
+  EventLossOptions none;
+  none.count_cache_bytes = 0;
+  for (const EventLossOptions& o : {EventLossOptions{}, none}) {
+    INFO("count_cache_bytes " << o.count_cache_bytes);
+    EventLoss loss(ctx, binned, 1.0f, o);
+    const std::vector<float> view0 = counts_of(loss, 0);
+    CHECK(view0 != view1);
+    CHECK(counts_of(loss, 1) == view1);
+    CHECK(counts_of(loss, 0) == view0);
+  }
+  test::require_no_validation_messages();
+}
+
 namespace {
 
 // An EBAD-NeRF folder made by hand from a simulated dataset in our layout: poses_bounds.npy

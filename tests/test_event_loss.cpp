@@ -225,9 +225,8 @@ TEST_CASE("event loss sign: renders that follow the simulator's events score nea
   test::require_no_validation_messages();
 }
 
-TEST_CASE(
-    "event loss: the value-only record matches the full one, and counts are reused only for the same view and times",
-    "[events][loss]") {
+TEST_CASE("event loss: the value-only record matches the full one; each view's counts are kept, or shared past the cap",
+          "[events][loss]") {
   auto& ctx = test::gpu_context();
   const uint32_t W = 24, H = 16, F = 7;
   auto ev = random_events(W, H, 6000, 21);
@@ -281,10 +280,31 @@ TEST_CASE(
   cmd.submit();
   CHECK(loss.count_passes() == 1);
   CHECK(loss.value() == Approx(forward0).epsilon(1e-6));
-  loss.record(cmd, frames_of(1, false, true));  // another view: counted again
+  loss.record(cmd, frames_of(1, false, true));  // another view: counted into its own planes
   cmd.submit();
   CHECK(loss.count_passes() == 2);
   CHECK(loss.value() == Approx(forward1).epsilon(1e-6));
+  loss.record(cmd, frames_of(0, false, true));  // the first view again: its planes were kept
+  cmd.submit();
+  CHECK(loss.count_passes() == 2);
+  CHECK(loss.value() == Approx(forward0).epsilon(1e-6));
+  auto other = frames_of(0, false, true);
+  other.u = ExposureTrajectory::virtual_times(2);  // other times (5 frames): counted again
+  other.rgb.resize(5), other.grad.resize(5);
+  loss.record(cmd, other);
+  cmd.submit();
+  CHECK(loss.count_passes() == 3);
+
+  EventLossOptions small;  // no room to keep a view's planes: one shared set, counted per view change
+  small.count_cache_bytes = 0;
+  EventLoss shared(ctx, gev, 0.1f, small);
+  const std::vector<std::pair<uint32_t, double>> visits{{0, forward0}, {0, forward0}, {1, forward1}, {0, forward0}};
+  for (const auto& [view, expected] : visits) {
+    shared.record(cmd, frames_of(view, false, true));
+    cmd.submit();
+    CHECK(shared.value() == Approx(expected).epsilon(1e-6));
+  }
+  CHECK(shared.count_passes() == 3);
   test::require_no_validation_messages();
 }
 

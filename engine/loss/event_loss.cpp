@@ -13,7 +13,6 @@ EventLoss::EventLoss(gpu::Context& ctx, const IntervalEvents& events, float weig
     : ExposureLossTerm(ctx, "events", weight, 1),
       events_(events),
       options_(options),
-      counts_(ctx, 16, "event_counts"),
       scratch_(ctx, 16, "event_scratch"),
       partials_(ctx, 16, "event_partials"),
       sums_(ctx, 16, "event_sums") {
@@ -22,6 +21,23 @@ EventLoss::EventLoss(gpu::Context& ctx, const IntervalEvents& events, float weig
   if (!(options.eps > 0)) throw std::invalid_argument("event loss: eps must be > 0");
   if (!(options.norm_floor_rms > 0)) throw std::invalid_argument("event loss: norm_floor_rms must be > 0");
   check_event_pool(options.pool, "event loss");
+  shared_.planes = gpu::Buffer(ctx, 16, "event_counts");
+}
+
+// The planes a view's counts live in: its own when every view's fit count_cache_bytes, else the
+// shared set.
+EventLoss::CountPlanes& EventLoss::planes_for(uint32_t view, uint64_t bytes) {
+  const uint64_t views = events_.window_count();
+  if (kept_.empty() && views * bytes <= options_.count_cache_bytes) {
+    kept_.resize(views);
+    for (uint32_t v = 0; v < views; ++v) {
+      kept_[v].view = v;
+      kept_[v].planes = gpu::Buffer(ctx_, bytes, "event_counts_view" + std::to_string(v));
+    }
+  }
+  CountPlanes& p = view < kept_.size() && kept_[view].planes.size() >= bytes ? kept_[view] : shared_;
+  if (&p == &shared_ && p.view != view) p.times.clear();
+  return p;
 }
 
 std::vector<std::pair<uint32_t, uint32_t>> EventLoss::sample_pairs(uint32_t frames, uint64_t seed) {
@@ -61,23 +77,25 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
   const uint32_t groups = gpu::Commands::div_up(quads ? hw / 4 : hw, shaderio::kLossGroupSize);
   const uint64_t cells = event_pool_cells(f.width, f.height, options_.pool);
   const uint32_t cell_groups = quads ? groups : gpu::Commands::div_up(cells, shaderio::kLossGroupSize);
-  counts_.ensure(uint64_t(intervals) * 2 * hw * 4);
   scratch_.ensure(2 * cells * 4);
   partials_.ensure(uint64_t(cell_groups) * 16);
   sums_.ensure(uint64_t(intervals) * 16);
   ctx_.check_binding_size(uint64_t(intervals) * 2 * hw * 4, "event loss counts");
 
-  // Every interval's events once, into its own plane (unless counts_ holds them already).
+  // Every interval's events once, into its own plane (unless the view's planes hold them already).
   std::vector<double> times(F);
   for (uint32_t i = 0; i < F; ++i) times[i] = f.time_at(i);
-  if (f.view != counted_view_ || times != counted_times_ || events_.generation() != counted_generation_) {
-    cmd.fill(counts_, 0u);
-    for (uint32_t k = 0; k < intervals; ++k) events_.accumulate(cmd, f.view, times[k], times[k + 1], counts_, k);
-    counted_view_ = f.view;
-    counted_times_ = times;
-    counted_generation_ = events_.generation();
+  CountPlanes& counted = planes_for(f.view, uint64_t(intervals) * 2 * hw * 4);
+  counted.planes.ensure(uint64_t(intervals) * 2 * hw * 4);
+  if (times != counted.times || events_.generation() != counted.generation) {
+    cmd.fill(counted.planes, 0u);
+    for (uint32_t k = 0; k < intervals; ++k) events_.accumulate(cmd, f.view, times[k], times[k + 1], counted.planes, k);
+    counted.view = f.view;
+    counted.times = times;
+    counted.generation = events_.generation();
     ++count_passes_;
   }
+  last_counts_ = &counted.planes;
 
   pairs_ = sample_pairs(F, f.seed);
   const gpu::Groups g = cmd.linear_groups(groups), gc = cmd.linear_groups(cell_groups);
@@ -100,7 +118,7 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     pc.counts_float = events_.float_planes() ? 1u : 0u;
     pc.pool = options_.pool;
     cmd.dispatch(quads ? "loss/event_pair_quads" : "loss/event_pair",
-                 {{shaderio::kEventPairBindCounts, counts_},
+                 {{shaderio::kEventPairBindCounts, counted.planes},
                   {shaderio::kEventPairBindFrameS, *f.rgb[s]},
                   {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
                   {shaderio::kEventPairBindScratch, scratch_},

@@ -12,9 +12,10 @@
 // below sqrt(H·W)·norm_floor_rms is held at that floor, so nearly static frame pairs (the
 // trajectories start at rest) don't turn into huge gradients.
 //
-// GPU work per record: the events of each of the 2N frame intervals are counted once into their
-// own plane (integer atomics, exact), and each pair sums its planes; every reduction is in a
-// fixed order, so the value and the gradients are reproducible on a device.
+// GPU work per record: the events of each of the 2N frame intervals are counted into their own
+// plane (integer atomics, exact), and each pair sums its planes; every reduction is in a fixed
+// order, so the value and the gradients are reproducible on a device. A view's planes are kept
+// for its next records (its frame times and events rarely change), up to count_cache_bytes in all.
 #pragma once
 #include <cstdint>
 #include <utility>
@@ -31,6 +32,9 @@ struct EventLossOptions {
   float eps = 1e-3f;                         // L = log(eps + Y), the event model's eps
   float norm_floor_rms = 1e-3f;              // per-pixel RMS below which a norm is floored
   uint32_t pool = 1;                         // side of the pooling cells (loss/event_pooling.h)
+  // The most bytes of count planes kept across records, one set per view; past it the views
+  // share one set, counted again whenever the view changes.
+  uint64_t count_cache_bytes = 256ull << 20;
 };
 
 class EventLoss : public ExposureLossTerm {
@@ -51,24 +55,31 @@ class EventLoss : public ExposureLossTerm {
   const EventLossOptions& options() const { return options_; }
   // Per-pixel counts of the last record, 2 * H * W values per interval plane: uints, or floats
   // when the events' float_planes() (for viewers and tests).
-  const gpu::Buffer& counts() const { return counts_; }
-  // How many records counted their events (a record for the same view and frame times as the
-  // one before reuses its counts: events never change).
+  const gpu::Buffer& counts() const { return *last_counts_; }
+  // How many records counted their events (a record for a view whose planes are kept, with the
+  // same frame times and events, reuses them).
   uint64_t count_passes() const { return count_passes_; }
 
  private:
+  // One set of interval planes and what it holds: the frame times and events' generation of its
+  // last counting pass (empty times: nothing). It assumes each record's commands are submitted
+  // (a discarded batch would leave it stale).
+  struct CountPlanes {
+    gpu::Buffer planes;
+    uint32_t view = 0;
+    std::vector<double> times;
+    uint64_t generation = 0;
+  };
   void record_pairs(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
+  CountPlanes& planes_for(uint32_t view, uint64_t bytes);
 
   const IntervalEvents& events_;
   EventLossOptions options_;
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
-  gpu::Buffer counts_, scratch_, partials_, sums_;
-  // What counts_ holds: the view, frame times and events' generation of the last counting pass
-  // (empty: nothing).
-  // It assumes each record's commands are submitted (a discarded batch would leave it stale).
-  uint32_t counted_view_ = 0;
-  std::vector<double> counted_times_;
-  uint64_t counted_generation_ = 0;
+  gpu::Buffer scratch_, partials_, sums_;
+  std::vector<CountPlanes> kept_;  // per view, when all fit options_.count_cache_bytes
+  CountPlanes shared_;             // every view past them
+  const gpu::Buffer* last_counts_ = &shared_.planes;
   uint64_t count_passes_ = 0;
 };
 
