@@ -225,8 +225,9 @@ TEST_CASE("event loss sign: renders that follow the simulator's events score nea
   test::require_no_validation_messages();
 }
 
-TEST_CASE("event loss: the value-only record matches the full one; each view's counts are kept, or shared past the cap",
-          "[events][loss]") {
+TEST_CASE(
+    "event loss: the value-only record matches the full one, and each view's counts are kept or shared past the cap",
+    "[events][loss]") {
   auto& ctx = test::gpu_context();
   const uint32_t W = 24, H = 16, F = 7;
   auto ev = random_events(W, H, 6000, 21);
