@@ -80,13 +80,14 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
   scratch_.ensure(2 * cells * 4);
   partials_.ensure(uint64_t(cell_groups) * 16);
   sums_.ensure(uint64_t(intervals) * 16);
-  ctx_.check_binding_size(uint64_t(intervals) * 2 * hw * 4, "event loss counts");
+  const uint64_t count_bytes = uint64_t(intervals) * 2 * hw * 4;
+  ctx_.check_binding_size(count_bytes, "event loss counts");
 
   // Every interval's events once, into its own plane (unless the view's planes hold them already).
   std::vector<double> times(F);
   for (uint32_t i = 0; i < F; ++i) times[i] = f.time_at(i);
-  CountPlanes& counted = planes_for(f.view, uint64_t(intervals) * 2 * hw * 4);
-  counted.planes.ensure(uint64_t(intervals) * 2 * hw * 4);
+  CountPlanes& counted = planes_for(f.view, count_bytes);
+  counted.planes.ensure(count_bytes);
   if (times != counted.times || events_.generation() != counted.generation) {
     cmd.fill(counted.planes, 0u);
     for (uint32_t k = 0; k < intervals; ++k) events_.accumulate(cmd, f.view, times[k], times[k + 1], counted.planes, k);
