@@ -28,6 +28,12 @@ std::vector<std::string> split(const std::string& s) {
 // A built-in scene's simulation seed: its place in sim::builtin_scene_names(), from 1.
 std::string builtin_scene_seed(size_t index) { return std::to_string(index + 1); }
 
+// --blur-px, once a single value is spread over the scenes, holds one value per scene.
+void require_blur_per_scene(const std::vector<std::string>& scenes, const std::vector<std::string>& blur) {
+  if (blur.size() != scenes.size())
+    throw std::invalid_argument("--blur-px needs one value per scene (" + std::to_string(scenes.size()) + ")");
+}
+
 // The scenes of --scenes with their folders and seeds; unknown scenes are refused here.
 std::vector<ExperimentScene> resolve_scenes(const std::vector<std::string>& scenes,
                                             const std::vector<std::string>& blur, const std::string& sim_seed);
@@ -36,6 +42,7 @@ std::vector<ExperimentScene> resolve_scenes(const std::vector<std::string>& scen
 std::vector<ExperimentScene> resolve_scenes(const std::vector<std::string>& scenes,
                                             const std::vector<std::string>& blur,
                                             const std::vector<std::string>& seeds) {
+  require_blur_per_scene(scenes, blur);
   std::vector<ExperimentScene> out;
   for (size_t i = 0; i < scenes.size(); ++i)
     for (const std::string& seed : seeds) {
@@ -52,8 +59,7 @@ std::vector<ExperimentScene> resolve_scenes(const std::vector<std::string>& scen
 std::vector<ExperimentScene> resolve_scenes(const std::vector<std::string>& scenes,
                                             const std::vector<std::string>& blur, const std::string& sim_seed) {
   const auto names = sim::builtin_scene_names();
-  if (blur.size() != scenes.size())
-    throw std::invalid_argument("--blur-px needs one value per scene (" + std::to_string(scenes.size()) + ")");
+  require_blur_per_scene(scenes, blur);
   std::vector<ExperimentScene> out;
   for (size_t i = 0; i < scenes.size(); ++i) {
     const std::string& scene = scenes[i];
@@ -102,8 +108,9 @@ std::string ExperimentPlan::help() {
       "         [--no-baseline-pose-refine] [--poses perturbed|colmap] [--emit-jobs FILE | --job] [key=value ...]\n"
       "         [--sim-seeds A,B,...] [--ablation] [--shake smooth|jerk]\n"
       "       evflow experiment --collect DIR\n"
-      "  Simulates each built-in scene (blur size per scene; recorded poses perturbed like poses estimated\n"
-      "  from blurry images), trains every method on it with the preset\n"
+      "  Simulates each built-in scene (its own blur size, or --blur-px: one per scene or one for all;\n"
+      "  recorded poses perturbed like poses estimated from blurry images), trains every method on it\n"
+      "  with the preset\n"
       "  and the key=value overrides, evaluates (deblur at mid-exposure; novel views as given and after\n"
       "  test-pose refinement) and writes DIR/experiment.md and DIR/experiment.json.\n"
       "  Each scene is simulated with its own seed (%s), so a scene's data\n"
@@ -146,6 +153,8 @@ ExperimentPlan ExperimentPlan::from_args(ArgParser& p) {
       std::snprintf(v, sizeof v, "%g", sim::builtin_scene_blur_px(builtin ? sc : "default"));
       blur.push_back(v);
     }
+  else if (blur.size() == 1)  // one size for every scene
+    blur.resize(scenes.size(), blur.front());
   e.width = value_or("--width", e.width), e.height = value_or("--height", e.height);
   const std::string methods = p.value("--methods");
   e.methods = split(methods.empty() ? "plain,edi,blur-only,blur+events" : methods);

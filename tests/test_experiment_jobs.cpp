@@ -114,5 +114,15 @@ TEST_CASE("experiment: each scene's own blur unless --blur-px is given", "[exper
   CHECK(slurp(dir / "b.txt").find("--scenes 'gallery' --blur-px '7'") != std::string::npos);
   CHECK(run_evflow(dir, "experiment --out c --scenes gallery --blur-px 7,8 --emit-jobs c.txt", out) != 0);
   CHECK(out.find("--blur-px needs one value per scene (1)") != std::string::npos);
+  // One size for several scenes applies to each, with and without --sim-seeds; two for three are refused.
+  REQUIRE(run_evflow(dir, "experiment --out d --ablation --scenes workshop,gallery --blur-px 6 --emit-jobs d.txt",
+                     out) == 0);
+  const std::string one = slurp(dir / "d.txt");
+  CHECK(one.find("--scenes 'workshop' --blur-px '6'") != std::string::npos);
+  CHECK(one.find("--scenes 'gallery' --blur-px '6'") != std::string::npos);
+  CHECK(run_evflow(dir,
+                   "experiment --out e --ablation --scenes workshop,gallery,default --blur-px 6,4 --emit-jobs e.txt",
+                   out) != 0);
+  CHECK(out.find("--blur-px needs one value per scene (3)") != std::string::npos);
   fs::remove_all(dir);
 }
