@@ -209,8 +209,18 @@ static int bench_train(ArgParser& p) {
   Trainer t = splats.empty() ? Trainer(ctx, data, cfg) : Trainer(ctx, data, cfg, bench_start(splats, cfg));
   t.step();  // warm-up: pipelines compiled, buffers sized
   std::vector<double> total, fwd, loss, bwd, opt, ldi;
-  std::map<std::string, std::vector<double>> stages, ldi_stages;  // the rasterizer's, the LDI branch's
-  std::vector<std::string> order, ldi_order;
+  std::map<std::string, std::vector<double>> stages, loss_stages, ldi_stages;  // rasterizer, loss terms, LDI
+  std::vector<std::string> order, loss_order, ldi_order;
+  // A step's stages into per-stage samples; a stage recorded several times a step (chunks) adds up.
+  auto add_step = [](const std::vector<std::pair<std::string, double>>& step_stages, std::vector<std::string>& names,
+                     std::map<std::string, std::vector<double>>& samples) {
+    std::map<std::string, double> sum;
+    for (auto& [name, ms] : step_stages) {
+      if (!samples.count(name) && !sum.count(name)) names.push_back(name);
+      sum[name] += ms;
+    }
+    for (auto& [name, ms] : sum) samples[name].push_back(ms);
+  };
   const uint64_t submits0 = ctx.submits(), transfers0 = ctx.transfers();
   for (int i = 0; i < steps; ++i) {
     StepStats st = t.step();
@@ -218,12 +228,8 @@ static int bench_train(ArgParser& p) {
       if (!stages.count(name)) order.push_back(name);
       stages[name].push_back(ms);
     }
-    std::map<std::string, double> step_ldi;  // a stage recorded several times a step (chunks): its sum
-    for (auto& [name, ms] : st.ldi_stages) {
-      if (!ldi_stages.count(name) && !step_ldi.count(name)) ldi_order.push_back(name);
-      step_ldi[name] += ms;
-    }
-    for (auto& [name, ms] : step_ldi) ldi_stages[name].push_back(ms);
+    add_step(st.loss_stages, loss_order, loss_stages);
+    add_step(st.ldi_stages, ldi_order, ldi_stages);
     total.push_back(st.ms);
     fwd.push_back(st.raster_forward_ms);
     loss.push_back(st.loss_ms);
@@ -246,6 +252,8 @@ static int bench_train(ArgParser& p) {
         method.c_str(), ctx.caps().name.c_str(), W, H, count, steps, host_mib, device_mib, submits, transfers,
         1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), median(ldi), m);
     print_stages_json(order, stages);
+    std::printf("}, \"loss_stages_ms\": {");
+    print_stages_json(loss_order, loss_stages);
     std::printf("}, \"ldi_stages_ms\": {");
     print_stages_json(ldi_order, ldi_stages);
     std::printf("}}\n");
@@ -257,6 +265,7 @@ static int bench_train(ArgParser& p) {
         "  optimizer (Adam)    %9.2f ms\n  LDI branch          %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
         median(fwd), median(loss), median(bwd), median(opt), median(ldi), m, 1000.0 / m);
     print_stages_text("rasterizer stages", order, stages);
+    print_stages_text("loss term stages", loss_order, loss_stages);
     if (!ldi_order.empty()) print_stages_text("LDI branch stages", ldi_order, ldi_stages);
     std::printf("  peak memory: host %.1f MiB (the process's resident set), device %.1f MiB (buffers)\n", host_mib,
                 device_mib);

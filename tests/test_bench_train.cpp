@@ -45,6 +45,32 @@ TEST_CASE("bench train: a blur+events step's round trips do not grow with its fr
   CHECK(b["submits_per_step"].get<double>() <= 12.0);
 }
 
+// The loss stage's GPU time by term: each term under its name, the frames' shares of the image
+// terms' gradient and the direction check (on in every timed step), none longer than the stage.
+TEST_CASE("bench train: the loss terms' stage times by name", "[cli]") {
+  const fs::path dir = fresh_dir("evflow_bench_loss_stages");
+  std::string out;
+  REQUIRE(run_evflow(dir, "simulate --scene gallery --out sim --width 32 --height 24 --blur-px 3 --train-views 2",
+                     out) == 0);
+  REQUIRE(run_evflow(dir, "bench train --data sim --method blur+events --gaussians 500 --steps 2 --json", out) == 0);
+  const nlohmann::json b = nlohmann::json::parse(out.substr(out.find('{')));
+  const nlohmann::json& stages = b["loss_stages_ms"];
+  INFO(stages.dump());
+  double sum = 0;
+  for (const char* name : {"l1_ssim", "direction check", "frame shares", "events"}) {
+    REQUIRE(stages.contains(name));
+    CHECK(stages[name].get<double>() > 0);
+    sum += stages[name].get<double>();
+  }
+  CHECK(stages.size() == 4);
+  CHECK(sum <= b["ms"]["loss"].get<double>());
+  // Without the check its stage is gone.
+  REQUIRE(run_evflow(dir,
+                     "bench train --data sim --method blur+events --gaussians 500 --steps 2 --json event_flip_until=0",
+                     out) == 0);
+  CHECK_FALSE(nlohmann::json::parse(out.substr(out.find('{')))["loss_stages_ms"].contains("direction check"));
+}
+
 // --splats: the steps start from a run's Gaussians (their count, not --gaussians) and, in blur
 // mode, its learned exposures; a missing run is named.
 TEST_CASE("bench train --splats: steps from a run's Gaussians", "[cli]") {

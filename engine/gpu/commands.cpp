@@ -219,6 +219,7 @@ void Commands::submit() {
     for (size_t i = 0; i < marks_.size(); ++i)
       stage_ms_.emplace_back(marks_[i], double(ts[i + 1] - ts[i]) * ctx_.caps().timestamp_period_ns * 1e-6);
   }
+  if (logging_) stage_log_.insert(stage_log_.end(), stage_ms_.begin(), stage_ms_.end());
   EVF_VK(vkResetCommandBuffer(cb_, 0));
   begin();
 }

@@ -58,6 +58,14 @@ class Commands {
   // Stage times (ms) of the last submit, in recording order.
   const std::vector<std::pair<std::string, double>>& stage_ms() const { return stage_ms_; }
 
+  // For work that submits several times (a step's loss terms): from start_stage_log() on, every
+  // submit's stage times are kept, in order, until take_stage_log() returns them and stops.
+  void start_stage_log() { stage_log_.clear(), logging_ = true; }
+  std::vector<std::pair<std::string, double>> take_stage_log() {
+    logging_ = false;
+    return std::move(stage_log_);
+  }
+
  private:
   void begin();
   void barrier();
@@ -74,6 +82,8 @@ class Commands {
   uint32_t query_capacity_ = 256;
   std::vector<std::string> marks_;
   std::vector<std::pair<std::string, double>> stage_ms_;
+  std::vector<std::pair<std::string, double>> stage_log_;
+  bool logging_ = false;
   std::vector<std::pair<uint64_t, std::string>> used_;  // the allocations the recorded commands use, by name
   void used(const Buffer& b);
   void check_used();

@@ -13,6 +13,7 @@ void DirectionCheck::score_reversed(gpu::Commands& cmd, ExposureFrames frames) {
   frames.grad.clear();
   cmd.submit();  // value slots recorded before (the image terms') are read after the next submit: keep them
   events_.record_value(cmd, frames);
+  cmd.mark("direction check");
   cmd.submit();
   reversed_ = events_.value();
 }

@@ -36,12 +36,16 @@ void LossTerms::record_image_terms(gpu::Commands& cmd, const ImageModel& m, cons
   bool first = true;
   for (auto& t : image_) {
     t->record(cmd, m.prediction(), target, m.prediction_grad(), t->weight() / float(m.mean_count()), !first);
+    cmd.mark(t->name());
     first = false;
   }
 }
 
 void LossTerms::record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames, double scale) const {
-  for (auto& t : exposure_) t->record(cmd, frames, float(t->weight() * scale));
+  for (auto& t : exposure_) {
+    t->record(cmd, frames, float(t->weight() * scale));
+    cmd.mark(t->name());
+  }
 }
 
 LossValues LossTerms::read(bool exposure_recorded, bool branches_recorded, double exposure_scale) const {

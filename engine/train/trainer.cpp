@@ -284,7 +284,9 @@ StepStats Trainer::step() {
   if (image_model_->upsample() != upsample_at(step_)) set_image_model(upsample_at(step_));
   render_exposure(st.view);
   st.raster_forward_ms = clock.lap();
+  cmd_.start_stage_log();
   record_losses(st, exposure_on);
+  st.loss_stages = cmd_.take_stage_log();
   st.loss_ms = clock.lap();
   if (ldi_) {
     ldi_->record(cmd_, st.view, step_, exposure_->images(), *image_model_, step_ > cfg_.blur_step(cfg_.joint_from),
@@ -386,6 +388,7 @@ void Trainer::record_exposure_terms(StepStats& st) {
     image_model_->frame_share(cmd_, i, frame_grad_[i]);
     ef.grad.push_back(&frame_grad_[i]);
   }
+  cmd_.mark("frame shares");
   terms_.record_exposure_terms(cmd_, ef, event_schedule());
   if (check && direction_->prefers_reversed(cmd_)) {
     cameras_->flip(st.view);  // this step's gradients belong to the other direction: the flip is the update
