@@ -22,7 +22,8 @@ struct Command {
   }
 };
 
-// Small argument helpers: "--key value" and "--flag".
+// Small argument helpers: "--key value" and "--flag". An option given twice, or given an empty
+// value, is refused; numbers must be finite.
 // "a, b, c" from {a, b, c} with sep ", ".
 inline std::string join(const std::vector<std::string>& items, const std::string& sep) {
   std::string s;
@@ -36,6 +37,7 @@ struct ArgParser {
   bool flag(const std::string& name);
   std::string value(const std::string& name, const std::string& def = "");
   long long integer(const std::string& name, long long def);
+  long long integer(const std::string& name, long long def, long long lo, long long hi);  // refuses outside [lo, hi]
   double number(const std::string& name, double def);
   std::vector<std::string> positional() const;  // what is left after flags and values were taken
   void reject_unknown() const;                  // throws on any leftover --option

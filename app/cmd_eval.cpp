@@ -126,8 +126,7 @@ static int run_eval(const Args& a) {
     return 0;
   }
   std::string data_override = p.value("--data");
-  const std::string refine_arg = p.value("--refine-iters");
-  const uint32_t refine_iters = refine_arg.empty() ? 60u : uint32_t(std::stoul(refine_arg));
+  const uint32_t refine_iters = uint32_t(p.integer("--refine-iters", 60, 0, 1000000));
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   auto pos = p.positional();

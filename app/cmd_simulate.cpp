@@ -109,11 +109,11 @@ static int run_simulate(const Args& a) {
   const long long subdivide = p.integer("--subdivide", 1);
   if (subdivide < 1 || subdivide > 1024) throw std::invalid_argument("--subdivide must be between 1 and 1024");
   const std::string write_scene = p.value("--write-scene");
-  sp.width = uint32_t(p.integer("--width", sp.width));
-  sp.height = uint32_t(p.integer("--height", sp.height));
+  sp.width = uint32_t(p.integer("--width", sp.width, 1, 16384));
+  sp.height = uint32_t(p.integer("--height", sp.height, 1, 16384));
   sp.fov_y_deg = p.number("--fov", sp.fov_y_deg);
   sp.train_views = int(p.integer("--train-views", sp.train_views));
-  sp.novel_views = int(p.integer("--novel-views", sp.novel_views));
+  sp.novel_views = int(p.integer("--novel-views", sp.novel_views, 0, 100000));
   sp.arc_deg = p.number("--arc", sp.arc_deg);
   sp.blur_px = p.number("--blur-px", sp.blur_px);
   sp.exposure_s = p.number("--exposure", sp.exposure_s);
@@ -145,7 +145,9 @@ static int run_simulate(const Args& a) {
   sp.events.jitter_s = p.number("--jitter", sp.events.jitter_s);
   sp.events.seed = sp.seed;
   sp.shading.ambient = float(p.number("--ambient", sp.shading.ambient));
-  sp.shading.texture_samples = int(p.integer("--texture-samples", sp.shading.texture_samples));
+  sp.shading.texture_samples = int(p.integer("--texture-samples", sp.shading.texture_samples, 1, 4));
+  if (sp.shading.texture_samples != 1 && sp.shading.texture_samples != 4)
+    throw std::invalid_argument("--texture-samples must be 1 or 4, got " + std::to_string(sp.shading.texture_samples));
   const std::string flow = p.value("--flow", "mid");
   if (flow != "mid" && flow != "all") throw std::invalid_argument("--flow must be mid or all");
   gpu::ContextOptions o = context_options(p);

@@ -41,18 +41,20 @@ static int run_train_prior(const Args& a) {
   ArgParser p(a);
   if (p.flag("--help")) return print_help(), 0;
   const std::string out = p.value("--out");
-  const uint64_t rooms = uint64_t(p.integer("--rooms", 12)), held = uint64_t(p.integer("--held-out-rooms", 2));
-  const uint64_t first_room = uint64_t(p.integer("--room-seed", 1000));
+  const uint64_t rooms = uint64_t(p.integer("--rooms", 12, 1, 100000)),
+                 held = uint64_t(p.integer("--held-out-rooms", 2, 0, 100000));
+  const uint64_t first_room = uint64_t(p.integer("--room-seed", 1000, 0, 1000000000));
   prior::SampleOptions so;
-  so.views_per_room = int(p.integer("--views", 8));
-  so.width = uint32_t(p.integer("--width", 173)), so.height = uint32_t(p.integer("--height", 130));
+  so.views_per_room = int(p.integer("--views", 8, 1, 100000));
+  so.width = uint32_t(p.integer("--width", 173, 1, 16384)), so.height = uint32_t(p.integer("--height", 130, 1, 16384));
   prior::ResidualNetSpec spec;
-  spec.width = uint32_t(p.integer("--net-width", 16));
+  spec.width = uint32_t(p.integer("--net-width", 16, 1, 1024));
   prior::PriorTrainOptions o;
-  o.steps = uint32_t(p.integer("--steps", 2000));
-  o.crop = uint32_t(p.integer("--crop", 64));
-  o.batch = uint32_t(p.integer("--batch", 4));
+  o.steps = uint32_t(p.integer("--steps", 2000, 1, 100000000));
+  o.crop = uint32_t(p.integer("--crop", 64, 1, 16384));
+  o.batch = uint32_t(p.integer("--batch", 4, 1, 4096));
   o.lr = float(p.number("--lr", 1e-3));
+  if (!(o.lr > 0)) throw std::invalid_argument("--lr must be positive");
   o.seed = uint64_t(p.integer("--seed", 1));
   o.max_seconds = 60.0 * p.number("--minutes", 0);
   const uint32_t log_every = uint32_t(std::max<long long>(1, p.integer("--log-every", 25)));

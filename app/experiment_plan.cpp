@@ -1,6 +1,7 @@
 #include "experiment_plan.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -32,6 +33,23 @@ std::string builtin_scene_seed(size_t index) { return std::to_string(index + 1);
 void require_blur_per_scene(const std::vector<std::string>& scenes, const std::vector<std::string>& blur) {
   if (blur.size() != scenes.size())
     throw std::invalid_argument("--blur-px needs one value per scene (" + std::to_string(scenes.size()) + ")");
+}
+
+// The settings are kept as text for the job lines; each must read as what the subcommand it is
+// passed to expects (digits only where `integer`), within [lo, hi], before any job runs.
+void require_number(const std::string& option, const std::string& v, double lo, double hi, bool integer = false) {
+  size_t pos = 0;
+  double x = 0;
+  try {
+    x = std::stod(v, &pos);
+  } catch (...) { pos = 0; }
+  if (pos == 0 || pos != v.size() || !std::isfinite(x) || x < lo || x > hi ||
+      (integer && v.find_first_not_of("0123456789") != std::string::npos)) {
+    char range[64];
+    std::snprintf(range, sizeof range, "%g..%g", lo, hi);
+    throw std::invalid_argument(option + " needs " + (integer ? "a whole number" : "a number") + " in " + range +
+                                ", got '" + v + "'");
+  }
 }
 
 // The scenes of --scenes with their folders and seeds; unknown scenes are refused here.
@@ -170,6 +188,10 @@ ExperimentPlan ExperimentPlan::from_args(ArgParser& p) {
   e.poses = value_or("--poses", e.poses);
   e.shake = value_or("--shake", e.shake);
   p.reject_unknown();
+  require_number("--width", e.width, 1, 16384, true), require_number("--height", e.height, 1, 16384, true);
+  require_number("--refine-iters", e.refine_iters, 0, 1000000, true);
+  require_number("--pose-noise-rot", e.noise_rot, 0, 180), require_number("--pose-noise-trans", e.noise_trans, 0, 1e6);
+  for (const auto& b : blur) require_number("--blur-px", b, 0, 1e6);
   if (e.shake != "smooth" && e.shake != "jerk")
     throw std::invalid_argument("--shake must be smooth or jerk, got '" + e.shake + "'");
   if (e.poses != "perturbed" && e.poses != "colmap")

@@ -1,4 +1,5 @@
 // evflow: the command-line program. `evflow --help` lists the subcommands.
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <exception>
@@ -13,10 +14,17 @@ std::map<std::string, CommandInfo>& commands() {
   return m;
 }
 
+// An option given twice would have its second value taken for an unknown option: say so instead.
+static void reject_repeat(const Args& args, const std::string& name) {
+  for (const auto& a : args)
+    if (a == name || a.rfind(name + "=", 0) == 0) throw std::invalid_argument(name + " is given twice");
+}
+
 bool ArgParser::flag(const std::string& name) {
   for (size_t i = 0; i < args.size(); ++i)
     if (args[i] == name) {
       args.erase(args.begin() + i);
+      reject_repeat(args, name);
       return true;
     }
   return false;
@@ -24,17 +32,21 @@ bool ArgParser::flag(const std::string& name) {
 
 std::string ArgParser::value(const std::string& name, const std::string& def) {
   for (size_t i = 0; i < args.size(); ++i) {
+    std::string v;
     if (args[i] == name) {
       if (i + 1 >= args.size()) throw std::invalid_argument(name + " needs a value");
-      std::string v = args[i + 1];
+      v = args[i + 1];
       args.erase(args.begin() + i, args.begin() + i + 2);
-      return v;
-    }
-    if (args[i].rfind(name + "=", 0) == 0) {
-      std::string v = args[i].substr(name.size() + 1);
+    } else if (args[i].rfind(name + "=", 0) == 0) {
+      v = args[i].substr(name.size() + 1);
       args.erase(args.begin() + i);
-      return v;
+    } else {
+      continue;
     }
+    // An empty value (an unset shell variable, say) must not read as the option left out.
+    if (v.empty()) throw std::invalid_argument(name + " needs a value, and the one given is empty");
+    reject_repeat(args, name);
+    return v;
   }
   return def;
 }
@@ -50,15 +62,23 @@ long long ArgParser::integer(const std::string& name, long long def) {
   } catch (...) { throw std::invalid_argument(name + " expects an integer, got '" + v + "'"); }
 }
 
+long long ArgParser::integer(const std::string& name, long long def, long long lo, long long hi) {
+  const long long r = integer(name, def);
+  if (r < lo || r > hi)
+    throw std::invalid_argument(name + " must be " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " +
+                                std::to_string(r));
+  return r;
+}
+
 double ArgParser::number(const std::string& name, double def) {
   std::string v = value(name);
   if (v.empty()) return def;
   try {
     size_t pos;
     double r = std::stod(v, &pos);
-    if (pos != v.size()) throw 1;
+    if (pos != v.size() || !std::isfinite(r)) throw 1;
     return r;
-  } catch (...) { throw std::invalid_argument(name + " expects a number, got '" + v + "'"); }
+  } catch (...) { throw std::invalid_argument(name + " expects a finite number, got '" + v + "'"); }
 }
 
 std::vector<std::string> ArgParser::positional() const {

@@ -44,19 +44,14 @@ std::vector<float> positions_at(const nlohmann::json& view, const Camera& mid, c
   return pos;
 }
 
-}  // namespace
-
-std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const fs::path& data, const std::string& name,
-                                                                          const std::vector<double>& frame_u) {
-  const fs::path traj = data / "gt" / "trajectories.json", depth_file = data / "gt" / "depth" / (name + ".npy");
-  if (!fs::exists(traj) || !fs::exists(depth_file)) return std::nullopt;
-  std::ifstream f(traj);
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(f);
-  } catch (const std::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
+// The interval flows of training view `name` from the trajectories parsed from `traj`.
+std::vector<std::vector<float>> interval_flow_of(const nlohmann::json& j, const fs::path& traj, const std::string& name,
+                                                 const fs::path& depth_file, const std::vector<double>& frame_u) {
   for (const nlohmann::json& view : j.at("train")) {
     if (view.at("name") != name) continue;
+    if (view.at("subframes").size() < 2)
+      throw std::runtime_error(traj.string() + ": view '" + name + "' has " +
+                               std::to_string(view.at("subframes").size()) + " subframes; the flow needs at least 2");
     const nlohmann::json& gc = view.at("gt_camera");
     const Camera mid = camera_of(gc.at("intrinsics"), gc.at("R"), gc.at("t"), gc.at("size"));
     const std::vector<double> d = io::read_npy_double(depth_file);
@@ -77,8 +72,29 @@ std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const 
   throw std::runtime_error(traj.string() + ": no training view '" + name + "'");
 }
 
+}  // namespace
+
+std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const fs::path& data, const std::string& name,
+                                                                          const std::vector<double>& frame_u) {
+  const fs::path traj = data / "gt" / "trajectories.json", depth_file = data / "gt" / "depth" / (name + ".npy");
+  if (!fs::exists(traj) || !fs::exists(depth_file)) return std::nullopt;
+  std::ifstream f(traj);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(f);
+  } catch (const std::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
+  try {
+    return interval_flow_of(j, traj, name, depth_file, frame_u);
+  } catch (const nlohmann::json::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
+}
+
 EndpointError endpoint_error(const std::vector<float>& estimate, const std::vector<float>& truth,
                              const std::vector<uint32_t>& counts) {
+  if (truth.size() != counts.size() * 2 || estimate.size() != counts.size() * 2)
+    throw std::invalid_argument("flow endpoint error: the ground truth (gt/trajectories.json's camera) has " +
+                                std::to_string(truth.size() / 2) + " pixels, the estimate " +
+                                std::to_string(estimate.size() / 2) + " and the sensor " +
+                                std::to_string(counts.size()));
   EndpointError e;
   for (size_t p = 0; p < counts.size(); ++p) {
     const float tx = truth[p * 2], ty = truth[p * 2 + 1];

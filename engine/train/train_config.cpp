@@ -150,6 +150,20 @@ Setting field(const char* key, T TrainConfig::*m, const char* doc) {
           [m](const TrainConfig& c) { return json_of(c.*m); }, doc};
 }
 
+// A whole-number key refused outside [lo, hi] (where a larger value is no setting but a hang).
+template <typename T>
+Setting bounded(const char* key, T TrainConfig::*m, T lo, T hi, const char* doc) {
+  return {key,
+          [key, m, lo, hi](TrainConfig& c, const std::string& v) {
+            const T x = Codec<T>::parse(key, v);
+            if (x < lo || x > hi)
+              throw std::invalid_argument("config key '" + std::string(key) + "' must be " + std::to_string(lo) + ".." +
+                                          std::to_string(hi) + ", got '" + v + "'");
+            c.*m = x;
+          },
+          [m](const TrainConfig& c) { return json_of(c.*m); }, doc};
+}
+
 // The settings tables: every key once, with what it means. Defaults are the member initialisers
 // of TrainConfig; `evflow train --keys` prints these tables and docs/training.md holds them.
 
@@ -230,7 +244,7 @@ std::vector<Setting> blur_settings() {
             "`plain`: each image is one render (3DGS); `blur`: each blurry image is the mean of 2N+1 renders, "
             "decoded to linear light, along the view's learned Bézier exposure trajectory (9 se(3) knots, paper "
             "Sec. 4.1, [trajectory.md](trajectory.md)), the blur-only baseline of the paper"),
-      field("virtual_frames", &TrainConfig::virtual_frames, "N: 2N+1 virtual poses per exposure"),
+      bounded("virtual_frames", &TrainConfig::virtual_frames, 0u, 32u, "N: 2N+1 virtual poses per exposure (0..32)"),
       field("blur_upsample", &TrainConfig::blur_upsample,
             "M of the flow-upsampled blur (paper Eq. 9): each interval of the virtual frames adds M−1 sub-frames, "
             "its first frame moved m/M of the way along the interval's optical flow (`flow`), and the blurry "
