@@ -202,8 +202,8 @@ static TrainConfig read_config(const std::string& config_file, const std::string
     nlohmann::json j;
     try {
       f >> j;
+      cfg.apply_json(j);
     } catch (const std::exception& e) { throw std::runtime_error(config_file + ": " + e.what()); }
-    cfg.apply_json(j);
   }
   if (!preset.empty()) cfg.set("preset", preset);
   for (auto& kv : overrides) cfg.set(kv.substr(0, kv.find('=')), kv.substr(kv.find('=') + 1));

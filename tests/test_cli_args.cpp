@@ -39,11 +39,16 @@ TEST_CASE("command line: out-of-range values and repeated or empty options are r
   refused(dir, "bench raster --gaussians 1 --gaussians 2", "--gaussians is given twice");
   // An empty value (an unset shell variable) used to read as the option left out: a whole
   // experiment ran instead of writing its job lines.
-  refused(dir, "experiment --out e --scenes default --emit-jobs ''", "--emit-jobs needs a value, and the one given is empty");
+  refused(dir, "experiment --out e --scenes default --emit-jobs ''",
+          "--emit-jobs needs a value, and the one given is empty");
   // The job lines would each have hung in eval.
   refused(dir, "experiment --out e --scenes default --refine-iters -5 --emit-jobs j.txt",
           "--refine-iters needs a whole number in 0..");
   refused(dir, "experiment --out e --scenes default --pose-noise-rot x --emit-jobs j.txt", "--pose-noise-rot needs");
+  // Errors that named a library call or no file.
+  refused(dir, "devices --device 99999999999999999999", "--device 99999999999999999999: only");
+  std::ofstream(dir / "bad.json") << R"({"preset": 5})";
+  refused(dir, "train nowhere --out r --config bad.json", "bad.json: ");
   CHECK_FALSE(fs::exists(dir / "e"));
   CHECK_FALSE(fs::exists(dir / "j.txt"));
   CHECK_FALSE(fs::exists(dir / "s"));

@@ -240,7 +240,7 @@ VkPhysicalDeviceProperties Context::choose_device() {
       if (type_rank(cands[i].second.deviceType) < type_rank(cands[chosen].second.deviceType))
         chosen = static_cast<int>(i);
   } else if (std::all_of(opts_.device.begin(), opts_.device.end(), ::isdigit)) {
-    size_t idx = std::stoul(opts_.device);
+    const size_t idx = opts_.device.size() > 9 ? cands.size() : std::stoul(opts_.device);  // no wrap, no throw
     if (idx >= cands.size())
       throw Error("--device " + opts_.device + ": only " + std::to_string(cands.size()) + " usable device(s)");
     chosen = static_cast<int>(idx);
