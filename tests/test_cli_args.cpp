@@ -49,6 +49,7 @@ TEST_CASE("command line: out-of-range values and repeated or empty options are r
   refused(dir, "devices --device 99999999999999999999", "--device 99999999999999999999: only");
   std::ofstream(dir / "bad.json") << R"({"preset": 5})";
   refused(dir, "train nowhere --out r --config bad.json", "bad.json: ");
+  refused(dir, "train bad.json --out r", "bad.json: is a file, and a dataset is a folder");
   CHECK_FALSE(fs::exists(dir / "e"));
   CHECK_FALSE(fs::exists(dir / "j.txt"));
   CHECK_FALSE(fs::exists(dir / "s"));

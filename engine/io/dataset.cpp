@@ -59,6 +59,7 @@ const Format kFormats[] = {
 
 Dataset load_dataset(const fs::path& dir, const LoadOptions& opt) {
   std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) detail::fail(dir, "is a file, and a dataset is a folder");
   if (!fs::is_directory(dir, ec)) detail::fail(dir, "dataset folder is missing");
   for (const Format& f : kFormats)
     if (f.detect(dir)) return f.read(dir, opt);
