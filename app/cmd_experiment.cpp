@@ -89,23 +89,30 @@ nlohmann::json table_row(const ExperimentPlan& plan, size_t si, const std::strin
   const fs::path run = plan.run_dir(si, m);
   double secs = -1;
   if (fs::exists(run / "train_seconds.txt")) std::ifstream(run / "train_seconds.txt") >> secs;
-  nlohmann::json e;
+  double blur_px = 0;
+  try {
+    blur_px = std::stod(plan.scenes[si].blur_px);
+  } catch (const std::exception&) {
+    throw std::runtime_error("experiment_plan.json: scene " + plan.scenes[si].label + "'s blur_px '" +
+                             plan.scenes[si].blur_px + "' is not a number");
+  }
   std::ifstream f(run / "eval.json");
   try {
+    nlohmann::json e;
     f >> e;
+    auto get = [&](const char* set, const char* key) {
+      return e.contains(set) ? e.at(set).at(key).get<double>() : std::nan("");
+    };
+    return {{"scene", plan.scenes[si].label},
+            {"blur_px", blur_px},
+            {"method", m},
+            {"deblur_psnr", get("deblur", "mean_psnr")},
+            {"deblur_ssim", get("deblur", "mean_ssim")},
+            {"novel_psnr", get("novel", "mean_psnr")},
+            {"novel_ssim", get("novel", "mean_ssim")},
+            {"novel_refined_psnr", get("novel_refined", "mean_psnr")},
+            {"train_seconds", secs}};
   } catch (const std::exception& ex) { throw std::runtime_error((run / "eval.json").string() + ": " + ex.what()); }
-  auto get = [&](const char* set, const char* key) {
-    return e.contains(set) ? e[set][key].get<double>() : std::nan("");
-  };
-  return {{"scene", plan.scenes[si].label},
-          {"blur_px", std::stod(plan.scenes[si].blur_px)},
-          {"method", m},
-          {"deblur_psnr", get("deblur", "mean_psnr")},
-          {"deblur_ssim", get("deblur", "mean_ssim")},
-          {"novel_psnr", get("novel", "mean_psnr")},
-          {"novel_ssim", get("novel", "mean_ssim")},
-          {"novel_refined_psnr", get("novel_refined", "mean_psnr")},
-          {"train_seconds", secs}};
 }
 
 std::string markdown_row(const nlohmann::json& row, const std::string& blur_px) {

@@ -55,6 +55,15 @@ TEST_CASE("command line: out-of-range values and repeated or empty options are r
   CHECK_FALSE(fs::exists(dir / "s"));
 }
 
+TEST_CASE("experiment --collect: a run's eval.json of the wrong shape is named", "[cli][experiment]") {
+  const fs::path dir = fresh_dir("evflow_collect_bad");
+  std::string out;
+  REQUIRE(run_evflow(dir, "experiment --out x --scenes default --methods plain --emit-jobs jobs.txt", out) == 0);
+  fs::create_directories(dir / "x" / "default" / "plain");
+  std::ofstream(dir / "x" / "default" / "plain" / "eval.json") << R"({"deblur": {"mean_psnr": "high"}})";
+  refused(dir, "experiment --collect x", (dir / "x" / "default" / "plain" / "eval.json").string() + ": ");
+}
+
 TEST_CASE("ground-truth flow: too few subframes and a camera of another size are named", "[cli][flow]") {
   const fs::path dir = fresh_dir("evflow_gt_flow_bad");
   std::string out;
