@@ -117,7 +117,7 @@ static int run_render(const Args& a) {
   const uint32_t w = uint32_t(p.integer("--width", 800, 1, 16384)), h = uint32_t(p.integer("--height", 600, 1, 16384));
   const uint32_t frames = uint32_t(p.integer("--frames", 36, 1, 100000));
   const std::string background = p.value("--background");
-  const int sh_degree = int(p.integer("--sh-degree", -1));
+  const int sh_degree = int(p.integer("--sh-degree", -1, -1, 3));  // -1: the splats' own
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   const auto pos = p.positional();

@@ -31,6 +31,7 @@ TEST_CASE("command line: out-of-range values and repeated or empty options are r
   refused(dir, "bench raster --width 32 --height 24 --gaussians 100 --repeats 0 --json", "--repeats must be 1..");
   refused(dir, "bench raster --width 32 --height 24 --gaussians 100 --warmup -1 --json", "--warmup must be 0..");
   refused(dir, "render nowhere.ply --out r --frames -1", "--frames must be 1..");
+  refused(dir, "render nowhere.ply --out r --sh-degree 9", "--sh-degree must be -1..3");
   refused(dir, "eval nowhere --refine-iters -1", "--refine-iters must be 0..");
   refused(dir, "eval nowhere --refine-iters 5x", "--refine-iters expects an integer, got '5x'");
   refused(dir, "train nowhere --out r virtual_frames=50000", "config key 'virtual_frames' must be 0..32");
