@@ -116,7 +116,8 @@ void print_json(const std::vector<uint64_t>& macs, const Timing& timing, const s
 }  // namespace
 
 int bench_conv(ArgParser& p) {
-  const uint32_t W = uint32_t(p.integer("--width", 346, 1, 16384)), H = uint32_t(p.integer("--height", 260, 1, 16384));
+  const uint32_t W = uint32_t(p.integer("--width", 346, 1, kMaxImageSide)),
+                 H = uint32_t(p.integer("--height", 260, 1, kMaxImageSide));
   const std::vector<uint32_t> widths = parse_widths(p.value("--widths", "32,64,128,64,16,1"));
   const int repeats = int(p.integer("--repeats", 5)), warmup = int(p.integer("--warmup", 1));
   const long batch = p.integer("--batch", 1);

@@ -31,6 +31,9 @@ inline std::string join(const std::vector<std::string>& items, const std::string
   return s;
 }
 
+// The largest image width or height any command takes (a bound, not a limit of the renderer's).
+inline constexpr long long kMaxImageSide = 16384;
+
 struct ArgParser {
   explicit ArgParser(const Args& a) : args(a) {}
   Args args;

@@ -114,7 +114,8 @@ static int run_render(const Args& a) {
   }
   const std::string out_dir = p.value("--out"), camera_file = p.value("--camera"), data_dir = p.value("--data");
   const std::string path = p.value("--path", camera_file.empty() ? "orbit" : "");
-  const uint32_t w = uint32_t(p.integer("--width", 800, 1, 16384)), h = uint32_t(p.integer("--height", 600, 1, 16384));
+  const uint32_t w = uint32_t(p.integer("--width", 800, 1, kMaxImageSide)),
+                 h = uint32_t(p.integer("--height", 600, 1, kMaxImageSide));
   const uint32_t frames = uint32_t(p.integer("--frames", 36, 1, 100000));
   const std::string background = p.value("--background");
   const int sh_degree = int(p.integer("--sh-degree", -1, -1, 3));  // -1: the splats' own
@@ -123,7 +124,6 @@ static int run_render(const Args& a) {
   const auto pos = p.positional();
   if (pos.size() != 1 || out_dir.empty()) throw std::invalid_argument("usage: evflow render SPLATS --out DIR (--help)");
   if (!camera_file.empty() && !path.empty()) throw std::invalid_argument("--camera and --path exclude each other");
-  if (w < 1 || h < 1 || w > 16384 || h > 16384) throw std::invalid_argument("--width/--height must be in 1..16384");
   if (frames < 1) throw std::invalid_argument("--frames must be at least 1");
 
   const fs::path src = pos[0];

@@ -46,12 +46,13 @@ static int run_train_prior(const Args& a) {
   const uint64_t first_room = uint64_t(p.integer("--room-seed", 1000, 0, 1000000000));
   prior::SampleOptions so;
   so.views_per_room = int(p.integer("--views", 8, 1, 100000));
-  so.width = uint32_t(p.integer("--width", 173, 1, 16384)), so.height = uint32_t(p.integer("--height", 130, 1, 16384));
+  so.width = uint32_t(p.integer("--width", 173, 1, kMaxImageSide)),
+  so.height = uint32_t(p.integer("--height", 130, 1, kMaxImageSide));
   prior::ResidualNetSpec spec;
   spec.width = uint32_t(p.integer("--net-width", 16, 1, 1024));
   prior::PriorTrainOptions o;
   o.steps = uint32_t(p.integer("--steps", 2000, 1, 100000000));
-  o.crop = uint32_t(p.integer("--crop", 64, 1, 16384));
+  o.crop = uint32_t(p.integer("--crop", 64, 1, kMaxImageSide));
   o.batch = uint32_t(p.integer("--batch", 4, 1, 4096));
   o.lr = float(p.number("--lr", 1e-3));
   if (!(o.lr > 0)) throw std::invalid_argument("--lr must be positive");
