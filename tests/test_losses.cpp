@@ -176,7 +176,6 @@ TEST_CASE("loss: blended L1 + SSIM value and gradient, terms accumulate into one
   CHECK(std::abs(v[0] - ref::blend_loss(p.ad, p.bd, p.dims, lam)) < 1e-5);
   CHECK(std::abs(v[1] - ref::l1_mean(p.ad, p.bd)) < 1e-6);
   CHECK(std::abs(v[2] - ref::ssim_mean(p.ad, p.bd, p.dims)) < 1e-5);
-  CHECK(std::abs(blend.value() - v[0]) == 0.0);
 
   std::vector<double> gg, rr;
   for (auto [c, y, x] : sample_pixels(p.dims, 100, 6)) {
