@@ -19,10 +19,7 @@ TEST_CASE("lanes: lavapipe runs at the subgroup size the test matrix asks for", 
     SUCCEED("not lavapipe, or not a run of the lane matrix");
     return;
   }
+  // (Without AVX-512 the 16-lane runs never get here: tests/main.cpp reports them skipped.)
   const uint32_t lanes = uint32_t(std::stoul(expect));
-  if (lanes > 8 && !__builtin_cpu_supports("avx512f")) {
-    SUCCEED("lavapipe needs AVX-512 for more than 8 lanes; this CPU has none");
-    return;
-  }
   REQUIRE(caps.subgroup_size == lanes);
 }
