@@ -196,7 +196,6 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
       tr.data()[j * 6 + 0] = 0.5 * kDrift * (j - 4) / 4.0, tr.data()[j * 6 + 4] = 0.5 * kYaw * (j - 4) / 4.0;
     std::array<double, ExposureTrajectory::kSize> kg{};
     loss_at(tr, &kg);
-    int agree = 0;
     const int comps[4] = {2 * 6 + 0, 6 * 6 + 0, 8 * 6 + 4, 0 * 6 + 1};
     for (int c : comps) {
       const double h = 2e-3, x0 = tr.data()[c];
@@ -207,9 +206,9 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
       tr.data()[c] = x0;
       const double fd = (lp - lm) / (2 * h);
       std::printf("event loss knot gradient, component %d: analytic %.5g, central difference %.5g\n", c, kg[c], fd);
-      if (std::abs(kg[c] - fd) <= 0.15 * std::abs(fd) + 1e-3) ++agree;
+      INFO("knot component " << c);
+      CHECK(kg[c] == Approx(fd).epsilon(0.03).margin(1e-3));  // 0.7-2.0 % apart here
     }
-    REQUIRE(agree >= 3);
   }
   auto run = [&](double sign, bool flip = false) {
     TrainConfig cfg;
