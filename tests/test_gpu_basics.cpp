@@ -59,8 +59,8 @@ TEST_CASE("gpu: dispatches past 65,535 workgroups reach every element", "[gpu]")
 }
 
 TEST_CASE("gpu: a binding above the device's storage range is refused with a clear message", "[gpu]") {
-  // A device whose range is lowered to 4 KiB (as a GPU's 128 MiB or 4 GiB would be reached), so
-  // that the refusal runs on every device.
+  // A device whose binding range is lowered to 4 KiB, so that the refusal runs on every device
+  // (a GPU's range can exceed the largest buffer it allocates).
   gpu::ContextOptions o = gpu::ContextOptions::from_env();
   o.validation = true;
   o.binding_limit = 4096;
