@@ -124,7 +124,6 @@ static int run_render(const Args& a) {
   const auto pos = p.positional();
   if (pos.size() != 1 || out_dir.empty()) throw std::invalid_argument("usage: evflow render SPLATS --out DIR (--help)");
   if (!camera_file.empty() && !path.empty()) throw std::invalid_argument("--camera and --path exclude each other");
-  if (frames < 1) throw std::invalid_argument("--frames must be at least 1");
 
   const fs::path src = pos[0];
   const bool is_run = fs::is_directory(src);

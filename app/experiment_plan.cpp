@@ -188,8 +188,8 @@ ExperimentPlan ExperimentPlan::from_args(ArgParser& p) {
   e.poses = value_or("--poses", e.poses);
   e.shake = value_or("--shake", e.shake);
   p.reject_unknown();
-  require_number("--width", e.width, 1, double(kMaxImageSide), true),
-      require_number("--height", e.height, 1, double(kMaxImageSide), true);
+  require_number("--width", e.width, 1, double(kMaxImageSide), true);
+  require_number("--height", e.height, 1, double(kMaxImageSide), true);
   require_number("--refine-iters", e.refine_iters, 0, 1000000, true);
   require_number("--pose-noise-rot", e.noise_rot, 0, 180), require_number("--pose-noise-trans", e.noise_trans, 0, 1e6);
   for (const auto& b : blur) require_number("--blur-px", b, 0, 1e6);
