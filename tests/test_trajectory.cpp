@@ -11,6 +11,9 @@
 
 #include "camera/se3.h"
 #include "camera/trajectory.h"
+#include "io/dataset.h"
+#include "train/camera_model.h"
+#include "train/train_config.h"
 
 using namespace evflow;
 using namespace evflow::lie;
@@ -415,4 +418,26 @@ TEST_CASE("Exposure trajectory: knot gradients match finite differences", "[came
   CHECK(sum_med < 1e-6);
   CHECK(sum_worst < 1e-8);
   CHECK_THROWS(ExposureTrajectory(view).backward(std::vector<double>{0.5}, std::vector<Vec6>{}));
+}
+
+TEST_CASE("trajectory: the trajectory_init_sigma key sets every view's starting spread of the knots",
+          "[camera][train]") {
+  io::Dataset data;
+  for (const double z : {-3.0, -2.0, -1.0})
+    data.train.push_back({"", {}, Camera::look_at(64, 48, 60, {0, 0, z}, {0, 0, 0})});
+  auto knot_rms = [&](const std::string& sigma) {
+    TrainConfig cfg;
+    cfg.set("mode", "blur");
+    if (!sigma.empty()) cfg.set("trajectory_init_sigma", sigma);
+    const CameraModel model(data, cfg);
+    REQUIRE(model.trajectories().size() == data.train.size());
+    double sum = 0;
+    for (const ExposureTrajectory& t : model.trajectories())
+      for (size_t i = 0; i < t.size(); ++i) sum += t.data()[i] * t.data()[i];
+    return std::sqrt(sum / double(data.train.size() * ExposureTrajectory::size()));
+  };
+  // 162 draws of N(0, sigma^2): their RMS lies within 20 % of sigma (about 3.6 standard errors).
+  CHECK(knot_rms("") == Approx(ExposureTrajectory::kDefaultInitSigma).epsilon(0.2));
+  CHECK(knot_rms("0.01") == Approx(0.01).epsilon(0.2));
+  CHECK(knot_rms("0") == 0.0);
 }

@@ -27,7 +27,8 @@ CameraModel::CameraModel(const io::Dataset& data, const TrainConfig& cfg)
   if (kind_ == Kind::Trajectory) {
     times_ = ExposureTrajectory::virtual_times(int(cfg.virtual_frames));
     lr_init_ = cfg.lr_trajectory_init, lr_final_ = cfg.lr_trajectory_final;
-    for (size_t v = 0; v < nv; ++v) trajectories_.emplace_back(data.train[v].camera, cfg.seed * 100003 + v);
+    for (size_t v = 0; v < nv; ++v)
+      trajectories_.emplace_back(data.train[v].camera, cfg.seed * 100003 + v, cfg.trajectory_init_sigma);
   } else {
     times_ = {0.5};
     lr_init_ = cfg.lr_pose_init, lr_final_ = cfg.lr_pose_final;

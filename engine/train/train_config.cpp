@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <functional>
 #include <initializer_list>
+#include <sstream>
 #include <stdexcept>
 #include <type_traits>
 
@@ -17,9 +18,9 @@ double to_double(const std::string& k, const std::string& v) {
   try {
     size_t p;
     double d = std::stod(v, &p);
-    if (p != v.size()) throw 1;
+    if (p != v.size() || !std::isfinite(d)) throw 1;
     return d;
-  } catch (...) { throw std::invalid_argument("config key '" + k + "' expects a number, got '" + v + "'"); }
+  } catch (...) { throw std::invalid_argument("config key '" + k + "' expects a finite number, got '" + v + "'"); }
 }
 uint64_t to_uint(const std::string& k, const std::string& v) {
   try {
@@ -150,15 +151,18 @@ Setting field(const char* key, T TrainConfig::*m, const char* doc) {
           [m](const TrainConfig& c) { return json_of(c.*m); }, doc};
 }
 
-// A whole-number key refused outside [lo, hi] (where a larger value is no setting but a hang).
+// A key refused outside [lo, hi] (where a larger value is no setting but a hang, or no setting at all).
 template <typename T>
 Setting bounded(const char* key, T TrainConfig::*m, T lo, T hi, const char* doc) {
   return {key,
           [key, m, lo, hi](TrainConfig& c, const std::string& v) {
             const T x = Codec<T>::parse(key, v);
-            if (x < lo || x > hi)
-              throw std::invalid_argument("config key '" + std::string(key) + "' must be " + std::to_string(lo) + ".." +
-                                          std::to_string(hi) + ", got '" + v + "'");
+            if (!(x >= lo && x <= hi)) {  // NaN too
+              std::ostringstream range;
+              range << lo << ".." << hi;
+              throw std::invalid_argument("config key '" + std::string(key) + "' must be " + range.str() + ", got '" +
+                                          v + "'");
+            }
             c.*m = x;
           },
           [m](const TrainConfig& c) { return json_of(c.*m); }, doc};
@@ -280,6 +284,10 @@ std::vector<Setting> blur_settings() {
             "1e-3 → 1e-5 too little room to learn the exposure motion"),
       field("lr_trajectory_final", &TrainConfig::lr_trajectory_final,
             "… at the end (exponential decay from `lr_trajectory_init`)"),
+      bounded("trajectory_init_sigma", &TrainConfig::trajectory_init_sigma, 0.0, 0.1,
+              "standard deviation of the knots' start values (se(3) components, radians and scene units, i.i.d. "
+              "around the view's pose; [trajectory.md](trajectory.md)), in [0, 0.1]; the knots start nearly equal, "
+              "so the first blur-only steps move them alike, and the motion grows from this spread"),
   };
 }
 

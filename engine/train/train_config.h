@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "camera/trajectory.h"
+
 namespace evflow {
 
 // The values of the keys loss_space, mode, target and init (their settings-table entries say what
@@ -52,6 +54,7 @@ struct TrainConfig {
   double edi_warmup_motion = 0.0;
   double splats_from = 0.0;
   double lr_trajectory_init = 6e-3, lr_trajectory_final = 6e-4;
+  double trajectory_init_sigma = ExposureTrajectory::kDefaultInitSigma;
   double event_weight = 0.0;
   double event_theta_pos = 0.0, event_theta_neg = 0.0;
   double event_norm_floor = 1e-3;
