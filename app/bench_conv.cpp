@@ -116,16 +116,14 @@ void print_json(const std::vector<uint64_t>& macs, const Timing& timing, const s
 }  // namespace
 
 int bench_conv(ArgParser& p) {
-  const uint32_t W = uint32_t(p.integer("--width", 346, 1, kMaxImageSide)),
-                 H = uint32_t(p.integer("--height", 260, 1, kMaxImageSide));
+  const auto [W, H] = p.image_size({346, 260});
   const std::vector<uint32_t> widths = parse_widths(p.value("--widths", "32,64,128,64,16,1"));
-  const int repeats = int(p.integer("--repeats", 5)), warmup = int(p.integer("--warmup", 1));
-  const long batch = p.integer("--batch", 1);
+  const int repeats = int(p.integer("--repeats", 5, 1, 100000));
+  const int warmup = int(p.integer("--warmup", 1, 0, 100000));
+  const long batch = p.integer("--batch", 1, 1, 4096);
   const bool json = p.flag("--json");
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
-  if (W == 0 || H == 0 || repeats < 1 || batch < 1 || batch > 4096)
-    throw std::invalid_argument("bench conv: size, batch and repeats must be positive");
   gpu::Context ctx(o);
   nn::ConvStack stack(ctx, widths, H, W, "bench", uint32_t(batch));
   stack.init_he(1);

@@ -1,5 +1,6 @@
 // Subcommand registry: each app/cmd_*.cpp registers one subcommand with a static Command.
 #pragma once
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <string>
@@ -34,6 +35,11 @@ inline std::string join(const std::vector<std::string>& items, const std::string
 // The largest image width or height any command takes (a bound, not a limit of the renderer's).
 inline constexpr long long kMaxImageSide = 16384;
 
+// An image's width and height in pixels.
+struct ImageSize {
+  uint32_t width, height;
+};
+
 struct ArgParser {
   explicit ArgParser(const Args& a) : args(a) {}
   Args args;
@@ -42,6 +48,8 @@ struct ArgParser {
   long long integer(const std::string& name, long long def);
   long long integer(const std::string& name, long long def, long long lo, long long hi);  // refuses outside [lo, hi]
   double number(const std::string& name, double def);
+  // --width and --height, each refused outside [min_side, kMaxImageSide].
+  ImageSize image_size(ImageSize def, long long min_side = 1);
   std::vector<std::string> positional() const;  // what is left after flags and values were taken
   void reject_unknown() const;                  // throws on any leftover --option
 };

@@ -71,8 +71,7 @@ static Camera run_camera(const RunFolder& run) {
 // training view (--splats RUN), else a 60-degree camera of --width x --height; the splats of
 // --splats (a run, .ply or .glb) or N synthetic Gaussians in front of that camera.
 static std::pair<Camera, GaussianCloud> raster_scene(ArgParser& p) {
-  const uint32_t W = uint32_t(p.integer("--width", 346, 1, kMaxImageSide)),
-                 H = uint32_t(p.integer("--height", 260, 1, kMaxImageSide));
+  const auto [W, H] = p.image_size({346, 260});
   const size_t N = size_t(p.integer("--gaussians", 100000, 1, 100000000));
   const int degree = int(p.integer("--sh-degree", 3));
   const std::string camera_file = p.value("--camera"), splats = p.value("--splats");
@@ -175,8 +174,7 @@ static void print_stages_text(const char* title, const std::vector<std::string>&
 // Training steps (sharp views rendered from a synthetic ground-truth cloud, or a dataset folder
 // with any method): it/s and the split between rasterization, loss terms and optimizer.
 static int bench_train(ArgParser& p) {
-  uint32_t W = uint32_t(p.integer("--width", 346, 1, kMaxImageSide)),
-           H = uint32_t(p.integer("--height", 260, 1, kMaxImageSide));
+  auto [W, H] = p.image_size({346, 260});
   const uint32_t N = uint32_t(p.integer("--gaussians", 100000, 1, 100000000));
   const int steps = int(p.integer("--steps", 20, 1, 1000000));
   const int views = int(p.integer("--views", 8, 1, 100000));
@@ -324,15 +322,15 @@ static int bench_flow(ArgParser& p) {
 // stage (GPU timestamps), medians over every frame rendered.
 static int bench_sim(ArgParser& p) {
   sim::SimParams sp;
-  sp.width = uint32_t(p.integer("--width", sp.width, 1, kMaxImageSide));
-  sp.height = uint32_t(p.integer("--height", sp.height, 1, kMaxImageSide));
+  const ImageSize size = p.image_size({sp.width, sp.height});
+  sp.width = size.width;
+  sp.height = size.height;
   const std::string scene_arg = p.value("--scene");
-  const long long subdivide = p.integer("--subdivide", 1);
+  const long long subdivide = p.integer("--subdivide", 1, 1, 1024);
   const int repeats = int(p.integer("--repeats", 3, 1, 100000)), warmup = int(p.integer("--warmup", 1, 0, 100000));
   const bool json = p.flag("--json");
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
-  if (subdivide < 1 || subdivide > 1024) throw std::invalid_argument("--subdivide must be between 1 and 1024");
   sim::Scene scene = sim::builtin_or_gltf_scene(scene_arg);
   if (subdivide > 1) scene = sim::subdivide(scene, int(subdivide));
   gpu::Context ctx(o);

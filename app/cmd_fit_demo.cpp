@@ -44,10 +44,10 @@ static int run_fit_demo(const Args& a) {
     return 0;
   }
   const std::string out = p.value("--out", "runs/fit-demo");
-  const int steps = int(p.integer("--steps", 300));
-  const uint32_t W = uint32_t(p.integer("--width", 160)), H = uint32_t(p.integer("--height", 120));
-  const size_t N = size_t(p.integer("--gaussians", 3000));
-  const int views = int(p.integer("--views", 4));
+  const int steps = int(p.integer("--steps", 300, 1, 10000000));
+  const auto [W, H] = p.image_size({160, 120});
+  const size_t N = size_t(p.integer("--gaussians", 3000, 1, 100000000));
+  const int views = int(p.integer("--views", 4, 1, 1000));
   gpu::ContextOptions o = context_options(p);
   p.reject_unknown();
   gpu::Context ctx(o);

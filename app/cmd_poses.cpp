@@ -72,7 +72,7 @@ static int run_poses(const Args& a) {
   if (blurry && edi) throw std::invalid_argument("--edi and --blurry exclude each other");
   opt.edi = !blurry;
   opt.colmap.matcher = p.value("--matcher", "exhaustive");
-  opt.colmap.threads = int(p.integer("--threads", 0));
+  opt.colmap.threads = int(p.integer("--threads", 0, 0, 4096));
   if (const char* bin = std::getenv("EVF_COLMAP")) opt.colmap.binary = bin;
   const bool json = p.flag("--json");
   std::string out = p.value("--out");

@@ -114,8 +114,7 @@ static int run_render(const Args& a) {
   }
   const std::string out_dir = p.value("--out"), camera_file = p.value("--camera"), data_dir = p.value("--data");
   const std::string path = p.value("--path", camera_file.empty() ? "orbit" : "");
-  const uint32_t w = uint32_t(p.integer("--width", 800, 1, kMaxImageSide)),
-                 h = uint32_t(p.integer("--height", 600, 1, kMaxImageSide));
+  const auto [w, h] = p.image_size({800, 600});
   const uint32_t frames = uint32_t(p.integer("--frames", 36, 1, 100000));
   const std::string background = p.value("--background");
   const int sh_degree = int(p.integer("--sh-degree", -1, -1, 3));  // -1: the splats' own

@@ -106,11 +106,11 @@ static int run_simulate(const Args& a) {
   sim::SimParams sp;
   const std::string out = p.value("--out", "sim_dataset");
   const std::string scene_path = p.value("--scene");
-  const long long subdivide = p.integer("--subdivide", 1);
-  if (subdivide < 1 || subdivide > 1024) throw std::invalid_argument("--subdivide must be between 1 and 1024");
+  const long long subdivide = p.integer("--subdivide", 1, 1, 1024);
   const std::string write_scene = p.value("--write-scene");
-  sp.width = uint32_t(p.integer("--width", sp.width, 1, kMaxImageSide));
-  sp.height = uint32_t(p.integer("--height", sp.height, 1, kMaxImageSide));
+  const ImageSize size = p.image_size({sp.width, sp.height});
+  sp.width = size.width;
+  sp.height = size.height;
   sp.fov_y_deg = p.number("--fov", sp.fov_y_deg);
   sp.train_views = int(p.integer("--train-views", sp.train_views));
   sp.novel_views = int(p.integer("--novel-views", sp.novel_views, 0, 100000));

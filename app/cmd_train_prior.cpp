@@ -46,8 +46,9 @@ static int run_train_prior(const Args& a) {
   const uint64_t first_room = uint64_t(p.integer("--room-seed", 1000, 0, 1000000000));
   prior::SampleOptions so;
   so.views_per_room = int(p.integer("--views", 8, 1, 100000));
-  so.width = uint32_t(p.integer("--width", 173, 1, kMaxImageSide));
-  so.height = uint32_t(p.integer("--height", 130, 1, kMaxImageSide));
+  const ImageSize size = p.image_size({173, 130});
+  so.width = size.width;
+  so.height = size.height;
   prior::ResidualNetSpec spec;
   spec.width = uint32_t(p.integer("--net-width", 16, 1, 1024));
   prior::PriorTrainOptions o;

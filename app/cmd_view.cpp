@@ -24,9 +24,10 @@ static int run_view(const Args& a) {
     return 0;
   }
   viewer::ViewerOptions o;
-  o.width = static_cast<uint32_t>(p.integer("--width", 800));
-  o.height = static_cast<uint32_t>(p.integer("--height", 600));
-  o.frames = static_cast<int>(p.integer("--frames", 0));
+  const ImageSize size = p.image_size({800, 600}, 16);
+  o.width = size.width;
+  o.height = size.height;
+  o.frames = int(p.integer("--frames", 0, 0, 100000000));
   o.screenshot = p.value("--screenshot");
   o.fps_cap = p.number("--fps-cap", 30.0);
   o.vsync = p.flag("--vsync");
@@ -42,8 +43,6 @@ static int run_view(const Args& a) {
   p.reject_unknown();
   auto pos = p.positional();
   if (pos.size() != 1) throw std::invalid_argument("usage: evflow view RUN|file.ply|file.glb [options] (--help)");
-  if (o.width < 16 || o.height < 16 || o.width > 16384 || o.height > 16384)
-    throw std::invalid_argument("--width/--height must be in 16..16384");
   if (!o.screenshot.empty() && o.frames <= 0) throw std::invalid_argument("--screenshot needs --frames N");
   std::filesystem::path src = pos[0];
   const GaussianCloud cloud = load_splats(src);

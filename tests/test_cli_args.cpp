@@ -36,6 +36,19 @@ TEST_CASE("command line: out-of-range values and repeated or empty options are r
   refused(dir, "eval nowhere --refine-iters 5x", "--refine-iters expects an integer, got '5x'");
   refused(dir, "train nowhere --out r virtual_frames=50000", "config key 'virtual_frames' must be 0..32");
   refused(dir, "simulate --out s --arc nan", "--arc expects a finite number, got 'nan'");
+  // Image sizes are read by one helper in every command; the viewer's smallest window is 16 px.
+  refused(dir, "render nowhere.ply --out r --height 0", "--height must be 1..16384, got 0");
+  refused(dir, "view nowhere.ply --width 8", "--width must be 16..16384, got 8");
+  // fit-demo took any number: --views 0 crashed (a signal), --gaussians -1 was a library's
+  // allocation error, --width 0 an error from the renderer.
+  refused(dir, "fit-demo --out f --views 0", "--views must be 1..1000, got 0");
+  refused(dir, "fit-demo --out f --gaussians -1", "--gaussians must be 1..");
+  refused(dir, "fit-demo --out f --width 0", "--width must be 1..16384, got 0");
+  // A negative warm-up count ran the whole benchmark.
+  refused(dir, "bench conv --warmup -1", "--warmup must be 0..");
+  refused(dir, "poses nowhere --threads -3", "--threads must be 0..4096, got -3");
+  // NaN passed every config key's parse and every range check written as `x < lo || x > hi`.
+  refused(dir, "train nowhere --out r event_weight=nan", "config key 'event_weight' expects a finite number");
   // The second value used to be reported as an unknown option.
   refused(dir, "bench raster --gaussians 1 --gaussians 2", "--gaussians is given twice");
   // An empty value (an unset shell variable) used to read as the option left out: a whole
@@ -54,6 +67,7 @@ TEST_CASE("command line: out-of-range values and repeated or empty options are r
   CHECK_FALSE(fs::exists(dir / "e"));
   CHECK_FALSE(fs::exists(dir / "j.txt"));
   CHECK_FALSE(fs::exists(dir / "s"));
+  CHECK_FALSE(fs::exists(dir / "f"));
 }
 
 TEST_CASE("experiment --collect: a run's eval.json of the wrong shape is named", "[cli][experiment]") {

@@ -55,7 +55,7 @@ TEST_CASE("simulate: --subdivide makes a heavier mesh of the same scene, --write
   INFO(from_file << builtin);
   CHECK(std::abs(blurry_db(from_file) - blurry_db(builtin)) < 0.05);
   CHECK(run_evflow(dir, "simulate --subdivide 0 --write-scene x.glb", out) != 0);
-  CHECK(out.find("--subdivide must be between 1 and 1024") != std::string::npos);
+  CHECK(out.find("--subdivide must be 1..1024, got 0") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "x.glb"));
 }
 
