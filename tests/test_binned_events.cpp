@@ -236,9 +236,7 @@ void write_ebad_folder(const io::Dataset& d, const fs::path& out, uint32_t bins)
 TEST_CASE("binned events: blur+events trains on an EBAD-NeRF folder, its event term on every step",
           "[events][train][gpu]") {
   REQUIRE(fs::exists(test::evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_ebad_train_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_ebad_train");
   std::string out;
   REQUIRE(test::run_evflow(dir, "simulate --scene gallery --out sim --width 32 --height 24 --blur-px 4 --seed 3",
                            out) == 0);

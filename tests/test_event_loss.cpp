@@ -313,9 +313,7 @@ TEST_CASE("event terms in training: event_weight_end fades them after the direct
           "[events][train][gpu]") {
   namespace fs = std::filesystem;
   REQUIRE(fs::exists(test::evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_event_schedule_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_event_schedule");
   std::string out;
   REQUIRE(test::run_evflow(dir,
                            "simulate --scene objects --out sim --width 40 --height 30 --seed 2 --train-views 3 "

@@ -22,9 +22,7 @@ namespace fs = std::filesystem;
 TEST_CASE("experiment: a scene is simulated with its own seed wherever it is listed, bad seeds and scenes refused",
           "[experiment][gpu]") {
   REQUIRE(fs::exists(evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_experiment_test_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_experiment_test");
   const std::string size = " --width 32 --height 24 --pose-noise-rot 0.4 --pose-noise-trans 0.01";
   std::string out;
 
@@ -93,8 +91,7 @@ TEST_CASE(
     "experiment: a scene file runs end to end under DIR/<file stem>, baselines refine their poses unless told not to",
     "[experiment][gpu]") {
   REQUIRE(fs::exists(evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_experiment_file_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_experiment_file");
   fs::create_directories(dir / "scenes");
   sim::write_gltf(sim::make_builtin_scene("gallery"), dir / "scenes" / "some.glb");
   const std::string tiny =

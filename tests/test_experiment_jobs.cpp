@@ -51,8 +51,7 @@ bool same_runs(const nlohmann::json& a, const nlohmann::json& b) {
 TEST_CASE("experiment: the emitted job lines, run one by one, collect into the direct run's table",
           "[experiment][gpu]") {
   REQUIRE(fs::exists(evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_experiment_jobs_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_experiment_jobs");
   fs::create_directories(dir / "elsewhere");
   const std::string tiny =
       " --scenes gallery --blur-px 4 --methods plain,blur-only --refine-iters 1 --width 32 --height 24 "
@@ -100,9 +99,7 @@ TEST_CASE("experiment: the emitted job lines, run one by one, collect into the d
 }
 
 TEST_CASE("experiment: each scene's own blur unless --blur-px is given", "[experiment]") {
-  const fs::path dir = fs::temp_directory_path() / ("evflow_blur_px_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_blur_px");
   std::string out;
   REQUIRE(run_evflow(dir, "experiment --out a --scenes workshop,gallery --methods plain --emit-jobs a.txt", out) == 0);
   const std::string jobs = slurp(dir / "a.txt");

@@ -138,9 +138,7 @@ TEST_CASE(
     "plot: training writes curve.csv with the PSNR every log_every steps and curve.png, which evflow plot redraws",
     "[plot][gpu]") {
   REQUIRE(fs::exists(test::evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_plot_run_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_plot_run");
   std::string out;
   REQUIRE(test::run_evflow(dir, "simulate --scene gallery --out data --width 32 --height 24 --blur-px 3 --seed 4",
                            out) == 0);

@@ -223,9 +223,7 @@ TEST_CASE("prior: training rooms are seeded and not the built-in scenes, and sam
 
 TEST_CASE("prior: evflow train-prior trains, scores against both baselines and writes its weights", "[gpu][prior]") {
   REQUIRE(fs::exists(test::evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_train_prior_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_train_prior");
   std::string out;
   const std::string args =
       "train-prior --out w.safetensors --rooms 1 --held-out-rooms 1 --views 1 --width 40 --height 32 --crop 16 "

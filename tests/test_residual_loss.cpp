@@ -104,9 +104,7 @@ TEST_CASE("residual loss in training: a finite L_res, summed into the loss, whos
           "[train][gpu][prior]") {
   namespace fs = std::filesystem;
   REQUIRE(fs::exists(test::evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_residual_train_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_residual_train");
   std::string out;
   REQUIRE(test::run_evflow(dir,
                            "simulate --scene objects --out sim --width 40 --height 30 --seed 3 --train-views 3 "

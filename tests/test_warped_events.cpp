@@ -263,9 +263,7 @@ TEST_CASE("blur+events+warp and +flow train on a simulated folder with ground-tr
           "[events][warp][train][gpu]") {
   namespace fs = std::filesystem;
   REQUIRE(fs::exists(test::evflow_binary()));
-  const fs::path dir = fs::temp_directory_path() / ("evflow_warp_train_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_warp_train");
   std::string out;
   REQUIRE(test::run_evflow(dir,
                            "simulate --scene gallery --out sim --width 32 --height 24 --blur-px 4 --seed 3 "
