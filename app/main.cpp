@@ -71,8 +71,8 @@ long long ArgParser::integer(const std::string& name, long long def, long long l
 }
 
 ImageSize ArgParser::image_size(ImageSize def, long long min_side) {
-  const uint32_t w = uint32_t(integer("--width", def.width, min_side, kMaxImageSide));
-  return {w, uint32_t(integer("--height", def.height, min_side, kMaxImageSide))};
+  return {uint32_t(integer("--width", def.width, min_side, kMaxImageSide)),
+          uint32_t(integer("--height", def.height, min_side, kMaxImageSide))};
 }
 
 double ArgParser::number(const std::string& name, double def) {

@@ -157,7 +157,7 @@ Setting bounded(const char* key, T TrainConfig::*m, T lo, T hi, const char* doc)
   return {key,
           [key, m, lo, hi](TrainConfig& c, const std::string& v) {
             const T x = Codec<T>::parse(key, v);
-            if (!(x >= lo && x <= hi)) {  // NaN too
+            if (x < lo || x > hi) {
               std::ostringstream range;
               range << lo << ".." << hi;
               throw std::invalid_argument("config key '" + std::string(key) + "' must be " + range.str() + ", got '" +
