@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "bench_stats.h"
 #include "gpu/commands.h"
 #include "nn/conv_stack.h"
 
@@ -25,11 +26,6 @@ std::vector<uint32_t> parse_widths(const std::string& s) {
   }
   if (w.size() < 2) throw std::invalid_argument("bench conv: --widths needs the input width and at least one layer");
   return w;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
 }
 
 struct LayerTimes {

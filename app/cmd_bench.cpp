@@ -9,6 +9,7 @@
 #include <sys/resource.h>
 
 #include "bench_conv.h"
+#include "bench_stats.h"
 #include "cli.h"
 #include "flow/flow_estimator.h"
 #include "gpu/commands.h"
@@ -23,11 +24,6 @@
 #include "train/trainer.h"
 
 namespace evflow::app {
-
-static double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
 
 // Named stage times in recording order, each the median of its runs, as JSON members.
 static void print_stages_json(const std::vector<std::string>& order,

@@ -5,10 +5,20 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "bench_stats.h"
 #include "cli_helpers.h"
 
 using namespace evflow::test;
 namespace fs = std::filesystem;
+
+// The benches' median is a time one run took: for an even count the upper middle value.
+TEST_CASE("bench: the printed median of an even count is the upper middle value", "[cli]") {
+  CHECK(evflow::app::median({}) == 0.0);
+  CHECK(evflow::app::median({7.0}) == 7.0);
+  CHECK(evflow::app::median({3.0, 1.0, 2.0}) == 2.0);
+  CHECK(evflow::app::median({4.0, 1.0, 3.0, 2.0}) == 3.0);
+  CHECK(evflow::app::median({10.0, 20.0}) == 20.0);
+}
 
 TEST_CASE("bench train: JSON with it/s, the split of a step and the peak host and device memory", "[cli]") {
   REQUIRE(fs::exists(evflow_binary()));

@@ -1,6 +1,5 @@
 // curve.png: the plot rasteriser draws the data where the axes say, and training writes the
 // figure of its curve.csv (with the training PSNR) that `evflow plot` redraws.
-#include <unistd.h>
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -124,14 +123,12 @@ TEST_CASE("plot: round ticks, unmeasured cells skipped, text in the bitmap font"
 }
 
 TEST_CASE("plot: a malformed curve.csv is refused naming the file, the line and the cell", "[plot]") {
-  const fs::path dir = fs::temp_directory_path() / ("evflow_plot_bad_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const fs::path dir = evflow::test::fresh_dir("evflow_plot_bad");
   std::ofstream(dir / "a.csv") << "step,loss\n1,0.5\n2,abc\n";
   std::ofstream(dir / "b.csv") << "step,loss\n1,0.5,7\n";
   CHECK_THROWS_WITH(read_curve_csv(dir / "a.csv"), Catch::Contains("a.csv:3") && Catch::Contains("'abc'"));
   CHECK_THROWS_WITH(read_curve_csv(dir / "b.csv"), Catch::Contains("b.csv:2") && Catch::Contains("3 cells"));
   CHECK_THROWS_WITH(read_curve_csv(dir / "none.csv"), Catch::Contains("none.csv"));
-  fs::remove_all(dir);
 }
 
 TEST_CASE(
