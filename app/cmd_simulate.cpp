@@ -112,7 +112,7 @@ static int run_simulate(const Args& a) {
   sp.width = size.width;
   sp.height = size.height;
   sp.fov_y_deg = p.number("--fov", sp.fov_y_deg);
-  sp.train_views = int(p.integer("--train-views", sp.train_views));
+  sp.train_views = int(p.integer("--train-views", sp.train_views, 1, 100000));
   sp.novel_views = int(p.integer("--novel-views", sp.novel_views, 0, 100000));
   sp.arc_deg = p.number("--arc", sp.arc_deg);
   sp.blur_px = p.number("--blur-px", sp.blur_px);
@@ -122,7 +122,7 @@ static int run_simulate(const Args& a) {
   sp.shake = p.value("--shake", sp.shake);
   sp.max_step_px = p.number("--max-step-px", sp.max_step_px);
   sp.plan_step_px = std::min(sp.plan_step_px, 0.8 * sp.max_step_px);
-  sp.max_subframes = int(p.integer("--max-subframes", sp.max_subframes));
+  sp.max_subframes = int(p.integer("--max-subframes", sp.max_subframes, 1, 1000000));
   sp.pose_noise_rot_deg = p.number("--pose-noise-rot", 0);
   sp.pose_noise_trans = p.number("--pose-noise-trans", 0);
   sp.seed = uint64_t(p.integer("--seed", 1));

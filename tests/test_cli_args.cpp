@@ -47,6 +47,9 @@ TEST_CASE("command line: out-of-range values and repeated or empty options are r
   // A negative warm-up count ran the whole benchmark.
   refused(dir, "bench conv --warmup -1", "--warmup must be 0..");
   refused(dir, "poses nowhere --threads -3", "--threads must be 0..4096, got -3");
+  // Both were left to the simulator, which refused them only after the header line.
+  refused(dir, "simulate --out s --train-views -1", "--train-views must be 1..100000, got -1");
+  refused(dir, "simulate --out s --max-subframes 0", "--max-subframes must be 1..1000000, got 0");
   // NaN passed every config key's parse and every range check written as `x < lo || x > hi`.
   refused(dir, "train nowhere --out r event_weight=nan", "config key 'event_weight' expects a finite number");
   // The second value used to be reported as an unknown option.
