@@ -1,6 +1,5 @@
 #include "bench_conv.h"
 
-#include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <map>
