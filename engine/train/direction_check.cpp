@@ -5,22 +5,20 @@
 
 namespace evflow {
 
-DirectionCheck::DirectionCheck(EventLoss& events, uint32_t until_step, double margin)
-    : events_(events), until_step_(until_step), margin_(margin) {}
+DirectionCheck::DirectionCheck(gpu::Context& ctx, EventLoss& events, uint32_t until_step, double margin)
+    : events_(events), until_step_(until_step), margin_(margin), reversed_(ctx, 4, "direction_check_reversed") {}
 
-void DirectionCheck::score_reversed(gpu::Commands& cmd, ExposureFrames frames) {
+void DirectionCheck::record_reversed(gpu::Commands& cmd, ExposureFrames frames) {
   std::reverse(frames.rgb.begin(), frames.rgb.end());
   frames.grad.clear();
-  cmd.submit();  // value slots recorded before (the image terms') are read after the next submit: keep them
   events_.record_value(cmd, frames);
+  cmd.copy(events_.value_buffer(), reversed_, 4, uint64_t(events_.value_offset()) * 4);
   cmd.mark("direction check");
-  cmd.submit();
-  reversed_ = events_.value();
 }
 
 bool DirectionCheck::prefers_reversed(gpu::Commands& cmd) const {
   cmd.submit();
-  return prefers(events_.value(), reversed_, margin_);
+  return prefers(events_.value(), reversed_.read_one<float>(0), margin_);
 }
 
 bool DirectionCheck::prefers(double forward, double reversed, double margin) {

@@ -8,17 +8,19 @@
 #pragma once
 #include <cstdint>
 
+#include "gpu/buffer.h"
 #include "loss/event_loss.h"
 
 namespace evflow {
 
 class DirectionCheck {
  public:
-  DirectionCheck(EventLoss& events, uint32_t until_step, double margin);
+  DirectionCheck(gpu::Context& ctx, EventLoss& events, uint32_t until_step, double margin);
   bool active(uint32_t step) const { return step <= until_step_; }
-  // Submits what `cmd` holds, then scores `frames` (in forward order; gradients not read) with
-  // their order reversed: the value alone, the same pairs and seed.
-  void score_reversed(gpu::Commands& cmd, ExposureFrames frames);
+  // Records the value alone of `frames` (in forward order; gradients not read) with their order
+  // reversed, the same pairs and seed, and a copy of it apart from the term's value slot, which
+  // the forward order's record then overwrites. Nothing is submitted.
+  void record_reversed(gpu::Commands& cmd, ExposureFrames frames);
   // After the event loss recorded the forward order into `cmd`: submits and compares.
   bool prefers_reversed(gpu::Commands& cmd) const;
   // The rule: the reversed order's value is below (1 - margin) times the forward order's.
@@ -28,7 +30,7 @@ class DirectionCheck {
   EventLoss& events_;
   uint32_t until_step_;
   double margin_;
-  double reversed_ = 0;
+  gpu::Buffer reversed_;  // one float: the reversed order's value
 };
 
 }  // namespace evflow

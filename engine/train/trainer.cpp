@@ -139,7 +139,8 @@ void Trainer::add_event_term() {
   o.theta_pos = float(pos), o.theta_neg = float(neg), o.norm_floor_rms = float(cfg_.event_norm_floor);
   o.pool = cfg_.event_pool;
   auto term = std::make_unique<EventLoss>(ctx_, *events_, float(cfg_.event_weight), o);
-  direction_ = std::make_unique<DirectionCheck>(*term, cfg_.blur_step(cfg_.event_flip_until), cfg_.event_flip_margin);
+  direction_ =
+      std::make_unique<DirectionCheck>(ctx_, *term, cfg_.blur_step(cfg_.event_flip_until), cfg_.event_flip_margin);
   add_loss(std::move(term));
 }
 
@@ -382,7 +383,7 @@ void Trainer::record_exposure_terms(StepStats& st) {
                     cfg_.seed * 0x100000001B3ull + step_};
   for (uint32_t i = 0; i < frames; ++i) ef.rgb.push_back(&image_model_->linear_frame(i));
   const bool check = direction_ && direction_->active(step_);
-  if (check) direction_->score_reversed(cmd_, ef);
+  if (check) direction_->record_reversed(cmd_, ef);
   image_model_->mean_grad(cmd_);
   for (uint32_t i = 0; i < frames; ++i) {
     image_model_->frame_share(cmd_, i, frame_grad_[i]);
