@@ -350,13 +350,13 @@ void Trainer::warmup_step(StepStats& st) {
 }
 
 // Every frame keeps its render state for the backward pass; the image model takes them all, in
-// frame order, in one submit.
+// frame order. The image model's commands are recorded, not submitted: the loss terms that read
+// its prediction follow them in the same submit.
 void Trainer::render_exposure(uint32_t view) {
   std::vector<Camera> cameras;
   for (uint32_t i = 0; i < exposure_->frames(); ++i) cameras.push_back(cameras_->frame_camera(view, i));
   exposure_->forward(raster_, *params_, cameras, render_settings());
   image_model_->forward(cmd_, exposure_->images(), image_model_->upsample() > 1 ? &flow_planes_[view] : nullptr);
-  cmd_.submit();
 }
 
 void Trainer::record_losses(StepStats& st, bool exposure_on) {
@@ -437,6 +437,7 @@ void Trainer::backward_raster(uint32_t view) {
 
 ViewSnapshot Trainer::snapshot(uint32_t v, int interval, SnapshotExtras extras) {
   render_exposure(v);
+  cmd_.submit();
   const size_t n = size_t(data_.train.at(v).camera.width) * data_.train[v].camera.height * 3;
   ViewSnapshot out{cameras_->frame_times(), exposure_->images(), image_model_->prediction().read<float>(n),
                    targets_[v].read<float>(n)};
