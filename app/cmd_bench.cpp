@@ -14,6 +14,7 @@
 #include "flow/flow_estimator.h"
 #include "gpu/commands.h"
 #include "io/camera_json.h"
+#include "loss/event_loss.h"
 #include "run_files.h"
 #include "sim/builtin_scenes.h"
 #include "sim/mesh_renderer.h"
@@ -167,12 +168,22 @@ static void print_stages_text(const char* title, const std::vector<std::string>&
   std::printf(" ms\n");
 }
 
+// How many times the trainer's event terms have counted a view's events (each view's counts are
+// kept for its next steps, so a run's steady state counts none).
+static uint64_t event_count_passes(const Trainer& t) {
+  uint64_t n = 0;
+  for (const LossTerm* term : t.losses())
+    if (const auto* e = dynamic_cast<const EventLoss*>(term)) n += e->count_passes();
+  return n;
+}
+
 // Training steps (sharp views rendered from a synthetic ground-truth cloud, or a dataset folder
 // with any method): it/s and the split between rasterization, loss terms and optimizer.
 static int bench_train(ArgParser& p) {
   auto [W, H] = p.image_size({346, 260});
   const uint32_t N = uint32_t(p.integer("--gaussians", 100000, 1, 100000000));
   const int steps = int(p.integer("--steps", 20, 1, 1000000));
+  const int warmup = int(p.integer("--warmup", 1, 0, 1000000));
   const int views = int(p.integer("--views", 8, 1, 100000));
   const bool json = p.flag("--json");
   const std::string data_dir = p.value("--data"), splats = p.value("--splats");
@@ -201,9 +212,12 @@ static int bench_train(ArgParser& p) {
   cfg.event_from = 0;        // the event term (when the method has one) is on in every timed step
   cfg.event_flip_until = 1;  // and so is the direction check
   for (auto& [k, v] : overrides) cfg.set(k, v);
-  cfg.iterations = std::max<uint32_t>(cfg.iterations, uint32_t(steps) + 1);  // the warm-up step and the timed ones
+  cfg.iterations =
+      std::max<uint32_t>(cfg.iterations, uint32_t(warmup + steps));  // the warm-up steps and the timed ones
   Trainer t = splats.empty() ? Trainer(ctx, data, cfg) : Trainer(ctx, data, cfg, bench_start(splats, cfg));
-  t.step();  // warm-up: pipelines compiled, buffers sized
+  // Untimed: pipelines compiled, buffers sized; as many steps as views visit each view once, so
+  // that the timed steps find every view's event counts kept (the steady state of a run).
+  for (int i = 0; i < warmup; ++i) t.step();
   std::vector<double> total, fwd, loss, bwd, opt, ldi;
   std::map<std::string, std::vector<double>> stages, loss_stages, ldi_stages;  // rasterizer, loss terms, LDI
   std::vector<std::string> order, loss_order, ldi_order;
@@ -217,7 +231,7 @@ static int bench_train(ArgParser& p) {
     }
     for (auto& [name, ms] : sum) samples[name].push_back(ms);
   };
-  const uint64_t submits0 = ctx.submits(), transfers0 = ctx.transfers();
+  const uint64_t submits0 = ctx.submits(), transfers0 = ctx.transfers(), counts0 = event_count_passes(t);
   for (int i = 0; i < steps; ++i) {
     StepStats st = t.step();
     for (auto& [name, ms] : t.rasterizer().stage_ms()) {
@@ -236,17 +250,20 @@ static int bench_train(ArgParser& p) {
   const uint32_t count = uint32_t(t.params().count);
   const double m = median(total);
   const double submits = double(ctx.submits() - submits0) / steps,
-               transfers = double(ctx.transfers() - transfers0) / steps;
+               transfers = double(ctx.transfers() - transfers0) / steps,
+               counts = double(event_count_passes(t) - counts0) / steps;
   const double host_mib = peak_host_mib(), device_mib = double(ctx.peak_device_bytes()) / (1 << 20);
   if (json) {
     std::printf(
         "{\"bench\": \"train\", \"method\": \"%s\", \"device\": \"%s\", \"width\": %u, \"height\": %u, \"gaussians\": "
-        "%u, \"steps\": %d, \"peak_host_mib\": %.1f, \"peak_device_mib\": %.1f, \"submits_per_step\": %.1f, "
-        "\"transfers_per_step\": %.1f, \"it_per_s\": %.3f, \"ms\": {\"rasterize_forward\": %.2f, \"loss\": %.2f, "
+        "%u, \"steps\": %d, \"warmup\": %d, \"peak_host_mib\": %.1f, \"peak_device_mib\": %.1f, \"submits_per_step\": "
+        "%.1f, "
+        "\"transfers_per_step\": %.1f, \"event_counts_per_step\": %.2f, \"it_per_s\": %.3f, \"ms\": "
+        "{\"rasterize_forward\": %.2f, \"loss\": %.2f, "
         "\"rasterize_backward\": %.2f, "
         "\"optimizer\": %.2f, \"ldi\": %.2f, \"step\": %.2f}, \"raster_stages_ms\": {",
-        method.c_str(), ctx.caps().name.c_str(), W, H, count, steps, host_mib, device_mib, submits, transfers,
-        1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), median(ldi), m);
+        method.c_str(), ctx.caps().name.c_str(), W, H, count, steps, warmup, host_mib, device_mib, submits, transfers,
+        counts, 1000.0 / m, median(fwd), median(loss), median(bwd), median(opt), median(ldi), m);
     print_stages_json(order, stages);
     std::printf("}, \"loss_stages_ms\": {");
     print_stages_json(loss_order, loss_stages);
@@ -254,8 +271,8 @@ static int bench_train(ArgParser& p) {
     print_stages_json(ldi_order, ldi_stages);
     std::printf("}}\n");
   } else {
-    std::printf("train bench (%s) on %s: %ux%u, %u Gaussians, one view per step, median of %d steps\n", method.c_str(),
-                ctx.caps().name.c_str(), W, H, count, steps);
+    std::printf("train bench (%s) on %s: %ux%u, %u Gaussians, one view per step, median of %d steps after %d untimed\n",
+                method.c_str(), ctx.caps().name.c_str(), W, H, count, steps, warmup);
     std::printf(
         "  rasterize forward   %9.2f ms\n  loss terms          %9.2f ms\n  rasterize backward  %9.2f ms\n"
         "  optimizer (Adam)    %9.2f ms\n  LDI branch          %9.2f ms\n  step                %9.2f ms  (%.2f it/s)\n",
@@ -265,7 +282,8 @@ static int bench_train(ArgParser& p) {
     if (!ldi_order.empty()) print_stages_text("LDI branch stages", ldi_order, ldi_stages);
     std::printf("  peak memory: host %.1f MiB (the process's resident set), device %.1f MiB (buffers)\n", host_mib,
                 device_mib);
-    std::printf("  round trips per step: %.1f submits, %.1f host-device copies\n", submits, transfers);
+    std::printf("  round trips per step: %.1f submits, %.1f host-device copies; %.2f event counting passes\n", submits,
+                transfers, counts);
   }
   return 0;
 }
@@ -371,13 +389,15 @@ static int run_bench(const Args& a) {
         "  synthetic Gaussians in front of a 60-degree camera, or from the first camera of a camera file\n"
         "  (as evflow render --camera reads; its size replaces --width/--height), of the given splats;\n"
         "  a run's splats without --camera: from its first training view at mid-exposure.\n"
-        "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--views 8] "
-        "[--json]\n"
+        "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--warmup 1]\n"
+        "                          [--views 8] [--json]\n"
         "                          [--data DIR --method plain|edi|blur-only|blur+events|blur+events+warp|\n"
         "                          blur+events+flow] [--splats RUN|F.ply|F.glb] [key=value ...]\n"
         "  Training steps (render, loss terms, backward, Adam): it/s and the split per part. With --data,\n"
         "  the steps train that dataset with the method (blur modes: 2N+1 renders per step). --splats\n"
         "  starts from those splats (a run's: its learned exposures too) instead of --gaussians new ones.\n"
+        "  --warmup: untimed steps first; with --data, one per training view times a run's steady state\n"
+        "  (every view's event counts kept).\n"
         "       evflow bench flow --data DIR [--views N] [--json]\n"
         "  Optical flow from events of the first N (default all) training views: seconds in all and\n"
         "  the GPU stages summed over every evaluation of the contrast.\n"

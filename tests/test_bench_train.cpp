@@ -55,6 +55,50 @@ TEST_CASE("bench train: a blur+events step's round trips do not grow with its fr
   CHECK(b["submits_per_step"].get<double>() <= 12.0);
 }
 
+// The direction check's reversed score rides in the step's loss submit: with the check on, a
+// blur+events step submits as often as without it, and reads the two scores after that submit.
+TEST_CASE("bench train: the direction check adds no submit to a step", "[cli]") {
+  const fs::path dir = fresh_dir("evflow_bench_check_submits");
+  std::string out;
+  REQUIRE(run_evflow(dir, "simulate --scene gallery --out sim --width 32 --height 24 --blur-px 3 --train-views 2",
+                     out) == 0);
+  auto submits = [&](const std::string& until) {
+    REQUIRE(run_evflow(dir,
+                       "bench train --data sim --method blur+events --gaussians 500 --steps 2 --json "
+                       "event_flip_until=" +
+                           until,
+                       out) == 0);
+    const nlohmann::json b = nlohmann::json::parse(out.substr(out.find('{')));
+    return std::make_pair(b["submits_per_step"].get<double>(), b["transfers_per_step"].get<double>());
+  };
+  const auto off = submits("0"), on = submits("1");
+  INFO("check off: " << off.first << " submits, " << off.second << " copies; on: " << on.first << ", " << on.second);
+  CHECK(on.first == off.first);
+  CHECK(on.second == off.second + 2);  // the forward and the reversed order's scores
+}
+
+// --warmup: untimed steps first. One per training view reaches a run's steady state, where every
+// view's event counts are kept and no timed step counts events again.
+TEST_CASE("bench train --warmup: one untimed step per view leaves no event counting to the timed steps", "[cli]") {
+  const fs::path dir = fresh_dir("evflow_bench_warmup");
+  std::string out;
+  REQUIRE(run_evflow(dir, "simulate --scene gallery --out sim --width 32 --height 24 --blur-px 3 --train-views 3",
+                     out) == 0);
+  auto counts = [&](int warmup) {
+    REQUIRE(run_evflow(dir,
+                       "bench train --data sim --method blur+events --gaussians 500 --steps 3 --json --warmup " +
+                           std::to_string(warmup),
+                       out) == 0);
+    const nlohmann::json b = nlohmann::json::parse(out.substr(out.find('{')));
+    CHECK(b["warmup"] == warmup);
+    return b["event_counts_per_step"].get<double>();
+  };
+  // Three views, visited in a shuffled order each epoch: after one untimed step the next two
+  // steps count their views' events for the first time.
+  CHECK(counts(1) > 0.5);
+  CHECK(counts(3) == 0.0);
+}
+
 // The loss stage's GPU time by term: each term under its name, the frames' shares of the image
 // terms' gradient and the direction check (on in every timed step), together no longer than the
 // stage. One timed step, since each figure is a median over the steps: with two, each is the

@@ -207,6 +207,10 @@ void Commands::check_used() {
 }
 
 void Commands::submit() {
+  if (empty_ && marks_.empty()) {  // nothing recorded: no round trip to the device
+    stage_ms_.clear();
+    return;
+  }
   check_used();
   EVF_VK(vkEndCommandBuffer(cb_));
   recording_ = false;

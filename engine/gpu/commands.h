@@ -52,7 +52,8 @@ class Commands {
   // Ends the stage `name`: its time is from the previous mark (or the start) to here.
   void mark(const std::string& name);
 
-  // Submits, waits, and makes the buffer ready for recording again.
+  // Submits, waits, and makes the buffer ready for recording again. With nothing recorded (no
+  // command, no mark) it returns at once: no submit, no stage times.
   void submit();
 
   // Stage times (ms) of the last submit, in recording order.
