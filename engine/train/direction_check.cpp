@@ -16,8 +16,7 @@ void DirectionCheck::record_reversed(gpu::Commands& cmd, ExposureFrames frames) 
   cmd.mark("direction check");
 }
 
-bool DirectionCheck::prefers_reversed(gpu::Commands& cmd) const {
-  cmd.submit();
+bool DirectionCheck::prefers_reversed() const {
   return prefers(events_.value(), reversed_.read_one<float>(0), margin_);
 }
 

@@ -21,8 +21,9 @@ class DirectionCheck {
   // reversed, the same pairs and seed, and a copy of it apart from the term's value slot, which
   // the forward order's record then overwrites. Nothing is submitted.
   void record_reversed(gpu::Commands& cmd, ExposureFrames frames);
-  // After the event loss recorded the forward order into `cmd`: submits and compares.
-  bool prefers_reversed(gpu::Commands& cmd) const;
+  // After the submit of record_reversed() and the event loss's record of the forward order:
+  // reads the two values and compares.
+  bool prefers_reversed() const;
   // The rule: the reversed order's value is below (1 - margin) times the forward order's.
   static bool prefers(double forward, double reversed, double margin);
 

@@ -299,8 +299,6 @@ StepStats Trainer::step() {
   read_losses(st, exposure_on, true);
   if (st.flipped && model_flow_step_ > 0) refresh_model_flow(st.view);  // the reversed trajectory's flow
   if (!st.flipped && !st.skipped) {
-    backward_images(exposure_on);
-    st.raster_backward_ms = clock.lap();
     if (ldi_) {
       ldi_->backward(cmd_, *image_model_);  // the joint loss's share of the renders' gradients
       cmd_.submit();
@@ -308,7 +306,7 @@ StepStats Trainer::step() {
       st.ldi_stages.insert(st.ldi_stages.end(), cmd_.stage_ms().begin(), cmd_.stage_ms().end());
     }
     backward_raster(st.view);
-    st.raster_backward_ms += clock.lap();
+    st.raster_backward_ms = clock.lap();
     if (step_ > cfg_.blur_step(cfg_.splats_from)) {  // else the knots learn alone (splats_from)
       optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_);
       st.optimizer_ms = clock.lap();
@@ -359,14 +357,27 @@ void Trainer::render_exposure(uint32_t view) {
   image_model_->forward(cmd_, exposure_->images(), image_model_->upsample() > 1 ? &flow_planes_[view] : nullptr);
 }
 
+// The loss terms and, in the same submit, the image model's backward to every frame's render
+// (recorded even for a step that turns out flipped or skipped, whose renders' gradients are then
+// not used); then the direction check's verdict from the values that submit wrote.
 void Trainer::record_losses(StepStats& st, bool exposure_on) {
   terms_.record_image_terms(cmd_, *image_model_, targets_[st.view]);
-  if (exposure_on) record_exposure_terms(st);
+  const bool check = exposure_on && direction_ && direction_->active(step_);
+  if (exposure_on) record_exposure_terms(st, check);
+  std::vector<const gpu::Buffer*> frame_grads;
+  if (exposure_on)
+    for (auto& g : frame_grad_) frame_grads.push_back(&g);
+  image_model_->render_grads(cmd_, frame_grads);
   cmd_.submit();
+  if (check && direction_->prefers_reversed()) {
+    cameras_->flip(st.view);  // this step's gradients belong to the other direction: the flip is the update
+    ++flips_;
+    st.flipped = true;
+  }
 }
 
 // Exposure terms add their per-frame gradients on top of each frame's share of the image terms'.
-void Trainer::record_exposure_terms(StepStats& st) {
+void Trainer::record_exposure_terms(const StepStats& st, bool check) {
   const io::View& view = data_.train[st.view];
   const uint32_t frames = exposure_->frames();
   const size_t n_pix = size_t(view.camera.width) * view.camera.height * 3;
@@ -382,7 +393,6 @@ void Trainer::record_exposure_terms(StepStats& st) {
                     {},
                     cfg_.seed * 0x100000001B3ull + step_};
   for (uint32_t i = 0; i < frames; ++i) ef.rgb.push_back(&image_model_->linear_frame(i));
-  const bool check = direction_ && direction_->active(step_);
   if (check) direction_->record_reversed(cmd_, ef);
   image_model_->mean_grad(cmd_);
   for (uint32_t i = 0; i < frames; ++i) {
@@ -391,11 +401,6 @@ void Trainer::record_exposure_terms(StepStats& st) {
   }
   cmd_.mark("frame shares");
   terms_.record_exposure_terms(cmd_, ef, event_schedule());
-  if (check && direction_->prefers_reversed(cmd_)) {
-    cameras_->flip(st.view);  // this step's gradients belong to the other direction: the flip is the update
-    ++flips_;
-    st.flipped = true;
-  }
 }
 
 // The event terms' weight factor at this step: 1 until the direction check ends
@@ -415,15 +420,6 @@ void Trainer::read_losses(StepStats& st, bool exposure_on, bool branches_on) con
   st.skipped = true;
   std::fprintf(stderr, "step %u: non-finite loss on view '%s' (term %s): update skipped\n", st.step,
                data_.train[st.view].name.c_str(), v.first_bad ? v.first_bad->name().c_str() : "sum");
-}
-
-// From the loss gradients to every frame's render.
-void Trainer::backward_images(bool exposure_on) {
-  std::vector<const gpu::Buffer*> frame_grads;
-  if (exposure_on)
-    for (auto& g : frame_grad_) frame_grads.push_back(&g);
-  image_model_->render_grads(cmd_, frame_grads);
-  cmd_.submit();  // the rasterizer's backward passes run on its own command buffer
 }
 
 // Through the rasterizer to the Gaussians and the frames' poses, and on to the view's camera

@@ -161,12 +161,11 @@ class Trainer {
   // The stages of a step.
   void render_exposure(uint32_t view);
   void record_losses(StepStats& st, bool exposure_on);
-  void record_exposure_terms(StepStats& st);
+  void record_exposure_terms(const StepStats& st, bool check);
   void read_losses(StepStats& st, bool exposure_on, bool branches_on) const;
   double event_schedule() const;
-  // The loss gradients to every frame's render; then backward_raster() through the rasterizer
-  // (the LDI branch adds the joint loss's share in between).
-  void backward_images(bool exposure_on);
+  // From every frame's render gradient (record_losses; the LDI branch adds the joint loss's
+  // share) through the rasterizer to the Gaussians and the frames' poses.
   void backward_raster(uint32_t view);
 
   gpu::Context& ctx_;
