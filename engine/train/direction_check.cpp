@@ -2,22 +2,28 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace evflow {
 
 DirectionCheck::DirectionCheck(gpu::Context& ctx, EventLoss& events, uint32_t until_step, double margin)
-    : events_(events), until_step_(until_step), margin_(margin), reversed_(ctx, 4, "direction_check_reversed") {}
+    : events_(events), until_step_(until_step), margin_(margin), scores_(ctx, 8, "direction_check_scores") {}
 
 void DirectionCheck::record_reversed(gpu::Commands& cmd, ExposureFrames frames) {
   std::reverse(frames.rgb.begin(), frames.rgb.end());
   frames.grad.clear();
   events_.record_value(cmd, frames);
-  cmd.copy(events_.value_buffer(), reversed_, 4, uint64_t(events_.value_offset()) * 4);
+  cmd.copy(events_.value_buffer(), scores_, 4, uint64_t(events_.value_offset()) * 4, 4);
   cmd.mark("direction check");
 }
 
+void DirectionCheck::keep_forward(gpu::Commands& cmd) {
+  cmd.copy(events_.value_buffer(), scores_, 4, uint64_t(events_.value_offset()) * 4, 0);
+}
+
 bool DirectionCheck::prefers_reversed() const {
-  return prefers(events_.value(), reversed_.read_one<float>(0), margin_);
+  const std::vector<float> v = scores_.read<float>(2);
+  return prefers(v[0], v[1], margin_);
 }
 
 bool DirectionCheck::prefers(double forward, double reversed, double margin) {

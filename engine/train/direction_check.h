@@ -21,8 +21,10 @@ class DirectionCheck {
   // reversed, the same pairs and seed, and a copy of it apart from the term's value slot, which
   // the forward order's record then overwrites. Nothing is submitted.
   void record_reversed(gpu::Commands& cmd, ExposureFrames frames);
-  // After the submit of record_reversed() and the event loss's record of the forward order:
-  // reads the two values and compares.
+  // After the event loss's record of the forward order: a copy of its value beside the reversed
+  // one, so that the two come back in one download.
+  void keep_forward(gpu::Commands& cmd);
+  // After the submit of the two records: reads the two values (one download) and compares.
   bool prefers_reversed() const;
   // The rule: the reversed order's value is below (1 - margin) times the forward order's.
   static bool prefers(double forward, double reversed, double margin);
@@ -31,7 +33,7 @@ class DirectionCheck {
   EventLoss& events_;
   uint32_t until_step_;
   double margin_;
-  gpu::Buffer reversed_;  // one float: the reversed order's value
+  gpu::Buffer scores_;  // two floats: the forward and the reversed order's values
 };
 
 }  // namespace evflow

@@ -401,6 +401,7 @@ void Trainer::record_exposure_terms(const StepStats& st, bool check) {
   }
   cmd_.mark("frame shares");
   terms_.record_exposure_terms(cmd_, ef, event_schedule());
+  if (check) direction_->keep_forward(cmd_);
 }
 
 // The event terms' weight factor at this step: 1 until the direction check ends
