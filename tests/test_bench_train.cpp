@@ -57,7 +57,9 @@ TEST_CASE("bench train: a blur+events step's round trips do not grow with its fr
 
 // The direction check's reversed score rides in the step's loss submit, and the two scores come
 // back after it in one download: with EVF_STAGED=1 (each download a submit of its own, as on a
-// GPU) the check adds one round trip to a blur+events step, that download.
+// GPU) the check adds one round trip to a blur+events step, that download. One untimed step per
+// view first: buffers that grow on a view's first visit (and, with EVF_POISON, are filled by a
+// submit of their own) are all in place before the timed steps.
 TEST_CASE("bench train: the direction check adds one round trip to a step, its scores' download", "[cli]") {
   const fs::path dir = fresh_dir("evflow_bench_check_submits");
   std::string out;
@@ -66,7 +68,7 @@ TEST_CASE("bench train: the direction check adds one round trip to a step, its s
   auto submits = [&](const std::string& until) {
     setenv("EVF_STAGED", "1", 1);
     const int rc = run_evflow(dir,
-                              "bench train --data sim --method blur+events --gaussians 500 --steps 2 --json "
+                              "bench train --data sim --method blur+events --gaussians 500 --steps 2 --warmup 2 --json "
                               "event_flip_until=" +
                                   until,
                               out);
