@@ -363,11 +363,7 @@ void Trainer::render_exposure(uint32_t view) {
 void Trainer::record_losses(StepStats& st, bool exposure_on) {
   terms_.record_image_terms(cmd_, *image_model_, targets_[st.view]);
   const bool check = exposure_on && direction_ && direction_->active(step_);
-  if (exposure_on) record_exposure_terms(st, check);
-  std::vector<const gpu::Buffer*> frame_grads;
-  if (exposure_on)
-    for (auto& g : frame_grad_) frame_grads.push_back(&g);
-  image_model_->render_grads(cmd_, frame_grads);
+  image_model_->render_grads(cmd_, exposure_on ? record_exposure_terms(st, check) : std::vector<const gpu::Buffer*>{});
   cmd_.submit();
   if (check && direction_->prefers_reversed()) {
     cameras_->flip(st.view);  // this step's gradients belong to the other direction: the flip is the update
@@ -377,7 +373,8 @@ void Trainer::record_losses(StepStats& st, bool exposure_on) {
 }
 
 // Exposure terms add their per-frame gradients on top of each frame's share of the image terms'.
-void Trainer::record_exposure_terms(const StepStats& st, bool check) {
+// Returns the frames' gradient buffers they add into.
+std::vector<const gpu::Buffer*> Trainer::record_exposure_terms(const StepStats& st, bool check) {
   const io::View& view = data_.train[st.view];
   const uint32_t frames = exposure_->frames();
   const size_t n_pix = size_t(view.camera.width) * view.camera.height * 3;
@@ -402,6 +399,7 @@ void Trainer::record_exposure_terms(const StepStats& st, bool check) {
   cmd_.mark("frame shares");
   terms_.record_exposure_terms(cmd_, ef, event_schedule());
   if (check) direction_->keep_forward(cmd_);
+  return ef.grad;
 }
 
 // The event terms' weight factor at this step: 1 until the direction check ends

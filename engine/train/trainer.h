@@ -161,7 +161,7 @@ class Trainer {
   // The stages of a step.
   void render_exposure(uint32_t view);
   void record_losses(StepStats& st, bool exposure_on);
-  void record_exposure_terms(const StepStats& st, bool check);
+  std::vector<const gpu::Buffer*> record_exposure_terms(const StepStats& st, bool check);
   void read_losses(StepStats& st, bool exposure_on, bool branches_on) const;
   double event_schedule() const;
   // From every frame's render gradient (record_losses; the LDI branch adds the joint loss's
