@@ -352,8 +352,11 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
                                  const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate) {
   const uint32_t groups = gpu::Commands::div_up(params.count, kProjectGroupSize);
   auto plane = [&](int k) { return gpu::BufferRef(isect_grad_[k]); };
-  const std::string raster_bwd =
-      "splat/rasterize_bwd" + block_suffix_ + (ctx_.caps().shared_float_atomic_add ? "" : "_cas");
+  // The block kernel adds no floats in shared memory; the per-pixel one needs the
+  // compare-and-swap build where the device lacks shared float atomics.
+  const std::string raster_bwd = block_suffix_.empty() && !ctx_.caps().shared_float_atomic_add
+                                     ? "splat/rasterize_bwd_cas"
+                                     : "splat/rasterize_bwd" + block_suffix_;
   // The compositing backward writes only the slots it visits (Gaussians in front of its tile's
   // last blended one); the others keep these zeros. A fill is a sequential write: far cheaper
   // than the kernel's scattered zero stores (lavapipe, bench raster 100k: backward -6 ms).

@@ -2,14 +2,13 @@
 // Backward rasterization for CPU drivers: one workgroup per 16x16 tile, each invocation owns a
 // block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s), as rasterize_block.comp, and visits
 // back to front only the Gaussians whose support reaches its block (support_blocks). Per Gaussian
-// it sums its block's 9 gradient terms in registers (fixed order) and adds them to the
-// workgroup's shared accumulator. Same maths as rasterize_bwd.comp.
-// Why: see rasterize_block.comp; in addition, one set of 9 shared adds per block instead of per
-// pixel (lavapipe runs each as a loop over the lanes; float adds as compare-and-swap loops).
+// it sums its block's 9 gradient terms in registers (fixed order) and stores them in its own row
+// of the batch's partial sums; once every block is done, each entry's partial sums are added in
+// block order and written to its slot. Same maths as rasterize_bwd.comp.
+// Why: see rasterize_block.comp; in addition, one set of partial sums per block instead of per
+// pixel, and plain stores instead of shared float atomics: lavapipe runs each atomic as a loop of
+// locked compare-and-swaps over the lanes, and the nine per visit were a third of this kernel.
 #extension GL_GOOGLE_include_directive : require
-#ifndef EVF_CAS_ATOMICS
-#extension GL_EXT_shader_atomic_float : require
-#endif
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
@@ -33,7 +32,13 @@
 #define EVF_BLOCKS EVF_THREADS
 layout(local_size_x = EVF_THREADS) in;
 #define EVF_BLOCK_BATCH 1
-// Batches of 256 (32, 64, 128 measured: no better; the backward loads only what it visits).
+// Batches of 32: each block's partial sums of a batch take 36 bytes per entry, 18 KiB for the
+// tile's 16 blocks (lavapipe has 32 KiB of shared memory); with atomics into one accumulator,
+// batches of 32 to 256 measured alike.
+#define EVF_BATCH 32
+#if EVF_BLOCKS > 16
+#error the partial sums of more than 16 blocks do not fit in 32 KiB of shared memory
+#endif
 #include "splat/raster_io.glsl"
 layout(std430, binding = kRasterizeBwdBindInT) readonly buffer InT { float final_T[]; };
 layout(std430, binding = kRasterizeBwdBindInLast) readonly buffer InLast { uint last_isect[]; };
@@ -44,30 +49,15 @@ layout(std430, binding = kRasterizeBwdBindG0) writeonly buffer G0 { vec4 slot_gr
 layout(std430, binding = kRasterizeBwdBindG1) writeonly buffer G1 { vec4 slot_grad_b[]; };
 layout(std430, binding = kRasterizeBwdBindG2) writeonly buffer G2 { float slot_grad_c[]; };
 layout(push_constant) uniform PC { RasterPC pc; };
-shared uint tile_last;
 
-// The shared accumulator: entry e's nine sums in acc[3e] = (mean.xy, conic.xy),
-// acc[3e + 1] = (conic.z, opacity, rgb.rg), acc[3e + 2].x = rgb.b, the per-slot layout, so that
-// zeroing and reading out an entry take three vec4 accesses instead of nine.
-#ifdef EVF_CAS_ATOMICS
-shared uvec4 acc[EVF_BATCH * 3];
-void acc_add(uint e, uint q, float v) {
-  uint i = 3u * e + q / 4u, c = q % 4u;
-  uint old = acc[i][c];
-  for (;;) {
-    uint prev = atomicCompSwap(acc[i][c], old, floatBitsToUint(uintBitsToFloat(old) + v));
-    if (prev == old) break;
-    old = prev;
-  }
-}
-vec4 acc_get(uint i) { return uintBitsToFloat(acc[i]); }
-void acc_zero(uint i) { acc[i] = uvec4(0u); }
-#else
-shared vec4 acc[EVF_BATCH * 3];
-void acc_add(uint e, uint q, float v) { atomicAdd(acc[3u * e + q / 4u][q % 4u], v); }
-vec4 acc_get(uint i) { return acc[i]; }
-void acc_zero(uint i) { acc[i] = vec4(0.0); }
-#endif
+// A batch's partial sums, one row per block: entry e's nine sums in part_a[b][e] = (mean.xy,
+// conic.xy), part_b[b][e] = (conic.z, opacity, rgb.rg), part_c[b][e] = rgb.b, the per-slot layout.
+// Block b writes only row b, and only the entries it visits; the read-out reads only those.
+shared vec4 part_a[EVF_BLOCKS][EVF_BATCH];
+shared vec4 part_b[EVF_BLOCKS][EVF_BATCH];
+shared float part_c[EVF_BLOCKS][EVF_BATCH];
+shared uint batch_blocks[EVF_BATCH];  // each entry's blocks (support_blocks)
+shared uint block_last[EVF_BLOCKS];  // one past each block's last blended Gaussian
 
 struct Run {     // 4 horizontally adjacent pixels
   vec4 T;                  // transmittance before the current Gaussian
@@ -144,60 +134,63 @@ void main() {
   EVF_RUNS(EVF_INIT)
 #define EVF_ACC(i) accumulate(r##i, g, cx, cy + float(i), a.xy, conic, b.y, col, start + j);
   uint count = range.y - range.x;
-  // Gaussians at or past the tile's largest `last` blended into no pixel: neither loaded nor
-  // visited, their slots keep the zeros the host filled the gradient planes with.
-  if (lid == 0) tile_last = range.x;
+  // Every invocation keeps every block's `last` in registers, for the read-out. Gaussians at or
+  // past the largest (visit_end) blended into no pixel: neither loaded nor visited, their slots
+  // keep the zeros the host filled the gradient planes with.
+  block_last[lid] = last;
   barrier();
-  atomicMax(tile_last, last);
-  barrier();
-  uint visit_end = tile_last;
+  uint lasts[EVF_BLOCKS], visit_end = range.x;
+  for (uint b = 0u; b < EVF_BLOCKS; ++b) {
+    lasts[b] = block_last[b];
+    visit_end = max(visit_end, lasts[b]);
+  }
   for (uint nb = (count + EVF_BATCH - 1u) / EVF_BATCH; nb > 0u; --nb) {
     uint start = range.x + (nb - 1u) * EVF_BATCH;
     uint n = min(uint(EVF_BATCH), range.y - start);
-    barrier();
     // Entries at or past visit_end are neither loaded nor visited nor written.
     uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
-    for (uint k = lid; k < n_load; k += EVF_THREADS)
-      for (uint q = 0; q < 3; ++q) acc_zero(k * 3 + q);
-    // Words at or past (n_load + 31) / 32 are never read: n_visit <= n_load.
-    if (32u * lid < n_load) load_batch_word(lid, start, n_load, tile_origin);
+    uint n_visit = start < last ? min(n, last - start) : 0u;  // n_visit <= n_load
     barrier();
-    // This block's Gaussians below its last blended one, back to front, from its bit set: one
-    // loop over the batch (see rasterize_block.comp).
-    uint n_visit = start < last ? min(n, last - start) : 0u;
-    uint w = (n_visit + 31u) / 32u, bits = 0u;  // w: one past the current word
-    for (;;) {
-      while (bits == 0u && w > 0u) {
-        --w;
-        bits = block_bits[lid][w];
-        uint below = n_visit - w * 32u;  // entries of this word below n_visit
-        if (below < 32u) bits &= (1u << below) - 1u;
-      }
-      if (bits == 0u) break;
-      {
-        uint top = uint(findMSB(bits));
-        bits &= ~(1u << top);
-        uint j = w * 32u + top;
-        vec4 a = batch_a[j], b = batch_b[j];
-        vec3 conic = vec3(a.zw, b.x), col = vec3(b.zw, batch_c[j].x);
-        Grad g;
-        g.mean = vec2(0.0);
-        g.conic = vec3(0.0);
-        g.opac = 0.0;
-        g.rgb = vec3(0.0);
-        EVF_RUNS(EVF_ACC)
-        acc_add(j, 0, g.mean.x); acc_add(j, 1, g.mean.y);
-        acc_add(j, 2, g.conic.x); acc_add(j, 3, g.conic.y); acc_add(j, 4, g.conic.z);
-        acc_add(j, 5, g.opac);
-        acc_add(j, 6, g.rgb.r); acc_add(j, 7, g.rgb.g); acc_add(j, 8, g.rgb.b);
-      }
+    for (uint e = lid; e < n_load; e += EVF_THREADS) batch_blocks[e] = load_batch_entry(e, start + e, tile_origin);
+    barrier();
+    // This block's entries below its last blended one (uniform loads: every lane reads entry e).
+    uint bits = 0u;
+    for (uint e = 0u; e < n_load; ++e) bits |= ((batch_blocks[e] >> lid) & 1u) << e;
+    if (n_visit < 32u) bits &= (1u << n_visit) - 1u;
+    // Back to front.
+    while (bits != 0u) {
+      uint j = uint(findMSB(bits));
+      bits &= ~(1u << j);
+      vec4 a = batch_a[j], b = batch_b[j];
+      vec3 conic = vec3(a.zw, b.x), col = vec3(b.zw, batch_c[j].x);
+      Grad g;
+      g.mean = vec2(0.0);
+      g.conic = vec3(0.0);
+      g.opac = 0.0;
+      g.rgb = vec3(0.0);
+      EVF_RUNS(EVF_ACC)
+      part_a[lid][j] = vec4(g.mean, g.conic.xy);
+      part_b[lid][j] = vec4(g.conic.z, g.opac, g.rgb.rg);
+      part_c[lid][j] = g.rgb.b;
     }
     barrier();
     for (uint k = lid; k < n_load; k += EVF_THREADS) {
+      uint visited = 0u;  // the blocks that visited entry k
+      for (uint b = 0u; b < EVF_BLOCKS; ++b) visited |= uint(start + k < lasts[b]) << b;
+      visited &= batch_blocks[k];
+      vec4 sa = vec4(0.0), sb = vec4(0.0);
+      float sc = 0.0;
+      while (visited != 0u) {
+        uint b = uint(findLSB(visited));
+        visited &= visited - 1u;
+        sa += part_a[b][k];
+        sb += part_b[b][k];
+        sc += part_c[b][k];
+      }
       uint slot = slot_from_isect[start + k];
-      slot_grad_a[slot] = acc_get(3 * k);
-      slot_grad_b[slot] = acc_get(3 * k + 1);
-      slot_grad_c[slot] = acc_get(3 * k + 2).x;
+      slot_grad_a[slot] = sa;
+      slot_grad_b[slot] = sb;
+      slot_grad_c[slot] = sc;
     }
   }
 }
