@@ -201,8 +201,10 @@ void Rasterizer::ensure_forward_buffers(RenderState& st) const {
   st.out_.rgb.ensure(pixels * 12);
   st.out_.alpha.ensure(pixels * 4);
   st.out_.depth.ensure(pixels * 4);
-  st.final_T_.ensure(pixels * 4);
-  st.last_isect_.ensure(pixels * 4);
+  // Whole tiles: the block kernels keep these two planes tile by tile (splat_layout.h).
+  const uint64_t tile_pixels = uint64_t(st.raster_pc_.tiles_x) * st.raster_pc_.tiles_y * kTileSize * kTileSize;
+  st.final_T_.ensure(tile_pixels * 4);
+  st.last_isect_.ensure(tile_pixels * 4);
 }
 
 RenderState Rasterizer::forward(const GaussianBuffers& params, const Camera& cam, const RenderSettings& settings) {

@@ -41,8 +41,9 @@ layout(local_size_x = EVF_THREADS) in;
 layout(std430, binding = kRasterizeBindOutRgb) writeonly buffer OutRgb { float out_rgb[]; };        // [3][H][W]
 layout(std430, binding = kRasterizeBindOutAlpha) writeonly buffer OutAlpha { float out_alpha[]; };  // [H][W]
 layout(std430, binding = kRasterizeBindOutDepth) writeonly buffer OutDepth { float out_depth[]; };  // [H][W]
-layout(std430, binding = kRasterizeBindOutT) writeonly buffer OutT { float final_T[]; };            // [H][W]
-layout(std430, binding = kRasterizeBindOutLast) writeonly buffer OutLast { uint last_isect[]; };    // [H][W] one past the last blended
+// Tile by tile (splat_layout.h): a run is one vec4.
+layout(std430, binding = kRasterizeBindOutT) writeonly buffer OutT { vec4 final_T[]; };
+layout(std430, binding = kRasterizeBindOutLast) writeonly buffer OutLast { uvec4 last_isect[]; };
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint done_count;
 
@@ -83,7 +84,10 @@ void blend(inout Run r, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity,
   r.last = mix(r.last, uvec4(idx + 1u), use);
 }
 
-void store_run(Run r, ivec2 p0) {
+// `q`: the run's vec4 in the tile-by-tile planes.
+void store_run(Run r, ivec2 p0, uint q) {
+  final_T[q] = r.T;
+  last_isect[q] = r.last;
   if (p0.y >= int(pc.height)) return;
   uint hw = pc.width * pc.height;
   for (int k = 0; k < 4; ++k) {
@@ -95,8 +99,6 @@ void store_run(Run r, ivec2 p0) {
     out_rgb[2 * hw + i] = r.Cb[k] + T * pc.background.b;
     out_alpha[i] = 1.0 - T;
     out_depth[i] = (T < 1.0) ? r.D[k] / (1.0 - T) : 0.0;
-    final_T[i] = T;
-    last_isect[i] = r.last[k];
   }
 }
 
@@ -143,6 +145,7 @@ void main() {
       }
     }
   }
-#define EVF_STORE(i) store_run(r##i, p0 + ivec2(0, i));
+  uint q0 = (uint(tile.y) * pc.tiles_x + uint(tile.x)) * (kTileSize * kTileSize / 4u) + (lid / 4u) * EVF_ROWS * 4u + lid % 4u;
+#define EVF_STORE(i) store_run(r##i, p0 + ivec2(0, i), q0 + 4u * i);
   EVF_RUNS(EVF_STORE)
 }

@@ -40,8 +40,9 @@ layout(local_size_x = EVF_THREADS) in;
 #error the partial sums of more than 16 blocks do not fit in 32 KiB of shared memory
 #endif
 #include "splat/raster_io.glsl"
-layout(std430, binding = kRasterizeBwdBindInT) readonly buffer InT { float final_T[]; };
-layout(std430, binding = kRasterizeBwdBindInLast) readonly buffer InLast { uint last_isect[]; };
+// Tile by tile (splat_layout.h): a run is one vec4.
+layout(std430, binding = kRasterizeBwdBindInT) readonly buffer InT { vec4 final_T[]; };
+layout(std430, binding = kRasterizeBwdBindInLast) readonly buffer InLast { uvec4 last_isect[]; };
 layout(std430, binding = kRasterizeBwdBindVRgb) readonly buffer VRgb { float v_rgb[]; };        // [3][H][W]
 layout(std430, binding = kRasterizeBwdBindVAlpha) readonly buffer VAlpha { float v_alpha[]; };  // [H][W]
 // Per-slot gradients (splat_layout.h): (v_mean2d.xy, v_conic.xy), (v_conic.z, v_opacity, v_rgb.rg), v_rgb.b.
@@ -73,16 +74,19 @@ struct Grad {    // one Gaussian's gradient summed over a block
   vec3 rgb;
 };
 
-Run run_init(ivec2 p0, uint first) {
+// `q`: the run's vec4 in the tile-by-tile planes.
+Run run_init(ivec2 p0, uint q, uint first) {
   Run r;
   uint hw = pc.width * pc.height;
+  vec4 T4 = final_T[q];
+  uvec4 last4 = last_isect[q];
   for (int k = 0; k < 4; ++k) {
     ivec2 p = p0 + ivec2(k, 0);
     bool inside = p.x < int(pc.width) && p.y < int(pc.height);
     uint i = inside ? uint(p.y) * pc.width + uint(p.x) : 0u;
-    float T = inside ? final_T[i] : 1.0;
+    float T = inside ? T4[k] : 1.0;
     r.T[k] = T;
-    r.last[k] = inside ? last_isect[i] : first;
+    r.last[k] = inside ? last4[k] : first;
     r.vr[k] = inside ? v_rgb[i] : 0.0;
     r.vg[k] = inside ? v_rgb[hw + i] : 0.0;
     r.vb[k] = inside ? v_rgb[2 * hw + i] : 0.0;
@@ -130,7 +134,8 @@ void main() {
   vec2 tile_origin = vec2(tile * int(kTileSize));
   uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
   uint last = range.x;
-#define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x); last = max(last, run_last(r##i));
+  uint q0 = (uint(tile.y) * pc.tiles_x + uint(tile.x)) * (kTileSize * kTileSize / 4u) + (lid / 4u) * EVF_ROWS * 4u + lid % 4u;
+#define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), q0 + 4u * i, range.x); last = max(last, run_last(r##i));
   EVF_RUNS(EVF_INIT)
 #define EVF_ACC(i) accumulate(r##i, g, cx, cy + float(i), a.xy, conic, b.y, col, start + j);
   uint count = range.y - range.x;

@@ -101,6 +101,9 @@ EVF_BIND(kRasterBindProjC, 5u, ProjC)
 EVF_BIND(kRasterizeBindOutRgb, 6u, OutRgb)
 EVF_BIND(kRasterizeBindOutAlpha, 7u, OutAlpha)
 EVF_BIND(kRasterizeBindOutDepth, 8u, OutDepth)
+// final_T and last_isect (one past the last blended): per pixel, in image order for the
+// per-pixel kernels; tile by tile for the block kernels (tile t's pixel (x, y) at
+// t * 256 + y * 16 + x, so a block's row of 4 is one vec4), tiles_x * tiles_y * 256 entries.
 EVF_BIND(kRasterizeBindOutT, 9u, OutT)
 EVF_BIND(kRasterizeBindOutLast, 10u, OutLast)
 // splat/rasterize_bwd, splat/rasterize_bwd_block
