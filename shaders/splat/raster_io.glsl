@@ -116,6 +116,13 @@ void load_batch_word(uint w, uint start, uint n, vec2 tile_origin) {
   for (uint i = 0u; i < EVF_BLOCKS / 4; ++i)
     for (uint k = 0u; k < 4u; ++k) block_bits[4u * i + k][w] = q[i][k];
 }
+
+// The vec4 of the first of block `lid`'s runs in the tile-by-tile planes (final_T, last_isect:
+// splat_layout.h); its run i is 4 i further on.
+uint block_run_vec4(ivec2 tile, uint tiles_x, uint lid) {
+  uint tile_vec4s = kTileSize * kTileSize / 4u;
+  return (uint(tile.y) * tiles_x + uint(tile.x)) * tile_vec4s + (lid / 4u) * EVF_ROWS * 4u + lid % 4u;
+}
 #endif
 
 ivec2 tile_of_group(uint tiles_x) {

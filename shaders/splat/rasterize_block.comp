@@ -145,7 +145,7 @@ void main() {
       }
     }
   }
-  uint q0 = (uint(tile.y) * pc.tiles_x + uint(tile.x)) * (kTileSize * kTileSize / 4u) + (lid / 4u) * EVF_ROWS * 4u + lid % 4u;
+  uint q0 = block_run_vec4(tile, pc.tiles_x, lid);
 #define EVF_STORE(i) store_run(r##i, p0 + ivec2(0, i), q0 + 4u * i);
   EVF_RUNS(EVF_STORE)
 }

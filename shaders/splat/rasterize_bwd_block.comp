@@ -134,7 +134,7 @@ void main() {
   vec2 tile_origin = vec2(tile * int(kTileSize));
   uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
   uint last = range.x;
-  uint q0 = (uint(tile.y) * pc.tiles_x + uint(tile.x)) * (kTileSize * kTileSize / 4u) + (lid / 4u) * EVF_ROWS * 4u + lid % 4u;
+  uint q0 = block_run_vec4(tile, pc.tiles_x, lid);
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), q0 + 4u * i, range.x); last = max(last, run_last(r##i));
   EVF_RUNS(EVF_INIT)
 #define EVF_ACC(i) accumulate(r##i, g, cx, cy + float(i), a.xy, conic, b.y, col, start + j);
