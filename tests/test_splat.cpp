@@ -282,6 +282,42 @@ TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][
   test::require_no_validation_messages();
 }
 
+TEST_CASE("splat backward with accumulate below the buffers' SH degree adds zero to the higher bands", "[gpu][splat]") {
+  auto& ctx = test::gpu_context();
+  Scene s = make_scene(47, 400, 3, 64, 48, false);
+  s.settings.sh_degree = 1;  // active bands 0 and 1: coefficients 0..3
+  GaussianBuffers params(ctx, s.cloud.size(), 3, "p_"), grads(ctx, s.cloud.size(), 3, "v_");
+  params.upload(s.cloud);
+  gpu::Buffer vr(ctx, 64 * 48 * 12, "v_rgb"), va(ctx, 64 * 48 * 4, "v_alpha");
+  vr.write(reference::random_weights(94, 3 * 64 * 48));
+  va.write(reference::random_weights(95, 64 * 48));
+  Rasterizer r(ctx);
+  RenderState rs(ctx);
+  r.forward(params, s.cam, s.settings, rs);
+  r.backward(rs, params, vr, va, grads);
+  GaussianCloud once = grads.download();
+  const size_t coeffs = 16, active = 4;
+  size_t nonzero_active = 0;
+  for (size_t i = 0; i < once.sh.size(); ++i) {
+    if ((i / 3) % coeffs >= active) REQUIRE(once.sh[i] == 0.0f);
+    nonzero_active += (i / 3) % coeffs < active && once.sh[i] != 0.0f;
+  }
+  REQUIRE(nonzero_active > 100);
+  // Whatever the higher bands hold stays; the active bands and the rest double.
+  GaussianCloud marked = once;
+  for (size_t i = 0; i < marked.sh.size(); ++i)
+    if ((i / 3) % coeffs >= active) marked.sh[i] = 7.0f;
+  grads.upload(marked);
+  r.backward(rs, params, vr, va, grads, true);
+  GaussianCloud twice = grads.download();
+  for (size_t i = 0; i < twice.sh.size(); ++i) {
+    INFO("sh value " << i);
+    REQUIRE(twice.sh[i] == ((i / 3) % coeffs >= active ? 7.0f : 2.0f * once.sh[i]));
+  }
+  for (size_t i = 0; i < twice.means.size(); ++i) REQUIRE(twice.means[i] == 2.0f * once.means[i]);
+  test::require_no_validation_messages();
+}
+
 TEST_CASE("splat render states kept side by side: each backward equals a fresh render's, norms added", "[gpu][splat]") {
   auto& ctx = test::gpu_context();
   BackwardSetup setup(ctx, 43);

@@ -110,7 +110,13 @@ void main() {
     EVF_SH_GRAD(0) EVF_SH_GRAD(1) EVF_SH_GRAD(2) EVF_SH_GRAD(3) EVF_SH_GRAD(4) EVF_SH_GRAD(5) EVF_SH_GRAD(6)
     EVF_SH_GRAD(7) EVF_SH_GRAD(8) EVF_SH_GRAD(9) EVF_SH_GRAD(10) EVF_SH_GRAD(11) EVF_SH_GRAD(12)
     EVF_SH_GRAD(13) EVF_SH_GRAD(14) EVF_SH_GRAD(15)
+#ifdef EVF_ACCUMULATE
+    // Above the active degree the gradient is zero, and adding zero changes nothing: the
+    // accumulating build touches only the active bands (at degree 0, 1 of the 16 triples).
+    store_sh_all(g, min(buffer_degree, pc.sh_degree), v_sh);
+#else
     store_sh_all(g, buffer_degree, v_sh);
+#endif
     // v_dir = sum_c v_raw_c d(raw_c)/d(dir) (zero at degree 0).
     vec3 v_dir = vec3(0.0);
     if (pc.sh_degree >= 1) {
