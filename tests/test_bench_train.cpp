@@ -105,10 +105,11 @@ TEST_CASE("bench train --warmup: one untimed step per view leaves no event count
   CHECK(counts(3) == 0.0);
 }
 
-// The loss stage's GPU time by term: each term under its name, the frames' shares of the image
-// terms' gradient and the direction check (on in every timed step), together no longer than the
-// stage. One timed step, since each figure is a median over the steps: with two, each is the
-// larger of its two values, and their sum may exceed the larger of the two steps' wall times.
+// The loss stage's GPU time by term: the image model's forward and backward, each term under its
+// name, the frames' shares of the image terms' gradient and the direction check (on in every timed
+// step), together no longer than the stage. One timed step, since each figure is a median over
+// the steps: with two, each is the larger of its two values, and their sum may exceed the larger
+// of the two steps' wall times.
 TEST_CASE("bench train: the loss terms' stage times by name", "[cli]") {
   const fs::path dir = fresh_dir("evflow_bench_loss_stages");
   std::string out;
@@ -119,12 +120,12 @@ TEST_CASE("bench train: the loss terms' stage times by name", "[cli]") {
   const nlohmann::json& stages = b["loss_stages_ms"];
   INFO(stages.dump());
   double sum = 0;
-  for (const char* name : {"l1_ssim", "direction check", "frame shares", "events"}) {
+  for (const char* name : {"image model", "l1_ssim", "direction check", "frame shares", "events", "render gradients"}) {
     REQUIRE(stages.contains(name));
     CHECK(stages[name].get<double>() > 0);
     sum += stages[name].get<double>();
   }
-  CHECK(stages.size() == 4);
+  CHECK(stages.size() == 6);
   CHECK(sum <= b["ms"]["loss"].get<double>());
   // Without the check its stage is gone.
   REQUIRE(run_evflow(dir,

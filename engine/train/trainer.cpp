@@ -355,6 +355,7 @@ void Trainer::render_exposure(uint32_t view) {
   for (uint32_t i = 0; i < exposure_->frames(); ++i) cameras.push_back(cameras_->frame_camera(view, i));
   exposure_->forward(raster_, *params_, cameras, render_settings());
   image_model_->forward(cmd_, exposure_->images(), image_model_->upsample() > 1 ? &flow_planes_[view] : nullptr);
+  cmd_.mark("image model");
 }
 
 // The loss terms and, in the same submit, the image model's backward to every frame's render
@@ -364,6 +365,7 @@ void Trainer::record_losses(StepStats& st, bool exposure_on) {
   terms_.record_image_terms(cmd_, *image_model_, targets_[st.view]);
   const bool check = exposure_on && direction_ && direction_->active(step_);
   image_model_->render_grads(cmd_, exposure_on ? record_exposure_terms(st, check) : std::vector<const gpu::Buffer*>{});
+  cmd_.mark("render gradients");
   cmd_.submit();
   if (check && direction_->prefers_reversed()) {
     cameras_->flip(st.view);  // this step's gradients belong to the other direction: the flip is the update

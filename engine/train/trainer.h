@@ -42,8 +42,9 @@ struct StepStats {
   // Wall-clock split of the step (each part ends in a submit and wait); optimizer_ms includes
   // density control; ldi_ms: the LDI branch's forward, terms, backward and Adam step (ldi=on).
   double raster_forward_ms = 0, loss_ms = 0, raster_backward_ms = 0, optimizer_ms = 0, ldi_ms = 0;
-  // The loss terms' stages (GPU timestamps, ms): each term by its name, and with the exposure
-  // terms "frame shares" and (while it runs) "direction check".
+  // The loss terms' stages (GPU timestamps, ms): "image model" (the frames' mean and colour
+  // conversions), each term by its name, with the exposure terms "frame shares" and (while it
+  // runs) "direction check", then "render gradients" (the image model's backward to each frame).
   std::vector<std::pair<std::string, double>> loss_stages;
   // The LDI branch's stages (GPU timestamps, ms; LdiBranch's marks), forward then backward.
   std::vector<std::pair<std::string, double>> ldi_stages;

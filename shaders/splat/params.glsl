@@ -25,7 +25,7 @@ vec3 load_log_scale(uint g) { return log_scales[g]; }
 vec4 load_quat(uint g) { return quats[g]; }
 
 #ifndef EVF_PARAMS_NO_SH
-// All 16 SH coefficients of Gaussian g; bands above `degree` (the buffers' degree) are zero.
+// All 16 SH coefficients of Gaussian g; bands above `degree` (at most the buffers' degree) are zero.
 void load_sh_all(uint g, uint degree, out vec3 c[16]) {
   for (int k = 1; k < 16; ++k) c[k] = vec3(0.0);
   c[0] = sh0[g];

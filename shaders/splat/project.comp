@@ -58,8 +58,9 @@ void main() {
   vec3 dir = normalize(mean - camera_center(cam));
   float Y[16];
   sh_basis(dir, pc.sh_degree, Y);
+  // Only the active bands: above the active degree Y is zero, and so is what they would add.
   vec3 coeffs[16];
-  load_sh_all(g, (pc.flags >> 8) & 3u, coeffs);
+  load_sh_all(g, min((pc.flags >> 8) & 3u, pc.sh_degree), coeffs);
   vec3 rgb = sh_eval(vec3(0.5), Y, coeffs);
   if (pc.sh_degree >= 1) {
     float wr[16], wg[16], wb[16];
