@@ -142,6 +142,49 @@ TEST_CASE("adam: several steps match the double reference step by step", "[gpu][
   test::require_no_validation_messages();
 }
 
+// A zero-gradient step of a group that never stepped with a gradient is only counted; once the
+// moments are not zero it is an ordinary step. Either way the state equals ordinary steps'.
+TEST_CASE("adam: zero-gradient steps equal ordinary steps, counted in the bias correction", "[gpu][optim]") {
+  auto& ctx = test::gpu_context();
+  std::mt19937 rng(5);
+  const uint32_t n = 48 * 40;
+  const auto init = random_floats(n, rng, 1.0f);
+  gpu::Buffer pa(ctx, n * 4, "pa"), pb(ctx, n * 4, "pb"), grad(ctx, n * 4, "g");
+  pa.write(init);
+  pb.write(init);
+  Adam a(ctx), b(ctx);
+  a.add_group({"sh1", &pa, &grad, n, 2.5e-3f, 48});
+  b.add_group({"sh1", &pb, &grad, n, 2.5e-3f, 48});
+  gpu::Commands cmd(ctx);
+  auto same_state = [&] {
+    CHECK(a.step_count(0) == b.step_count(0));
+    CHECK(pa.read<float>(n) == pb.read<float>(n));
+    CHECK(a.exp_avg(0).read<float>(n) == b.exp_avg(0).read<float>(n));
+    CHECK(a.exp_avg_sq(0).read<float>(n) == b.exp_avg_sq(0).read<float>(n));
+  };
+  grad.write(std::vector<float>(n, 0.0f));
+  for (int k = 0; k < 3; ++k) {
+    a.step_group(cmd, 0);
+    b.step_group_zero_grad(cmd, 0);
+  }
+  cmd.submit();
+  same_state();
+  CHECK(pb.read<float>(n) == init);
+  grad.write(random_floats(n, rng, 0.01f));  // step 4: the first gradient (bias correction at t = 4)
+  a.step_group(cmd, 0);
+  b.step_group(cmd, 0);
+  cmd.submit();
+  same_state();
+  grad.write(std::vector<float>(n, 0.0f));  // moments no longer zero: an ordinary step moves the parameters
+  a.step_group(cmd, 0);
+  b.step_group_zero_grad(cmd, 0);
+  cmd.submit();
+  same_state();
+  CHECK(pb.read<float>(n) != init);
+  CHECK(b.step_count(0) == 5);
+  test::require_no_validation_messages();
+}
+
 TEST_CASE("adam: gather (clone/prune) and reset move and zero the state by rows", "[gpu][optim]") {
   auto& ctx = test::gpu_context();
   std::mt19937 rng(3);

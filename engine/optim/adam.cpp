@@ -60,6 +60,7 @@ void Adam::load_state(size_t i, const std::vector<float>& m, const std::vector<f
   s.v->write(v);
   s.step = step;
   s.zeroed = true;
+  s.moments_zero = false;
 }
 
 void Adam::prepare(gpu::Commands& cmd, State& s) {
@@ -81,6 +82,7 @@ void Adam::step_group(gpu::Commands& cmd, size_t i) {
   prepare(cmd, s);
   s.step += 1;
   if (g.count == 0) return;
+  s.moments_zero = false;
   const double t = double(s.step);
   const double bc1 = 1.0 - std::pow(opts_.beta1, t);
   const double bc2 = 1.0 - std::pow(opts_.beta2, t);
@@ -99,6 +101,13 @@ void Adam::step_group(gpu::Commands& cmd, size_t i) {
                 {shaderio::kAdamBindM, *s.m},
                 {shaderio::kAdamBindV, *s.v}},
                pc, cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(g.count, 4), kOptimGroupSize)));
+}
+
+void Adam::step_group_zero_grad(gpu::Commands& cmd, size_t i) {
+  State& s = *groups_.at(i);
+  if (!s.moments_zero) return step_group(cmd, i);
+  prepare(cmd, s);
+  s.step += 1;  // m = v = 0 stay 0, and the parameters move by 0 / (0 + eps)
 }
 
 void Adam::reset_rows(gpu::Commands& cmd, size_t i, const gpu::Buffer& rows, uint32_t n) {

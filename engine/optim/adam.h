@@ -55,6 +55,11 @@ class Adam {
   // One Adam step of every group (one dispatch each), or of one group.
   void step(gpu::Commands& cmd);
   void step_group(gpu::Commands& cmd, size_t i);
+  // A step of group i whose gradient the caller knows to be exactly zero. While the group's
+  // moments are zero too (it has never stepped with a gradient nor loaded a state), Adam's update
+  // is zero and leaves both moments at zero: the step is only counted, with no dispatch. Otherwise
+  // an ordinary step.
+  void step_group_zero_grad(gpu::Commands& cmd, size_t i);
 
   // Zero both moments of rows rows[0..n) (an index list; out-of-range rows are ignored).
   void reset_rows(gpu::Commands& cmd, size_t i, const gpu::Buffer& rows, uint32_t n);
@@ -80,6 +85,7 @@ class Adam {
     AdamGroup desc;
     uint64_t step = 0;
     bool zeroed = false;
+    bool moments_zero = true;  // no step with a gradient and no loaded state yet
     // Two pairs of moment buffers: gather writes the spare pair, then they swap.
     gpu::Buffer buf[4];
     gpu::Buffer* m = nullptr;

@@ -62,18 +62,27 @@ void GaussianOptimizer::add_groups(const TrainConfig& cfg) {
   adam_->add_group({"log_scales", &p.log_scales, &g.log_scales, n * 3, float(cfg.lr_log_scales), 3});
   adam_->add_group({"quats", &p.quats, &g.quats, n * 4, float(cfg.lr_quats), 4});
   adam_->add_group({"opacity_logits", &p.opacity_logits, &g.opacity_logits, n, float(cfg.lr_opacity), 1});
-  adam_->add_group({"sh0", &p.sh[0], &g.sh[0], n * 3, float(cfg.lr_sh_dc), 3});
+  sh_groups_.push_back(adam_->add_group({"sh0", &p.sh[0], &g.sh[0], n * 3, float(cfg.lr_sh_dc), 3}));
   static const uint32_t band[4] = {1, 3, 5, 7};
   for (int l = 1; l <= p.sh_degree; ++l)
-    adam_->add_group(
-        {"sh" + std::to_string(l), &p.sh[l], &g.sh[l], n * band[l] * 3, float(cfg.lr_sh_rest), band[l] * 3});
+    sh_groups_.push_back(adam_->add_group(
+        {"sh" + std::to_string(l), &p.sh[l], &g.sh[l], n * band[l] * 3, float(cfg.lr_sh_rest), band[l] * 3}));
 }
 
-void GaussianOptimizer::step(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm, const Camera& camera, uint32_t step) {
+void GaussianOptimizer::step(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm, const Camera& camera, uint32_t step,
+                             int sh_degree) {
   const ExponentialDecay sched{lr_means_init_ * extent_, lr_means_final_ * extent_, iterations_};
   adam_->set_lr(means_group_, float(sched(step)));
   if (density_) stats_->accumulate(cmd, grad2d_norm, params_, camera, 0.5f * camera.width);
-  adam_->step(cmd);
+  // The bands above the active degree have a zero gradient: until they first become active their
+  // update is zero too, and Adam only counts the step (at degree 0 of 3, 45 of 59 floats a Gaussian).
+  for (size_t i = 0; i < adam_->group_count(); ++i) {
+    const auto band = std::find(sh_groups_.begin(), sh_groups_.end(), i);
+    if (band != sh_groups_.end() && int(band - sh_groups_.begin()) > sh_degree)
+      adam_->step_group_zero_grad(cmd, i);
+    else
+      adam_->step_group(cmd, i);
+  }
   cmd.submit();
   if (!density_) return;
   const DensityConfig& d = density_->config();

@@ -23,8 +23,9 @@ class GaussianOptimizer {
   GaussianOptimizer(gpu::Context& ctx, gpu::Commands& cmd, GaussianBuffers& params, GaussianBuffers& grads,
                     const TrainConfig& cfg, double extent);
   // One step after the backward pass: grad2d_norm holds the step's screen-gradient norms,
-  // `camera` is the view's (recorded) camera. Ends with a submit.
-  void step(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm, const Camera& camera, uint32_t step);
+  // `camera` is the view's (recorded) camera, `sh_degree` the active SH degree of the step's
+  // renders (their gradient is zero in every band above it). Ends with a submit.
+  void step(gpu::Commands& cmd, const gpu::Buffer& grad2d_norm, const Camera& camera, uint32_t step, int sh_degree);
 
   std::vector<OptimizerGroupState> state() const;
   void load(const std::vector<OptimizerGroupState>& saved);
@@ -38,6 +39,7 @@ class GaussianOptimizer {
   uint32_t iterations_;
   std::unique_ptr<Adam> adam_;
   size_t means_group_ = 0;
+  std::vector<size_t> sh_groups_;  // Adam's group of each SH band, band 0 first
   std::unique_ptr<DensityStats> stats_;
   std::unique_ptr<DensityControl> density_;
 };

@@ -308,7 +308,7 @@ StepStats Trainer::step() {
     backward_raster(st.view);
     st.raster_backward_ms = clock.lap();
     if (step_ > cfg_.blur_step(cfg_.splats_from)) {  // else the knots learn alone (splats_from)
-      optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_);
+      optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_, render_settings().sh_degree);
       st.optimizer_ms = clock.lap();
     }
   }
@@ -341,7 +341,7 @@ void Trainer::warmup_step(StepStats& st) {
     else
       cameras_->shift_and_step(st.view, g, step_);
     st.raster_backward_ms = clock.lap();
-    optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_);
+    optimizer_->step(cmd_, raster_.grad2d_norm(), data_.train[st.view].camera, step_, render_settings().sh_degree);
     st.optimizer_ms = clock.lap();
   }
   st.ms = clock.total();
