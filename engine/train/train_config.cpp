@@ -216,7 +216,9 @@ std::vector<Setting> image_settings() {
        },
        [](const TrainConfig& c) { return nlohmann::json(c.sh_degree); }, "largest spherical-harmonics degree (0..3)"},
       field("sh_increase_every", &TrainConfig::sh_increase_every,
-            "the active SH degree grows by one every this many steps"),
+            "the active SH degree grows by one every this many steps. Bands above it cost nothing until they "
+            "become active: the projection does not read them, the backward does not add to them, and Adam only "
+            "counts their steps (their gradient and moments are zero, so is their update)"),
       field("lr_means_init", &TrainConfig::lr_means_init,
             "Adam learning rate of the means at the start, × the scene extent"),
       field("lr_means_final", &TrainConfig::lr_means_final,
