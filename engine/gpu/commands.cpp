@@ -71,8 +71,8 @@ static std::string describe_all(const Kernel& k) {
   return s.empty() ? "none" : s;
 }
 
-void Commands::dispatch(const std::string& name, std::initializer_list<Bind> bindings, const void* push,
-                        uint32_t push_bytes, Groups g) {
+void Commands::dispatch(const std::string& name, std::span<const Bind> bindings, const void* push, uint32_t push_bytes,
+                        Groups g) {
   if (g.x == 0 || g.y == 0 || g.z == 0) return;
   const Kernel& k = ctx_.kernel(name);
   const std::vector<Kernel::Binding>& declared = k.bindings();

@@ -2,6 +2,7 @@
 // barrier after each command (so stages never race), writes named timestamps, and submits.
 #pragma once
 #include <initializer_list>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,12 +40,18 @@ class Commands {
 
   // Binds each buffer at its slot's index and runs the kernel. Throws unless the slots are
   // exactly the bindings the kernel's SPIR-V declares, each once, with the same block names.
-  void dispatch(const std::string& kernel, std::initializer_list<Bind> bindings, const void* push, uint32_t push_bytes,
+  void dispatch(const std::string& kernel, std::span<const Bind> bindings, const void* push, uint32_t push_bytes,
                 Groups groups);
   template <class PC>
   void dispatch(const std::string& kernel, std::initializer_list<Bind> bindings, const PC& pc, Groups groups) {
     static_assert(sizeof(PC) <= kPushConstantBytes, "push constants above 128 bytes");
-    dispatch(kernel, bindings, &pc, sizeof(PC), groups);
+    dispatch(kernel, std::span<const Bind>(bindings.begin(), bindings.size()), &pc, sizeof(PC), groups);
+  }
+  // The same with a binding list built at run time (bindings only some builds declare).
+  template <class PC>
+  void dispatch(const std::string& kernel, const std::vector<Bind>& bindings, const PC& pc, Groups groups) {
+    static_assert(sizeof(PC) <= kPushConstantBytes, "push constants above 128 bytes");
+    dispatch(kernel, std::span<const Bind>(bindings), &pc, sizeof(PC), groups);
   }
   void fill(const Buffer& b, uint32_t value, uint64_t offset = 0, uint64_t bytes = 0);
   void copy(const Buffer& src, const Buffer& dst, uint64_t bytes, uint64_t src_offset = 0, uint64_t dst_offset = 0);

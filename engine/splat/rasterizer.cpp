@@ -97,6 +97,7 @@ RenderState::RenderState(gpu::Context& ctx)
       keys_alt_(ctx, 16, "keys_alt"),
       slots_alt_(ctx, 16, "slots_alt"),
       gaussian_id_from_slot_(ctx, 16, "gaussian_id_from_slot"),
+      isect_blocks_(ctx, 16, "isect_blocks"),
       tile_range_(ctx, 16, "tile_range"),
       final_T_(ctx, 16, "final_T"),
       last_isect_(ctx, 16, "last_isect"),
@@ -279,19 +280,19 @@ void Rasterizer::record_raster(RenderState& st) {
   cmd_.fill(st.tile_range_, 0);
   cmd_.dispatch("splat/tile_ranges", {{kTileRangesBindKeys, *sorted_keys}, {kTileRangesBindRanges, st.tile_range_}},
                 st.raster_pc_, cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
-  cmd_.dispatch("splat/rasterize" + block_suffix_,
-                {{kRasterBindRanges, st.tile_range_},
-                 {kRasterBindSlots, st.sorted_slots()},
-                 {kRasterBindGid, st.gaussian_id_from_slot_},
-                 {kRasterBindProjA, st.proj_mean_conic_},
-                 {kRasterBindProjB, st.proj_misc_},
-                 {kRasterBindProjC, st.proj_color_},
-                 {kRasterizeBindOutRgb, st.out_.rgb},
-                 {kRasterizeBindOutAlpha, st.out_.alpha},
-                 {kRasterizeBindOutDepth, st.out_.depth},
-                 {kRasterizeBindOutT, st.final_T_},
-                 {kRasterizeBindOutLast, st.last_isect_}},
-                st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
+  std::vector<gpu::Bind> bindings = {
+      {kRasterBindRanges, st.tile_range_},         {kRasterBindSlots, st.sorted_slots()},
+      {kRasterBindGid, st.gaussian_id_from_slot_}, {kRasterBindProjA, st.proj_mean_conic_},
+      {kRasterBindProjB, st.proj_misc_},           {kRasterBindProjC, st.proj_color_},
+      {kRasterizeBindOutRgb, st.out_.rgb},         {kRasterizeBindOutAlpha, st.out_.alpha},
+      {kRasterizeBindOutDepth, st.out_.depth},     {kRasterizeBindOutT, st.final_T_},
+      {kRasterizeBindOutLast, st.last_isect_}};
+  if (!block_suffix_.empty()) {
+    st.isect_blocks_.ensure(uint64_t(m) * 4);
+    bindings.push_back({kRasterizeBindOutBlocks, st.isect_blocks_});
+  }
+  cmd_.dispatch("splat/rasterize" + block_suffix_, bindings, st.raster_pc_,
+                cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize");
 }
 
@@ -363,21 +364,21 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
   // last blended one); the others keep these zeros. A fill is a sequential write: far cheaper
   // than the kernel's scattered zero stores (lavapipe, bench raster 100k: backward -6 ms).
   for (size_t k = 0; k < isect_grad_.size(); ++k) cmd_.fill(isect_grad_[k], 0u, 0, isect_grad_bytes(k, st.num_isects_));
-  cmd_.dispatch(raster_bwd,
-                {{kRasterBindRanges, st.tile_range_},
-                 {kRasterBindSlots, st.sorted_slots()},
-                 {kRasterBindGid, st.gaussian_id_from_slot_},
-                 {kRasterBindProjA, st.proj_mean_conic_},
-                 {kRasterBindProjB, st.proj_misc_},
-                 {kRasterBindProjC, st.proj_color_},
-                 {kRasterizeBwdBindInT, st.final_T_},
-                 {kRasterizeBwdBindInLast, st.last_isect_},
-                 {kRasterizeBwdBindVRgb, v_rgb},
-                 {kRasterizeBwdBindVAlpha, v_alpha},
-                 {kRasterizeBwdBindG0, plane(0)},
-                 {kRasterizeBwdBindG1, plane(1)},
-                 {kRasterizeBwdBindG2, plane(2)}},
-                st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
+  std::vector<gpu::Bind> bindings = {{kRasterBindRanges, st.tile_range_},
+                                     {kRasterBindSlots, st.sorted_slots()},
+                                     {kRasterBindGid, st.gaussian_id_from_slot_},
+                                     {kRasterBindProjA, st.proj_mean_conic_},
+                                     {kRasterBindProjB, st.proj_misc_},
+                                     {kRasterBindProjC, st.proj_color_},
+                                     {kRasterizeBwdBindInT, st.final_T_},
+                                     {kRasterizeBwdBindInLast, st.last_isect_},
+                                     {kRasterizeBwdBindVRgb, v_rgb},
+                                     {kRasterizeBwdBindVAlpha, v_alpha},
+                                     {kRasterizeBwdBindG0, plane(0)},
+                                     {kRasterizeBwdBindG1, plane(1)},
+                                     {kRasterizeBwdBindG2, plane(2)}};
+  if (!block_suffix_.empty()) bindings.push_back({kRasterizeBwdBindInBlocks, st.isect_blocks_});
+  cmd_.dispatch(raster_bwd, bindings, st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize backward");
   ProjectPC pp = st.project_pc_;
   pp.flags = accumulate ? (pp.flags | kFlagAccumulate) : (pp.flags & ~kFlagAccumulate);

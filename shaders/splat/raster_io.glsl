@@ -23,19 +23,19 @@ void load_batch_entry(uint local, uint isect) {
 }
 #else
 // Block kernels (rasterize_block, rasterize_bwd_block): the tile is split into EVF_BLOCKS blocks
-// of 4 x EVF_ROWS pixels, one per invocation. Loading a batch also records, per block, which of
-// the batch's Gaussians can reach it (an EVF_BATCH-bit set per block, load_batch_word), so that
-// each invocation visits only those. A visit reads 9 (backward) or 10 (forward) floats in three
-// accesses (each a loop over the SIMD lanes on lavapipe), so nothing else is kept.
+// of 4 x EVF_ROWS pixels, one per invocation. Each loaded Gaussian comes with the blocks its
+// support reaches (support_blocks: computed by the forward, kept per intersection for the
+// backward), so that each invocation visits only those. A visit reads 9 (backward) or 10
+// (forward) floats in three accesses (each a loop over the SIMD lanes on lavapipe), so nothing
+// else is kept.
 #ifndef EVF_BATCH
 #define EVF_BATCH 256  // Gaussians per batch, a multiple of 32
 #endif
 shared vec4 batch_a[EVF_BATCH];  // mean.xy, conic.xy
 shared vec4 batch_b[EVF_BATCH];  // conic.z, opacity, red, green
 shared vec2 batch_c[EVF_BATCH];  // blue, depth
-shared uint block_bits[EVF_BLOCKS][EVF_BATCH / 32];
-#if EVF_BATCH > 32 * EVF_THREADS || EVF_BLOCKS > 32
-#error a batch is loaded one 32-entry word per invocation, and a Gaussian's blocks are one uint
+#if EVF_BLOCKS > 32
+#error a Gaussian's blocks are one uint
 #endif
 
 // Half extents of the support {d : d^T conic d <= q_max}: its bounding box is
@@ -89,32 +89,16 @@ uint support_blocks(vec2 mean, vec3 conic, float q_max) {
   return mask;
 }
 
-// Loads Gaussian `isect` of the tile as batch entry `local`; returns its blocks (support_blocks).
-// `tile_origin`: the tile's first pixel.
-uint load_batch_entry(uint local, uint isect, vec2 tile_origin) {
+// Loads Gaussian `isect` of the tile as batch entry `local`; returns what support_blocks needs:
+// (mean.xy, conic.xy) and (conic.z, opacity, depth, q_max).
+void load_batch_values(uint local, uint isect, out vec4 a, out vec4 b) {
   uint g = gaussian_id_from_slot[slot_from_isect[isect]];
-  vec4 a = proj_mean_conic[g], b = proj_misc[g];
+  a = proj_mean_conic[g];
+  b = proj_misc[g];
   vec3 col = proj_color[g].rgb;
   batch_a[local] = a;
   batch_b[local] = vec4(b.xy, col.rg);
   batch_c[local] = vec2(col.b, b.z);
-  return support_blocks(a.xy - tile_origin, vec3(a.zw, b.x), b.w);
-}
-
-// Loads the batch's entries [32 w, min(32 w + 32, n)), the tile's Gaussians from `start` on, and
-// writes word w of every block's bit set. One invocation builds a whole word in registers and
-// stores it: no shared atomics (each is a loop over the SIMD lanes on lavapipe), EVF_BLOCKS stores
-// per 32 entries instead of one atomic per entry and block.
-void load_batch_word(uint w, uint start, uint n, vec2 tile_origin) {
-  uvec4 q[EVF_BLOCKS / 4];  // q[i][k]: block 4 i + k
-  for (uint i = 0u; i < EVF_BLOCKS / 4; ++i) q[i] = uvec4(0u);
-  uint e_end = min(32u, n - 32u * w);
-  for (uint e = 0u; e < e_end; ++e) {
-    uvec4 m = uvec4(load_batch_entry(32u * w + e, start + 32u * w + e, tile_origin));
-    for (uint i = 0u; i < EVF_BLOCKS / 4; ++i) q[i] |= ((m >> (4u * i + uvec4(0u, 1u, 2u, 3u))) & 1u) << e;
-  }
-  for (uint i = 0u; i < EVF_BLOCKS / 4; ++i)
-    for (uint k = 0u; k < 4u; ++k) block_bits[4u * i + k][w] = q[i][k];
 }
 
 // The vec4 of the first of block `lid`'s runs in the tile-by-tile planes (final_T, last_isect:

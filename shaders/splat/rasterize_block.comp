@@ -44,8 +44,35 @@ layout(std430, binding = kRasterizeBindOutDepth) writeonly buffer OutDepth { flo
 // Tile by tile (splat_layout.h): a run is one vec4.
 layout(std430, binding = kRasterizeBindOutT) writeonly buffer OutT { vec4 final_T[]; };
 layout(std430, binding = kRasterizeBindOutLast) writeonly buffer OutLast { uvec4 last_isect[]; };
+layout(std430, binding = kRasterizeBindOutBlocks) writeonly buffer OutBlocks { uint isect_blocks[]; };
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint done_count;
+shared uint block_bits[EVF_BLOCKS][EVF_BATCH / 32];
+#if EVF_BATCH > 32 * EVF_THREADS
+#error a batch is loaded one 32-entry word per invocation
+#endif
+
+// Loads the batch's entries [32 w, min(32 w + 32, n)), the tile's Gaussians from `start` on,
+// keeps each one's blocks for the backward (isect_blocks) and writes word w of every block's bit
+// set. One invocation builds a whole word in registers and stores it: no shared atomics (each is
+// a loop over the SIMD lanes on lavapipe), EVF_BLOCKS stores per 32 entries instead of one
+// atomic per entry and block.
+void load_batch_word(uint w, uint start, uint n, vec2 tile_origin) {
+  uvec4 q[EVF_BLOCKS / 4];  // q[i][k]: block 4 i + k
+  for (uint i = 0u; i < EVF_BLOCKS / 4; ++i) q[i] = uvec4(0u);
+  uint e_end = min(32u, n - 32u * w);
+  for (uint e = 0u; e < e_end; ++e) {
+    uint isect = start + 32u * w + e;
+    vec4 a, b;
+    load_batch_values(32u * w + e, isect, a, b);
+    uint blocks = support_blocks(a.xy - tile_origin, vec3(a.zw, b.x), b.w);
+    isect_blocks[isect] = blocks;
+    uvec4 m = uvec4(blocks);
+    for (uint i = 0u; i < EVF_BLOCKS / 4; ++i) q[i] |= ((m >> (4u * i + uvec4(0u, 1u, 2u, 3u))) & 1u) << e;
+  }
+  for (uint i = 0u; i < EVF_BLOCKS / 4; ++i)
+    for (uint k = 0u; k < 4u; ++k) block_bits[4u * i + k][w] = q[i][k];
+}
 
 struct Run {     // 4 horizontally adjacent pixels
   vec4 T, Cr, Cg, Cb, D;

@@ -49,6 +49,8 @@ layout(std430, binding = kRasterizeBwdBindVAlpha) readonly buffer VAlpha { float
 layout(std430, binding = kRasterizeBwdBindG0) writeonly buffer G0 { vec4 slot_grad_a[]; };
 layout(std430, binding = kRasterizeBwdBindG1) writeonly buffer G1 { vec4 slot_grad_b[]; };
 layout(std430, binding = kRasterizeBwdBindG2) writeonly buffer G2 { float slot_grad_c[]; };
+// Each intersection's blocks, as the forward found them (splat_layout.h).
+layout(std430, binding = kRasterizeBwdBindInBlocks) readonly buffer InBlocks { uint isect_blocks[]; };
 layout(push_constant) uniform PC { RasterPC pc; };
 
 // A batch's partial sums, one row per block: entry e's nine sums in part_a[b][e] = (mean.xy,
@@ -131,7 +133,6 @@ void main() {
   ivec2 p0 = tile * int(kTileSize) + ivec2(int(lid % 4u) * 4, int(lid / 4u) * EVF_ROWS);
   vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
   float cy = float(p0.y) + 0.5;
-  vec2 tile_origin = vec2(tile * int(kTileSize));
   uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
   uint last = range.x;
   uint q0 = block_run_vec4(tile, pc.tiles_x, lid);
@@ -156,7 +157,12 @@ void main() {
     uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
     uint n_visit = start < last ? min(n, last - start) : 0u;  // n_visit <= n_load
     barrier();
-    for (uint e = lid; e < n_load; e += EVF_THREADS) batch_blocks[e] = load_batch_entry(e, start + e, tile_origin);
+    // Every entry below visit_end was loaded by the forward, which kept its blocks.
+    for (uint e = lid; e < n_load; e += EVF_THREADS) {
+      vec4 a, b;
+      load_batch_values(e, start + e, a, b);
+      batch_blocks[e] = isect_blocks[start + e];
+    }
     barrier();
     // This block's entries below its last blended one (uniform loads: every lane reads entry e).
     uint bits = 0u;

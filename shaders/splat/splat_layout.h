@@ -106,6 +106,10 @@ EVF_BIND(kRasterizeBindOutDepth, 8u, OutDepth)
 // t * 256 + y * 16 + x, so a block's row of 4 is one vec4), tiles_x * tiles_y * 256 entries.
 EVF_BIND(kRasterizeBindOutT, 9u, OutT)
 EVF_BIND(kRasterizeBindOutLast, 10u, OutLast)
+// Block kernels only: the blocks of its tile each loaded intersection's support reaches
+// (support_blocks, one uint by sorted position), written by the forward, read by the backward,
+// which loads only intersections the forward loaded (those before its tile's last blended one).
+EVF_BIND(kRasterizeBindOutBlocks, 11u, OutBlocks)
 // splat/rasterize_bwd, splat/rasterize_bwd_block
 EVF_BIND(kRasterizeBwdBindInT, 6u, InT)
 EVF_BIND(kRasterizeBwdBindInLast, 7u, InLast)
@@ -114,6 +118,7 @@ EVF_BIND(kRasterizeBwdBindVAlpha, 9u, VAlpha)
 EVF_BIND(kRasterizeBwdBindG0, 10u, G0)
 EVF_BIND(kRasterizeBwdBindG1, 11u, G1)
 EVF_BIND(kRasterizeBwdBindG2, 12u, G2)
+EVF_BIND(kRasterizeBwdBindInBlocks, 13u, InBlocks)  // block kernel only (kRasterizeBindOutBlocks)
 // splat/tile_ranges
 EVF_BIND(kTileRangesBindKeys, 0u, Keys)
 EVF_BIND(kTileRangesBindRanges, 1u, Ranges)
