@@ -225,6 +225,75 @@ TEST_CASE("event loss sign: renders that follow the simulator's events score nea
   test::require_no_validation_messages();
 }
 
+// score_reversed_next: the time-reversed order's value, from the forward record's own pass over
+// the counts (pool 1) or a value record of its own (pool 2), equals what record_value() writes
+// for the reversed frames, and the forward order's value and gradients are the same as without it.
+TEST_CASE("event loss: the reversed order scored beside the forward record equals a value record of it",
+          "[events][loss]") {
+  auto& ctx = test::gpu_context();
+  const uint32_t W = 24, H = 16, F = 7;
+  const GpuEvents gev(ctx, random_events(W, H, 6000, 41), {{0.0, 1.0}}, "test events");
+  const auto frames = random_frames(W, H, F, 43, false);
+  const size_t n = frames[0].size();
+  std::vector<gpu::Buffer> rgb, grad;
+  for (uint32_t i = 0; i < F; ++i) {
+    rgb.emplace_back(ctx, n * 4, "frame");
+    rgb.back().write(frames[i]);
+    grad.emplace_back(ctx, n * 4, "frame_grad");
+  }
+  auto frames_of = [&](bool reversed, bool with_grad) {
+    ExposureFrames f;
+    f.width = W, f.height = H;
+    f.t0 = 0.0, f.t1 = 1.0;
+    f.u = ExposureTrajectory::virtual_times(3);
+    f.seed = 47;
+    for (uint32_t i = 0; i < F; ++i) {
+      f.rgb.push_back(&rgb[reversed ? F - 1 - i : i]);
+      if (with_grad) f.grad.push_back(&grad[i]);
+    }
+    return f;
+  };
+  for (uint32_t pool : {1u, 2u}) {
+    INFO("pool " << pool);
+    EventLossOptions o;
+    o.pool = pool;
+    // The forward record alone, then the reversed order's value record.
+    EventLoss plain(ctx, gev, 0.1f, o);
+    gpu::Commands cmd(ctx);
+    for (auto& g : grad) g.write(std::vector<float>(n, 0.5f));
+    plain.record(cmd, frames_of(false, true));
+    cmd.submit();
+    const float forward = float(plain.value());
+    std::vector<std::vector<float>> plain_grads;
+    for (auto& g : grad) plain_grads.push_back(g.read<float>(n));
+    plain.record_value(cmd, frames_of(true, false));
+    cmd.submit();
+    const float reversed = float(plain.value());
+    REQUIRE(std::abs(forward - reversed) > 1e-3f);
+
+    // Both from one record.
+    EventLoss fused(ctx, gev, 0.1f, o);
+    gpu::Buffer scores(ctx, 8, "scores");
+    scores.write(std::vector<float>{-1.0f, -1.0f});
+    for (auto& g : grad) g.write(std::vector<float>(n, 0.5f));
+    fused.score_reversed_next(scores, 1);
+    fused.record(cmd, frames_of(false, true));
+    cmd.submit();
+    const auto s = scores.read<float>(2);
+    CHECK(s[0] == -1.0f);  // only the requested slot is written
+    CHECK(s[1] == reversed);
+    CHECK(float(fused.value()) == forward);
+    for (uint32_t i = 0; i < F; ++i) CHECK(grad[i].read<float>(n) == plain_grads[i]);
+
+    // One record only: the next leaves the slot alone.
+    scores.write(std::vector<float>{-1.0f, -1.0f});
+    fused.record(cmd, frames_of(false, true));
+    cmd.submit();
+    CHECK(scores.read<float>(2)[1] == -1.0f);
+  }
+  test::require_no_validation_messages();
+}
+
 TEST_CASE(
     "event loss: the value-only record matches the full one, and each view's counts are kept or shared past the cap",
     "[events][loss]") {

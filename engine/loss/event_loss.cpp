@@ -1,5 +1,6 @@
 #include "loss/event_loss.h"
 
+#include <algorithm>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -15,7 +16,9 @@ EventLoss::EventLoss(gpu::Context& ctx, const IntervalEvents& events, float weig
       options_(options),
       scratch_(ctx, 16, "event_scratch"),
       partials_(ctx, 16, "event_partials"),
-      sums_(ctx, 16, "event_sums") {
+      sums_(ctx, 16, "event_sums"),
+      partials_r_(ctx, 16, "event_partials_reversed"),
+      sums_r_(ctx, 16, "event_sums_reversed") {
   if (!(options.theta_pos > 0 && options.theta_neg > 0))
     throw std::invalid_argument("event loss: thresholds must be > 0");
   if (!(options.eps > 0)) throw std::invalid_argument("event loss: eps must be > 0");
@@ -47,8 +50,25 @@ std::vector<std::pair<uint32_t, uint32_t>> EventLoss::sample_pairs(uint32_t fram
   return pairs;
 }
 
+void EventLoss::score_reversed_next(const gpu::Buffer& out, uint32_t index) {
+  reversed_out_ = &out;
+  reversed_index_ = index;
+}
+
 void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
+  const gpu::Buffer* out = std::exchange(reversed_out_, nullptr);
+  reversed_fused_ = out && options_.pool == 1 && (uint64_t(f.width) * f.height) % 4 == 0;
+  if (out && !reversed_fused_) {  // its own value record, before the forward order's overwrites the slot
+    ExposureFrames r = f;
+    std::reverse(r.rgb.begin(), r.rgb.end());
+    r.grad.clear();
+    record_pairs(cmd, r, 0.0f, false);
+    cmd.copy(value_buffer(), *out, 4, uint64_t(value_offset()) * 4, uint64_t(reversed_index_) * 4);
+  }
+  reversed_out_ = out;
   record_pairs(cmd, f, weight, true);
+  reversed_out_ = nullptr;
+  reversed_fused_ = false;
 }
 
 void EventLoss::record_value(gpu::Commands& cmd, const ExposureFrames& f) { record_pairs(cmd, f, 0.0f, false); }
@@ -80,6 +100,10 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
   scratch_.ensure(2 * cells * 4);
   partials_.ensure(uint64_t(cell_groups) * 16);
   sums_.ensure(uint64_t(intervals) * 16);
+  if (reversed_fused_) {
+    partials_r_.ensure(uint64_t(cell_groups) * 16);
+    sums_r_.ensure(uint64_t(intervals) * 16);
+  }
   const uint64_t count_bytes = uint64_t(intervals) * 2 * hw * 4;
   ctx_.check_binding_size(count_bytes, "event loss counts");
 
@@ -118,29 +142,50 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     pc.pair = q;
     pc.counts_float = events_.float_planes() ? 1u : 0u;
     pc.pool = options_.pool;
-    cmd.dispatch(quads ? "loss/event_pair_quads" : "loss/event_pair",
-                 {{shaderio::kEventPairBindCounts, counted.planes},
-                  {shaderio::kEventPairBindFrameS, *f.rgb[s]},
-                  {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
-                  {shaderio::kEventPairBindScratch, scratch_},
-                  {shaderio::kEventPairBindPartials, partials_}},
-                 pc, gc);
+    std::vector<gpu::Bind> binds = {{shaderio::kEventPairBindCounts, counted.planes},
+                                    {shaderio::kEventPairBindFrameS, *f.rgb[s]},
+                                    {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
+                                    {shaderio::kEventPairBindScratch, scratch_},
+                                    {shaderio::kEventPairBindPartials, partials_}};
+    if (reversed_fused_) {  // the reversed order's frames t_s, t_j: F-1-s, F-1-j
+      binds.push_back({shaderio::kEventPairBindFrameRS, *f.rgb[F - 1 - s]});
+      binds.push_back({shaderio::kEventPairBindFrameRJ, *f.rgb[F - 1 - j]});
+      binds.push_back({shaderio::kEventPairBindPartialsR, partials_r_});
+    }
+    cmd.dispatch(reversed_fused_ ? "loss/event_pair_quads_rev"
+                 : quads         ? "loss/event_pair_quads"
+                                 : "loss/event_pair",
+                 binds, pc, gc);
     record_event_sums(cmd, partials_, sums_, cell_groups, 4 * q);
-    if (gradients)
-      cmd.dispatch(quads ? "loss/event_pair_quads_bwd" : "loss/event_pair_bwd",
-                   {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},
-                    {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
-                    {shaderio::kEventPairBwdBindScratch, scratch_},
-                    {shaderio::kEventPairBwdBindSums, sums_},
-                    {shaderio::kEventPairBwdBindGradS, *f.grad[s]},
-                    {shaderio::kEventPairBwdBindGradJ, *f.grad[j]},
-                    {shaderio::kEventPairBwdBindValues, value_buffer()}},
-                   pc, g);
-    else
-      cmd.dispatch("loss/event_pair_value",
-                   {{shaderio::kEventPairValueBindSums, sums_}, {shaderio::kEventPairValueBindValues, value_buffer()}},
-                   pc, gpu::Groups{1, 1, 1});
+    record_pair_tail(cmd, f, pc, cell_groups, g, quads, gradients);
   }
+}
+
+void EventLoss::record_pair_tail(gpu::Commands& cmd, const ExposureFrames& f, const shaderio::EventPairPC& pc,
+                                 uint32_t cell_groups, gpu::Groups g, bool quads, bool gradients) {
+  const auto [s, j] = pairs_[pc.pair];
+  if (reversed_fused_) {
+    record_event_sums(cmd, partials_r_, sums_r_, cell_groups, 4 * pc.pair);
+    shaderio::EventPairPC r = pc;
+    r.value_index = reversed_index_;
+    cmd.dispatch("loss/event_pair_value",
+                 {{shaderio::kEventPairValueBindSums, sums_r_}, {shaderio::kEventPairValueBindValues, *reversed_out_}},
+                 r, gpu::Groups{1, 1, 1});
+  }
+  if (gradients)
+    cmd.dispatch(quads ? "loss/event_pair_quads_bwd" : "loss/event_pair_bwd",
+                 {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},
+                  {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
+                  {shaderio::kEventPairBwdBindScratch, scratch_},
+                  {shaderio::kEventPairBwdBindSums, sums_},
+                  {shaderio::kEventPairBwdBindGradS, *f.grad[s]},
+                  {shaderio::kEventPairBwdBindGradJ, *f.grad[j]},
+                  {shaderio::kEventPairBwdBindValues, value_buffer()}},
+                 pc, g);
+  else
+    cmd.dispatch("loss/event_pair_value",
+                 {{shaderio::kEventPairValueBindSums, sums_}, {shaderio::kEventPairValueBindValues, value_buffer()}},
+                 pc, gpu::Groups{1, 1, 1});
 }
 
 }  // namespace evflow

@@ -26,6 +26,9 @@
 #include "loss/loss_term.h"
 
 namespace evflow {
+namespace shaderio {
+struct EventPairPC;
+}
 
 struct EventLossOptions {
   float theta_pos = 0.2f, theta_neg = 0.2f;  // log units per positive / negative event
@@ -45,9 +48,14 @@ class EventLoss : public ExposureLossTerm {
   using ExposureLossTerm::record;
   void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) override;
   // The value alone, for the same frames and seed (frames.grad is not read and may be empty):
-  // what record() writes into the value slot, at a fraction of the cost. The trainer scores the
-  // time-reversed frame order with it.
+  // what record() writes into the value slot, at a fraction of the cost (score_reversed_next's
+  // way with pooled cells).
   void record_value(gpu::Commands& cmd, const ExposureFrames& frames);
+  // At the next record() only: also the value record_value() would write for the same frames in
+  // the time-reversed order, into out[index] (floats). With per-pixel pairs (pool 1, H·W a
+  // multiple of 4) it comes from the forward order's own pass over the counts; otherwise from a
+  // record_value() of its own first. The trainer's direction check uses it.
+  void score_reversed_next(const gpu::Buffer& out, uint32_t index);
 
   // The pairs (s, j = i + 1) for F frames and a seed: s uniform in {0..i} (deterministic).
   static std::vector<std::pair<uint32_t, uint32_t>> sample_pairs(uint32_t frames, uint64_t seed);
@@ -71,12 +79,20 @@ class EventLoss : public ExposureLossTerm {
     uint64_t generation = 0;
   };
   void record_pairs(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
+  // The pair's dispatches after its forward pass: the reversed order's sums and value (fused
+  // direction check), then the forward order's backward or value.
+  void record_pair_tail(gpu::Commands& cmd, const ExposureFrames& f, const shaderio::EventPairPC& pc,
+                        uint32_t cell_groups, gpu::Groups g, bool quads, bool gradients);
   CountPlanes& planes_for(uint32_t view, uint64_t bytes);
 
   const IntervalEvents& events_;
   EventLossOptions options_;
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
   gpu::Buffer scratch_, partials_, sums_;
+  gpu::Buffer partials_r_, sums_r_;            // the reversed order's (fused direction check)
+  const gpu::Buffer* reversed_out_ = nullptr;  // score_reversed_next's request, for one record
+  uint32_t reversed_index_ = 0;
+  bool reversed_fused_ = false;    // this record sums the reversed order too
   std::vector<CountPlanes> kept_;  // per view, when all fit options_.count_cache_bytes
   CountPlanes shared_;             // every view past them
   const gpu::Buffer* last_counts_ = &shared_.planes;

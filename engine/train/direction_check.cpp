@@ -1,6 +1,5 @@
 #include "train/direction_check.h"
 
-#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -9,13 +8,7 @@ namespace evflow {
 DirectionCheck::DirectionCheck(gpu::Context& ctx, EventLoss& events, uint32_t until_step, double margin)
     : events_(events), until_step_(until_step), margin_(margin), scores_(ctx, 8, "direction_check_scores") {}
 
-void DirectionCheck::record_reversed(gpu::Commands& cmd, ExposureFrames frames) {
-  std::reverse(frames.rgb.begin(), frames.rgb.end());
-  frames.grad.clear();
-  events_.record_value(cmd, frames);
-  cmd.copy(events_.value_buffer(), scores_, 4, uint64_t(events_.value_offset()) * 4, 4);
-  cmd.mark("direction check");
-}
+void DirectionCheck::score_reversed_next() { events_.score_reversed_next(scores_, 1); }
 
 void DirectionCheck::keep_forward(gpu::Commands& cmd) {
   cmd.copy(events_.value_buffer(), scores_, 4, uint64_t(events_.value_offset()) * 4, 0);

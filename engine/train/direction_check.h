@@ -17,10 +17,10 @@ class DirectionCheck {
  public:
   DirectionCheck(gpu::Context& ctx, EventLoss& events, uint32_t until_step, double margin);
   bool active(uint32_t step) const { return step <= until_step_; }
-  // Records the value alone of `frames` (in forward order; gradients not read) with their order
-  // reversed, the same pairs and seed, and a copy of it apart from the term's value slot, which
-  // the forward order's record then overwrites. Nothing is submitted.
-  void record_reversed(gpu::Commands& cmd, ExposureFrames frames);
+  // Asks the event loss's next record for the value of the same frames, pairs and seed in the
+  // time-reversed order, written apart from the term's value slot (EventLoss::score_reversed_next:
+  // with per-pixel pairs, from the forward order's own pass over the counts).
+  void score_reversed_next();
   // After the event loss's record of the forward order: a copy of its value beside the reversed
   // one, so that the two come back in one download.
   void keep_forward(gpu::Commands& cmd);

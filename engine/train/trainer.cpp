@@ -392,7 +392,7 @@ std::vector<const gpu::Buffer*> Trainer::record_exposure_terms(const StepStats& 
                     {},
                     cfg_.seed * 0x100000001B3ull + step_};
   for (uint32_t i = 0; i < frames; ++i) ef.rgb.push_back(&image_model_->linear_frame(i));
-  if (check) direction_->record_reversed(cmd_, ef);
+  if (check) direction_->score_reversed_next();
   image_model_->mean_grad(cmd_);
   for (uint32_t i = 0; i < frames; ++i) {
     image_model_->frame_share(cmd_, i, frame_grad_[i]);

@@ -3,6 +3,9 @@
 // loss/event_pair writes (E and D per pixel in scratch planes 0 and 1, the workgroup sums of E*D,
 // D*D, E*E), four pixels per invocation through vec4 accesses (CPU drivers loop over the lanes
 // for every access, so one vec4 access costs what one float access costs).
+// Build loss/event_pair_quads_rev (EVF_EVENT_REVERSED) also sums the pair for the time-reversed
+// frame order from the same counts: D' = L(frame F-1-j) - L(frame F-1-s), the sums of E*D', D'*D',
+// E*E into a second set of partials, what this kernel run on the reversed frames would write.
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
@@ -12,6 +15,11 @@ layout(std430, binding = kEventPairBindFrameS) readonly buffer FrameS { vec4 fra
 layout(std430, binding = kEventPairBindFrameJ) readonly buffer FrameJ { vec4 frame_j[]; };     // planar RGB at t_j
 layout(std430, binding = kEventPairBindScratch) writeonly buffer Scratch { vec4 scratch[]; };  // [E][D]
 layout(std430, binding = kEventPairBindPartials) writeonly buffer Partials { vec4 partials[]; };
+#ifdef EVF_EVENT_REVERSED
+layout(std430, binding = kEventPairBindFrameRS) readonly buffer FrameRS { vec4 frame_rs[]; };  // the reversed order's t_s
+layout(std430, binding = kEventPairBindFrameRJ) readonly buffer FrameRJ { vec4 frame_rj[]; };  // the reversed order's t_j
+layout(std430, binding = kEventPairBindPartialsR) writeonly buffer PartialsR { vec4 partials_r[]; };
+#endif
 layout(push_constant) uniform PC { EventPairPC pc; };
 #include "loss/ssim_math.glsl"
 #include "loss/event_math.glsl"
@@ -24,7 +32,7 @@ vec4 plane_amounts(uint i) {
 
 void main() {
   uint quads = pc.width * pc.height / 4u, q = evf_linear_invocation(kLossGroupSize);
-  vec4 v = vec4(0.0);
+  vec4 v = vec4(0.0), v_r = vec4(0.0);
   if (q < quads) {
     vec4 e = vec4(0.0);
     for (uint k = pc.plane_first; k <= pc.plane_last; ++k) {
@@ -36,7 +44,17 @@ void main() {
     scratch[q] = e;
     scratch[quads + q] = d;
     v = vec4(dot(e, d), dot(d, d), dot(e, e), 0.0);
+#ifdef EVF_EVENT_REVERSED
+    vec4 d_r = event_log_luma(frame_rj[q], frame_rj[quads + q], frame_rj[2u * quads + q], pc.eps) -
+               event_log_luma(frame_rs[q], frame_rs[quads + q], frame_rs[2u * quads + q], pc.eps);
+    v_r = vec4(dot(e, d_r), dot(d_r, d_r), dot(e, e), 0.0);
+#endif
   }
   vec4 total = loss_group_sum(v);
   if (gl_LocalInvocationIndex == 0u) partials[evf_linear_group()] = total;
+#ifdef EVF_EVENT_REVERSED
+  barrier();  // the first sum's last reads before the second one's writes
+  vec4 total_r = loss_group_sum(v_r);
+  if (gl_LocalInvocationIndex == 0u) partials_r[evf_linear_group()] = total_r;
+#endif
 }

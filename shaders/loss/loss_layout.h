@@ -154,6 +154,10 @@ EVF_BIND(kEventPairBindFrameS, 1u, FrameS)
 EVF_BIND(kEventPairBindFrameJ, 2u, FrameJ)
 EVF_BIND(kEventPairBindScratch, 3u, Scratch)
 EVF_BIND(kEventPairBindPartials, 4u, Partials)
+// loss/event_pair_quads_rev only: the time-reversed order's two frames and partial sums.
+EVF_BIND(kEventPairBindFrameRS, 5u, FrameRS)
+EVF_BIND(kEventPairBindFrameRJ, 6u, FrameRJ)
+EVF_BIND(kEventPairBindPartialsR, 7u, PartialsR)
 // loss/event_pair_bwd
 EVF_BIND(kEventPairBwdBindFrameS, 0u, FrameS)
 EVF_BIND(kEventPairBwdBindFrameJ, 1u, FrameJ)
