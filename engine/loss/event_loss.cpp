@@ -55,17 +55,19 @@ void EventLoss::score_reversed_next(const gpu::Buffer& out, uint32_t index) {
   reversed_index_ = index;
 }
 
+bool EventLoss::quads(const ExposureFrames& f) const {
+  return options_.pool == 1 && (uint64_t(f.width) * f.height) % 4 == 0;
+}
+
 void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
-  const gpu::Buffer* out = std::exchange(reversed_out_, nullptr);
-  reversed_fused_ = out && options_.pool == 1 && (uint64_t(f.width) * f.height) % 4 == 0;
-  if (out && !reversed_fused_) {  // its own value record, before the forward order's overwrites the slot
+  reversed_fused_ = reversed_out_ && quads(f);
+  if (reversed_out_ && !reversed_fused_) {  // its own value record, before the forward order's overwrites the slot
     ExposureFrames r = f;
     std::reverse(r.rgb.begin(), r.rgb.end());
     r.grad.clear();
     record_pairs(cmd, r, 0.0f, false);
-    cmd.copy(value_buffer(), *out, 4, uint64_t(value_offset()) * 4, uint64_t(reversed_index_) * 4);
+    cmd.copy(value_buffer(), *reversed_out_, 4, uint64_t(value_offset()) * 4, uint64_t(reversed_index_) * 4);
   }
-  reversed_out_ = out;
   record_pairs(cmd, f, weight, true);
   reversed_out_ = nullptr;
   reversed_fused_ = false;
@@ -92,8 +94,7 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
       throw std::invalid_argument("event loss: frame " + std::to_string(i) +
                                   " buffers hold less than 3 x H x W floats");
   const uint32_t intervals = F - 1;
-  // Per pixel with H*W a multiple of 4: four pixels per invocation (the quad kernels' vec4 accesses).
-  const bool quads = options_.pool == 1 && hw % 4 == 0;
+  const bool quads = this->quads(f);
   const uint32_t groups = gpu::Commands::div_up(quads ? hw / 4 : hw, shaderio::kLossGroupSize);
   const uint64_t cells = event_pool_cells(f.width, f.height, options_.pool);
   const uint32_t cell_groups = quads ? groups : gpu::Commands::div_up(cells, shaderio::kLossGroupSize);
