@@ -55,12 +55,12 @@ void EventLoss::score_reversed_next(const gpu::Buffer& out, uint32_t index) {
   reversed_index_ = index;
 }
 
-bool EventLoss::quads(const ExposureFrames& f) const {
+bool EventLoss::quad_kernels(const ExposureFrames& f) const {
   return options_.pool == 1 && (uint64_t(f.width) * f.height) % 4 == 0;
 }
 
 void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
-  reversed_fused_ = reversed_out_ && quads(f);
+  reversed_fused_ = reversed_out_ && quad_kernels(f);
   if (reversed_out_ && !reversed_fused_) {  // its own value record, before the forward order's overwrites the slot
     ExposureFrames r = f;
     std::reverse(r.rgb.begin(), r.rgb.end());
@@ -94,7 +94,7 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
       throw std::invalid_argument("event loss: frame " + std::to_string(i) +
                                   " buffers hold less than 3 x H x W floats");
   const uint32_t intervals = F - 1;
-  const bool quads = this->quads(f);
+  const bool quads = quad_kernels(f);
   const uint32_t groups = gpu::Commands::div_up(quads ? hw / 4 : hw, shaderio::kLossGroupSize);
   const uint64_t cells = event_pool_cells(f.width, f.height, options_.pool);
   const uint32_t cell_groups = quads ? groups : gpu::Commands::div_up(cells, shaderio::kLossGroupSize);

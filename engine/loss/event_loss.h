@@ -80,7 +80,7 @@ class EventLoss : public ExposureLossTerm {
   };
   void record_pairs(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
   // Per pixel with H*W a multiple of 4: four pixels per invocation (the quad kernels' vec4 accesses).
-  bool quads(const ExposureFrames& frames) const;
+  bool quad_kernels(const ExposureFrames& frames) const;
   // The pair's dispatches after its forward pass: the reversed order's sums and value (fused
   // direction check), then the forward order's backward or value.
   void record_pair_tail(gpu::Commands& cmd, const ExposureFrames& f, const shaderio::EventPairPC& pc,
