@@ -4,12 +4,14 @@
 #include <cstdlib>
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 #include "common/common_layout.h"
 #include "gpu/buffer.h"
 #include "gpu/commands.h"
 #include "gpu/staging.h"
 #include "gpu_fixture.h"
+#include "splat/splat_layout.h"
 
 using namespace evflow;
 
@@ -76,6 +78,42 @@ TEST_CASE("gpu: a binding above the device's storage range is refused with a cle
   cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, fits}}, pc, gpu::Groups{1, 1, 1});
   cmd.submit();
   CHECK(fits.read<uint32_t>(16)[15] == 15u);
+  REQUIRE(ctx.take_validation_messages().empty());
+}
+
+TEST_CASE("gpu: buffer textures bind as texel buffer views, within the device's texel limit", "[gpu]") {
+  // The block compositing kernel reads the sorted slots and Gaussian ids as R32UI texels and the
+  // projected Gaussians as RGBA32F texels (samplerBuffer / usamplerBuffer), named by variable.
+  gpu::ContextOptions o = gpu::ContextOptions::from_env();
+  o.validation = true;
+  o.binding_limit = 4096;  // and 1024 texels
+  gpu::Context ctx(o);
+  REQUIRE(ctx.caps().max_texel_buffer_elements == 1024);
+  const auto& k = ctx.kernel("splat/rasterize_block");
+  auto binding = [&](const shaderio::BindSlot& s) {
+    for (const gpu::Kernel::Binding& b : k.bindings())
+      if (b.index == s.index) return b;
+    FAIL("no binding " << s.index);
+    return gpu::Kernel::Binding{};
+  };
+  using namespace shaderio;
+  CHECK(binding(kRasterBindRanges).texel_format == VK_FORMAT_UNDEFINED);
+  CHECK(binding(kRasterBindSlots).texel_format == VK_FORMAT_R32_UINT);
+  CHECK(binding(kRasterBindGid).texel_format == VK_FORMAT_R32_UINT);
+  for (const BindSlot& s : {kRasterBindProjA, kRasterBindProjB, kRasterBindProjC}) {
+    CHECK(binding(s).texel_format == VK_FORMAT_R32G32B32A32_SFLOAT);
+    CHECK(binding(s).block == s.block);
+  }
+  // 1025 RGBA32F texels at ProjA are one too many; the storage bindings fit.
+  gpu::Buffer fits(ctx, 4096, "fits"), too_many(ctx, 1025 * 16, "too_many_texels");
+  std::vector<gpu::Bind> binds;
+  for (const gpu::Kernel::Binding& b : k.bindings())
+    binds.push_back({BindSlot{b.index, b.block.c_str()}, b.index == kRasterBindProjA.index ? too_many : fits});
+  gpu::Commands cmd(ctx);
+  RasterPC pc{};
+  REQUIRE_THROWS_WITH(cmd.dispatch("splat/rasterize_block", binds, pc, gpu::Groups{1, 1, 1}),
+                      Catch::Contains("too_many_texels") && Catch::Contains("1025 texels") &&
+                          Catch::Contains("maxTexelBufferElements of 1024"));
   REQUIRE(ctx.take_validation_messages().empty());
 }
 

@@ -19,6 +19,7 @@ Commands::~Commands() {
   if (recording_) vkEndCommandBuffer(cb_);
   if (queries_) vkDestroyQueryPool(d, queries_, nullptr);
   for (VkDescriptorPool p : set_pools_) vkDestroyDescriptorPool(d, p, nullptr);
+  for (VkBufferView v : views_) vkDestroyBufferView(d, v, nullptr);
   vkDestroyFence(d, fence_, nullptr);
   vkFreeCommandBuffers(d, ctx_.command_pool(), 1, &cb_);
 }
@@ -32,6 +33,8 @@ void Commands::begin() {
   marks_.clear();
   for (VkDescriptorPool p : set_pools_) EVF_VK(vkResetDescriptorPool(ctx_.device(), p, 0));
   set_pool_ = 0;
+  for (VkBufferView v : views_) vkDestroyBufferView(ctx_.device(), v, nullptr);
+  views_.clear();
   if (queries_) {
     vkCmdResetQueryPool(cb_, queries_, 0, query_capacity_);
     vkCmdWriteTimestamp(cb_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries_, 0);
@@ -93,12 +96,20 @@ void Commands::dispatch(const std::string& name, std::span<const Bind> bindings,
   for (size_t i = 0; i < declared.size(); ++i)
     if (!bound[i]) throw Error("kernel '" + name + "': binding " + describe(declared[i]) + " is not bound");
   std::vector<VkDescriptorBufferInfo> infos;
+  std::vector<VkBufferView> views;
   infos.reserve(bound.size());
-  for (const Bind* b : bound) {
-    const BufferRef& r = b->buffer;
+  views.reserve(bound.size());
+  for (size_t i = 0; i < bound.size(); ++i) {
+    const BufferRef& r = bound[i]->buffer;
     if (!r.buffer || !r.buffer->valid()) throw Error("kernel '" + name + "': an unallocated buffer was bound");
     uint64_t range = r.range ? r.range : r.buffer->size() - r.offset;
-    ctx_.check_binding_size(range, "buffer '" + r.buffer->name() + "' in kernel '" + name + "'");
+    const std::string what = "buffer '" + r.buffer->name() + "' in kernel '" + name + "'";
+    if (declared[i].texel_format == VK_FORMAT_UNDEFINED) {
+      ctx_.check_binding_size(range, what);
+      views.push_back(VK_NULL_HANDLE);
+    } else {
+      views.push_back(texel_view(*r.buffer, r.offset, range, declared[i].texel_format, what));
+    }
     infos.push_back({r.buffer->handle(), r.offset, range});
     used(*r.buffer);
   }
@@ -107,8 +118,13 @@ void Commands::dispatch(const std::string& name, std::span<const Bind> bindings,
     writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     writes[i].dstBinding = declared[i].index;
     writes[i].descriptorCount = 1;
-    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    writes[i].pBufferInfo = &infos[i];
+    if (views[i]) {
+      writes[i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+      writes[i].pTexelBufferView = &views[i];
+    } else {
+      writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      writes[i].pBufferInfo = &infos[i];
+    }
   }
   vkCmdBindPipeline(cb_, VK_PIPELINE_BIND_POINT_COMPUTE, k.pipeline());
   if (!writes.empty()) bind_descriptors(k, writes);
@@ -119,6 +135,32 @@ void Commands::dispatch(const std::string& name, std::span<const Bind> bindings,
   vkCmdDispatch(cb_, g.x, g.y, g.z);
   barrier();
   empty_ = false;
+}
+
+// A view of [offset, offset + range) as texels of `format`, kept until the recording's submit has
+// run (begin() destroys it). Views are made per dispatch: a buffer that grows gets a new handle.
+VkBufferView Commands::texel_view(const Buffer& b, uint64_t offset, uint64_t range, VkFormat format,
+                                  const std::string& what) {
+  const uint64_t texel = format == VK_FORMAT_R32G32B32A32_SFLOAT ? 16 : 4;
+  const DeviceCaps& caps = ctx_.caps();
+  range -= range % texel;
+  if (range / texel > caps.max_texel_buffer_elements)
+    throw Error(what + " needs a texel buffer of " + std::to_string(range / texel) +
+                " texels, above this device's maxTexelBufferElements of " +
+                std::to_string(caps.max_texel_buffer_elements) + " (" + caps.name + ")");
+  if (caps.min_texel_offset_alignment && offset % caps.min_texel_offset_alignment)
+    throw Error(what + " is bound at offset " + std::to_string(offset) +
+                ", not a multiple of this device's minTexelBufferOffsetAlignment (" +
+                std::to_string(caps.min_texel_offset_alignment) + ")");
+  VkBufferViewCreateInfo vci{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+  vci.buffer = b.handle();
+  vci.format = format;
+  vci.offset = offset;
+  vci.range = range;
+  VkBufferView view = VK_NULL_HANDLE;
+  EVF_VK(vkCreateBufferView(ctx_.device(), &vci, nullptr, &view));
+  views_.push_back(view);
+  return view;
 }
 
 void Commands::bind_descriptors(const Kernel& k, const std::vector<VkWriteDescriptorSet>& writes) {
@@ -140,11 +182,12 @@ VkDescriptorSet Commands::allocate_set(VkDescriptorSetLayout layout) {
   for (;; ++set_pool_) {
     const bool fresh = set_pool_ == set_pools_.size();
     if (fresh) {
-      VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * kBindingsPerSet};
+      const VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * kBindingsPerSet},
+                                            {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, kSetsPerPool * kBindingsPerSet}};
       VkDescriptorPoolCreateInfo pci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
       pci.maxSets = kSetsPerPool;
-      pci.poolSizeCount = 1;
-      pci.pPoolSizes = &size;
+      pci.poolSizeCount = 2;
+      pci.pPoolSizes = sizes;
       VkDescriptorPool pool = VK_NULL_HANDLE;
       EVF_VK(vkCreateDescriptorPool(ctx_.device(), &pci, nullptr, &pool));
       set_pools_.push_back(pool);

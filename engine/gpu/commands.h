@@ -81,6 +81,8 @@ class Commands {
   // allocated from this recording's pools, which begin() resets.
   void bind_descriptors(const Kernel& k, const std::vector<VkWriteDescriptorSet>& writes);
   VkDescriptorSet allocate_set(VkDescriptorSetLayout layout);
+  VkBufferView texel_view(const Buffer& b, uint64_t offset, uint64_t range, VkFormat format, const std::string& what);
+  std::vector<VkBufferView> views_;  // the texel views of this recording
   std::vector<VkDescriptorPool> set_pools_;
   size_t set_pool_ = 0;  // the pool allocate_set takes from
   Context& ctx_;

@@ -279,6 +279,10 @@ void Context::query_caps(const VkPhysicalDeviceProperties& props) {
   if (opts_.binding_limit)
     caps_.max_storage_buffer_range = std::min<uint64_t>(caps_.max_storage_buffer_range, opts_.binding_limit);
   caps_.min_storage_offset_alignment = props.limits.minStorageBufferOffsetAlignment;
+  caps_.max_texel_buffer_elements = props.limits.maxTexelBufferElements;
+  if (opts_.binding_limit)
+    caps_.max_texel_buffer_elements = std::min<uint64_t>(caps_.max_texel_buffer_elements, opts_.binding_limit / 4);
+  caps_.min_texel_offset_alignment = props.limits.minTexelBufferOffsetAlignment;
   caps_.timestamps = props.limits.timestampComputeAndGraphics;
   caps_.timestamp_period_ns = props.limits.timestampPeriod;
   caps_.max_allocation_size = m3.maxMemoryAllocationSize;

@@ -44,8 +44,9 @@ struct ContextOptions {
   uint32_t sort_items = 0;    // keys per radix-sort invocation, 1..kSortItemsMax; 0 = by device and size
   int subgroup_reduce = -1;   // rasterize backward: 1 = subgroupAdd first, 0 = per-lane adds; -1 = by device
   std::string raster_kernel;  // "pixel" or "block" compositing kernels; "" = by device
-  // A storage binding limit below the device's (bytes; 0: the device's own): every size check
-  // then answers as a device with that limit would, so the refusals can be tried on any device.
+  // A storage binding limit below the device's (bytes; 0: the device's own), and a texel buffer
+  // limit of as many 4-byte texels: every size check then answers as a device with those limits
+  // would, so the refusals can be tried on any device.
   uint64_t binding_limit = 0;
   // Treat the device as one without host-visible device memory (a discrete GPU): buffers are not
   // mapped and every upload and download goes through the staging copy, as there.
@@ -74,6 +75,8 @@ struct DeviceCaps {
   uint64_t max_storage_buffer_range = 0;
   uint64_t max_allocation_size = 0;
   uint64_t min_storage_offset_alignment = 0;
+  uint64_t max_texel_buffer_elements = 0;  // texels one uniform texel buffer view may span
+  uint64_t min_texel_offset_alignment = 0;
   bool shared_float_atomic_add = false;
   bool buffer_float_atomic_add = false;
   bool subgroup_arithmetic = false;

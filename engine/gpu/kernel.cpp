@@ -21,17 +21,29 @@ static const EmbeddedShader* find_shader(const std::string& name) {
 }
 
 // The bindings of a module: variables decorated with Binding, named by their block type (the
-// pointee of the variable's pointer type). Opcodes: OpName 5, OpTypePointer 32, OpVariable 59,
-// OpDecorate 71; decoration Binding 33.
+// pointee of the variable's pointer type), or, for a buffer texture (a sampled image of dimension
+// Buffer), by the variable itself, with its view format from the sampled type. Opcodes: OpName 5,
+// OpTypeInt 21, OpTypeFloat 22, OpTypeImage 25, OpTypeSampledImage 27, OpTypePointer 32,
+// OpVariable 59, OpDecorate 71; decoration Binding 33; dimension Buffer 5.
 static std::vector<Kernel::Binding> reflect_bindings(const uint32_t* w, size_t n_words) {
   std::map<uint32_t, std::string> names;
-  std::map<uint32_t, uint32_t> pointee, var_type, binding_of;
+  std::map<uint32_t, uint32_t> pointee, var_type, binding_of, sampled_image;
+  std::map<uint32_t, VkFormat> texel_format_of_image, format_of_scalar;
   for (size_t i = 5; i < n_words;) {
     const uint32_t op = w[i] & 0xFFFF, len = w[i] >> 16;
     if (len == 0 || i + len > n_words) break;
     if (op == 5 && len >= 3) {
       const char* c = reinterpret_cast<const char*>(&w[i + 2]);
       names[w[i + 1]] = std::string(c, strnlen(c, (len - 2) * 4));
+    } else if (op == 21 && len >= 4) {
+      format_of_scalar[w[i + 1]] = w[i + 3] ? VK_FORMAT_R32_SINT : VK_FORMAT_R32_UINT;
+    } else if (op == 22 && len >= 3) {
+      format_of_scalar[w[i + 1]] = VK_FORMAT_R32G32B32A32_SFLOAT;
+    } else if (op == 25 && len >= 9 && w[i + 3] == 5) {
+      auto f = format_of_scalar.find(w[i + 2]);
+      if (f != format_of_scalar.end()) texel_format_of_image[w[i + 1]] = f->second;
+    } else if (op == 27 && len >= 3) {
+      sampled_image[w[i + 1]] = w[i + 2];
     } else if (op == 32 && len >= 4) {
       pointee[w[i + 1]] = w[i + 3];
     } else if (op == 59 && len >= 4) {
@@ -43,13 +55,20 @@ static std::vector<Kernel::Binding> reflect_bindings(const uint32_t* w, size_t n
   }
   std::vector<Kernel::Binding> out;
   for (auto [id, index] : binding_of) {
-    std::string block;
+    Kernel::Binding b{index, "", VK_FORMAT_UNDEFINED};
     auto t = var_type.find(id);
-    if (t != var_type.end()) {
-      auto p = pointee.find(t->second);
-      if (p != pointee.end() && names.count(p->second)) block = names[p->second];
+    auto p = t != var_type.end() ? pointee.find(t->second) : pointee.end();
+    if (p != pointee.end()) {
+      auto img = sampled_image.find(p->second);
+      auto texel = img != sampled_image.end() ? texel_format_of_image.find(img->second) : texel_format_of_image.end();
+      if (texel != texel_format_of_image.end()) {
+        b.texel_format = texel->second;
+        if (names.count(id)) b.block = names[id];
+      } else if (names.count(p->second)) {
+        b.block = names[p->second];
+      }
     }
-    out.push_back({index, block});
+    out.push_back(b);
   }
   std::sort(out.begin(), out.end(),
             [](const Kernel::Binding& a, const Kernel::Binding& b) { return a.index < b.index; });
@@ -69,7 +88,9 @@ Kernel::Kernel(Context& ctx, const std::string& name) : ctx_(ctx), name_(name) {
   for (size_t i = 0; i < bindings_.size(); ++i) {
     binds[i] = {};
     binds[i].binding = bindings_[i].index;
-    binds[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    binds[i].descriptorType = bindings_[i].texel_format == VK_FORMAT_UNDEFINED
+                                  ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+                                  : VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
     binds[i].descriptorCount = 1;
     binds[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
   }

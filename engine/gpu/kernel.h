@@ -1,7 +1,9 @@
 // A compute pipeline built from an embedded SPIR-V module. Its descriptor set layout (push
-// descriptors, or allocated sets under GPU-assisted validation; one storage buffer per binding)
-// is read from the module: each variable's Binding decoration and the name of its block type
-// (glslang keeps names). Every kernel has a 128-byte push-constant range (the Vulkan minimum).
+// descriptors, or allocated sets under GPU-assisted validation) is read from the module: each
+// variable's Binding decoration and the name of its block type (glslang keeps names). A binding
+// is a storage buffer, or, for a `samplerBuffer` / `usamplerBuffer` variable, a uniform texel
+// buffer named by the variable, viewed as RGBA32F / R32UI texels. Every kernel has a 128-byte
+// push-constant range (the Vulkan minimum).
 #pragma once
 #include <string>
 #include <vector>
@@ -21,11 +23,12 @@ class Kernel {
 
   struct Binding {
     uint32_t index;
-    std::string block;  // the block type's name in the SPIR-V ("" where it has none)
+    std::string block;                            // the block type's name in the SPIR-V ("" where it has none)
+    VkFormat texel_format = VK_FORMAT_UNDEFINED;  // a uniform texel buffer's view; UNDEFINED: storage
   };
 
   const std::string& name() const { return name_; }
-  // The storage-buffer bindings the module declares (and its optimiser kept), by index.
+  // The buffer bindings the module declares (and its optimiser kept), by index.
   const std::vector<Binding>& bindings() const { return bindings_; }
   VkPipeline pipeline() const { return pipeline_; }
   VkPipelineLayout layout() const { return layout_; }

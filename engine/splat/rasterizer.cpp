@@ -253,6 +253,11 @@ void Rasterizer::set_count(RenderState& st, uint32_t isects) const {
   if (uint64_t(m) * 4 > max_range)
     throw gpu::Error(std::to_string(m) + " tile intersections exceed the storage binding limit of " + ctx_.caps().name +
                      " (" + std::to_string(max_range / 4) + " at most)");
+  // The block kernels read the sorted slots as a texel buffer, one texel per intersection.
+  const uint64_t max_texels = ctx_.caps().max_texel_buffer_elements;
+  if (!block_suffix_.empty() && m > max_texels)
+    throw gpu::Error(std::to_string(m) + " tile intersections exceed the texel buffer limit of " + ctx_.caps().name +
+                     " (" + std::to_string(max_texels) + " at most)");
 }
 
 // Emit, sort, tile ranges and compositing.

@@ -1,11 +1,29 @@
 // Buffers shared by rasterize and rasterize_bwd (bindings 0..5), and the batch of Gaussians a
-// tile's workgroup holds in shared memory.
+// tile's workgroup holds in shared memory (per-pixel kernels) or the blocks it splits into
+// (block kernels).
 layout(std430, binding = kRasterBindRanges) readonly buffer Ranges { uvec2 tile_range[]; };
+#ifdef EVF_BLOCK_BATCH
+// The block kernels (CPU drivers) read the sorted slots, the Gaussian ids and the projected
+// Gaussians as texel buffers, at every visit: on lavapipe a texel fetch at a different index in
+// each SIMD lane is straight-line code (the 32-bit ones one hardware gather), where a load from a
+// storage buffer or from shared memory is a loop over the lanes.
+layout(binding = kRasterBindSlots) uniform usamplerBuffer Slots;
+layout(binding = kRasterBindGid) uniform usamplerBuffer Gid;
+layout(binding = kRasterBindProjA) uniform samplerBuffer ProjA;  // mean.xy, conic.xy
+layout(binding = kRasterBindProjB) uniform samplerBuffer ProjB;  // conic.z, opacity, depth, q_max
+layout(binding = kRasterBindProjC) uniform samplerBuffer ProjC;  // rgb, 0
+uint slot_of_isect(uint isect) { return texelFetch(Slots, int(isect)).x; }
+uint gaussian_of_isect(uint isect) { return texelFetch(Gid, int(slot_of_isect(isect))).x; }
+vec4 proj_a(uint g) { return texelFetch(ProjA, int(g)); }
+vec4 proj_b(uint g) { return texelFetch(ProjB, int(g)); }
+vec4 proj_c(uint g) { return texelFetch(ProjC, int(g)); }
+#else
 layout(std430, binding = kRasterBindSlots) readonly buffer Slots { uint slot_from_isect[]; };     // sorted
 layout(std430, binding = kRasterBindGid) readonly buffer Gid { uint gaussian_id_from_slot[]; };
 layout(std430, binding = kRasterBindProjA) readonly buffer ProjA { vec4 proj_mean_conic[]; };
 layout(std430, binding = kRasterBindProjB) readonly buffer ProjB { vec4 proj_misc[]; };
 layout(std430, binding = kRasterBindProjC) readonly buffer ProjC { vec4 proj_color[]; };
+#endif
 
 #ifndef EVF_BLOCK_BATCH
 shared vec4 batch_mean_conic[256];  // mean.xy, conic.xy
@@ -23,17 +41,10 @@ void load_batch_entry(uint local, uint isect) {
 }
 #else
 // Block kernels (rasterize_block, rasterize_bwd_block): the tile is split into EVF_BLOCKS blocks
-// of 4 x EVF_ROWS pixels, one per invocation. Each loaded Gaussian comes with the blocks its
-// support reaches (support_blocks: computed by the forward, kept per intersection for the
-// backward), so that each invocation visits only those. A visit reads 9 (backward) or 10
-// (forward) floats in three accesses (each a loop over the SIMD lanes on lavapipe), so nothing
-// else is kept.
-#ifndef EVF_BATCH
-#define EVF_BATCH 256  // Gaussians per batch, a multiple of 32
-#endif
-shared vec4 batch_a[EVF_BATCH];  // mean.xy, conic.xy
-shared vec4 batch_b[EVF_BATCH];  // conic.z, opacity, red, green
-shared vec2 batch_c[EVF_BATCH];  // blue, depth
+// of 4 x EVF_ROWS pixels, one per invocation. Each batch of the tile's Gaussians comes with the
+// blocks each one's support reaches (support_blocks: computed by the forward, kept per
+// intersection for the backward), so that each invocation visits only those; a visit fetches the
+// Gaussian's projection itself (gaussian_of_isect, proj_a/b/c).
 #if EVF_BLOCKS > 32
 #error a Gaussian's blocks are one uint
 #endif
@@ -87,18 +98,6 @@ uint support_blocks(vec2 mean, vec3 conic, float q_max) {
     mask |= (((1u << c.y) - 1u) & ~((1u << c.x) - 1u)) << (4u * r);
   }
   return mask;
-}
-
-// Loads Gaussian `isect` of the tile as batch entry `local`; returns what support_blocks needs:
-// (mean.xy, conic.xy) and (conic.z, opacity, depth, q_max).
-void load_batch_values(uint local, uint isect, out vec4 a, out vec4 b) {
-  uint g = gaussian_id_from_slot[slot_from_isect[isect]];
-  a = proj_mean_conic[g];
-  b = proj_misc[g];
-  vec3 col = proj_color[g].rgb;
-  batch_a[local] = a;
-  batch_b[local] = vec4(b.xy, col.rg);
-  batch_c[local] = vec2(col.b, b.z);
 }
 
 // The vec4 of the first of block `lid`'s runs in the tile-by-tile planes (final_T, last_isect:

@@ -4,9 +4,10 @@
 // Gaussians whose support reaches a pixel centre of its block (support_blocks in raster_io.glsl).
 // Same result as rasterize.comp, pixel for pixel; see docs/rasterizer.md.
 // Why: lavapipe runs the invocations of a SIMD vector in lockstep with masks (an `if` skips
-// nothing; only loops end early) and turns every shared-memory access into a loop over the
-// lanes. So each invocation walks its own list (the lanes read different Gaussians, which costs
-// no more), and one read of a Gaussian serves 4 x EVF_ROWS pixels.
+// nothing; only loops end early) and turns every storage or shared-memory access into a loop
+// over the lanes. So each invocation walks its own list, fetching each Gaussian it visits as
+// texels (straight-line code whatever index each lane reads), and one fetch of a Gaussian serves
+// 4 x EVF_ROWS pixels.
 #extension GL_GOOGLE_include_directive : require
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
@@ -52,8 +53,8 @@ shared uint block_bits[EVF_BLOCKS][EVF_BATCH / 32];
 #error a batch is loaded one 32-entry word per invocation
 #endif
 
-// Loads the batch's entries [32 w, min(32 w + 32, n)), the tile's Gaussians from `start` on,
-// keeps each one's blocks for the backward (isect_blocks) and writes word w of every block's bit
+// Finds the blocks of the batch's entries [32 w, min(32 w + 32, n)), the tile's Gaussians from
+// `start` on, keeps them for the backward (isect_blocks) and writes word w of every block's bit
 // set. One invocation builds a whole word in registers and stores it: no shared atomics (each is
 // a loop over the SIMD lanes on lavapipe), EVF_BLOCKS stores per 32 entries instead of one
 // atomic per entry and block.
@@ -63,8 +64,8 @@ void load_batch_word(uint w, uint start, uint n, vec2 tile_origin) {
   uint e_end = min(32u, n - 32u * w);
   for (uint e = 0u; e < e_end; ++e) {
     uint isect = start + 32u * w + e;
-    vec4 a, b;
-    load_batch_values(32u * w + e, isect, a, b);
+    uint g = gaussian_of_isect(isect);
+    vec4 a = proj_a(g), b = proj_b(g);
     uint blocks = support_blocks(a.xy - tile_origin, vec3(a.zw, b.x), b.w);
     isect_blocks[isect] = blocks;
     uvec4 m = uvec4(blocks);
@@ -143,7 +144,7 @@ void main() {
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x);
   EVF_RUNS(EVF_INIT)
 #define EVF_DONE(i) && run_done(r##i)
-#define EVF_BLEND(i) blend(r##i, cx, cy + float(i), a.xy, conic, b.y, col, c.y, start + j);
+#define EVF_BLEND(i) blend(r##i, cx, cy + float(i), a.xy, conic, b.y, col, b.z, start + j);
   for (uint start = range.x; start < range.y; start += EVF_BATCH) {
     uint n = min(uint(EVF_BATCH), range.y - start);
     barrier();
@@ -164,9 +165,9 @@ void main() {
       {
         uint j = w * 32u + uint(findLSB(bits));
         bits &= bits - 1u;
-        vec4 a = batch_a[j], b = batch_b[j];
-        vec2 c = batch_c[j];
-        vec3 conic = vec3(a.zw, b.x), col = vec3(b.zw, c.x);
+        uint g = gaussian_of_isect(start + j);
+        vec4 a = proj_a(g), b = proj_b(g);
+        vec3 conic = vec3(a.zw, b.x), col = proj_c(g).rgb;
         EVF_RUNS(EVF_BLEND)
         done = true EVF_RUNS(EVF_DONE);
       }

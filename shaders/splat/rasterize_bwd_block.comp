@@ -158,11 +158,7 @@ void main() {
     uint n_visit = start < last ? min(n, last - start) : 0u;  // n_visit <= n_load
     barrier();
     // Every entry below visit_end was loaded by the forward, which kept its blocks.
-    for (uint e = lid; e < n_load; e += EVF_THREADS) {
-      vec4 a, b;
-      load_batch_values(e, start + e, a, b);
-      batch_blocks[e] = isect_blocks[start + e];
-    }
+    for (uint e = lid; e < n_load; e += EVF_THREADS) batch_blocks[e] = isect_blocks[start + e];
     barrier();
     // This block's entries below its last blended one (uniform loads: every lane reads entry e).
     uint bits = 0u;
@@ -172,8 +168,9 @@ void main() {
     while (bits != 0u) {
       uint j = uint(findMSB(bits));
       bits &= ~(1u << j);
-      vec4 a = batch_a[j], b = batch_b[j];
-      vec3 conic = vec3(a.zw, b.x), col = vec3(b.zw, batch_c[j].x);
+      uint gid = gaussian_of_isect(start + j);
+      vec4 a = proj_a(gid), b = proj_b(gid);
+      vec3 conic = vec3(a.zw, b.x), col = proj_c(gid).rgb;
       Grad g;
       g.mean = vec2(0.0);
       g.conic = vec3(0.0);
@@ -198,7 +195,7 @@ void main() {
         sb += part_b[b][k];
         sc += part_c[b][k];
       }
-      uint slot = slot_from_isect[start + k];
+      uint slot = slot_of_isect(start + k);
       slot_grad_a[slot] = sa;
       slot_grad_b[slot] = sb;
       slot_grad_c[slot] = sc;
