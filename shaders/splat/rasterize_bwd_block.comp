@@ -50,7 +50,8 @@ layout(std430, binding = kRasterizeBwdBindG0) writeonly buffer G0 { vec4 slot_gr
 layout(std430, binding = kRasterizeBwdBindG1) writeonly buffer G1 { vec4 slot_grad_b[]; };
 layout(std430, binding = kRasterizeBwdBindG2) writeonly buffer G2 { float slot_grad_c[]; };
 // Each intersection's blocks, as the forward found them (splat_layout.h).
-layout(std430, binding = kRasterizeBwdBindInBlocks) readonly buffer InBlocks { uint isect_blocks[]; };
+layout(binding = kRasterizeBwdBindInBlocks) uniform usamplerBuffer InBlocks;  // texels: see raster_io.glsl
+uint blocks_of_isect(uint isect) { return texelFetch(InBlocks, int(isect)).x; }
 layout(push_constant) uniform PC { RasterPC pc; };
 
 // A batch's partial sums, one row per block: entry e's nine sums in part_a[b][e] = (mean.xy,
@@ -59,7 +60,6 @@ layout(push_constant) uniform PC { RasterPC pc; };
 shared vec4 part_a[EVF_BLOCKS][EVF_BATCH];
 shared vec4 part_b[EVF_BLOCKS][EVF_BATCH];
 shared float part_c[EVF_BLOCKS][EVF_BATCH];
-shared uint batch_blocks[EVF_BATCH];  // each entry's blocks (support_blocks)
 shared uint block_last[EVF_BLOCKS];  // one past each block's last blended Gaussian
 
 struct Run {     // 4 horizontally adjacent pixels
@@ -156,13 +156,11 @@ void main() {
     // Entries at or past visit_end are neither loaded nor visited nor written.
     uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
     uint n_visit = start < last ? min(n, last - start) : 0u;  // n_visit <= n_load
-    barrier();
-    // Every entry below visit_end was loaded by the forward, which kept its blocks.
-    for (uint e = lid; e < n_load; e += EVF_THREADS) batch_blocks[e] = isect_blocks[start + e];
-    barrier();
-    // This block's entries below its last blended one (uniform loads: every lane reads entry e).
+    barrier();  // the previous batch's read-out is done with the partial sums
+    // This block's entries below its last blended one. Every entry below visit_end was loaded by
+    // the forward, which kept its blocks.
     uint bits = 0u;
-    for (uint e = 0u; e < n_load; ++e) bits |= ((batch_blocks[e] >> lid) & 1u) << e;
+    for (uint e = 0u; e < n_load; ++e) bits |= ((blocks_of_isect(start + e) >> lid) & 1u) << e;
     if (n_visit < 32u) bits &= (1u << n_visit) - 1u;
     // Back to front.
     while (bits != 0u) {
@@ -185,7 +183,7 @@ void main() {
     for (uint k = lid; k < n_load; k += EVF_THREADS) {
       uint visited = 0u;  // the blocks that visited entry k
       for (uint b = 0u; b < EVF_BLOCKS; ++b) visited |= uint(start + k < lasts[b]) << b;
-      visited &= batch_blocks[k];
+      visited &= blocks_of_isect(start + k);
       vec4 sa = vec4(0.0), sb = vec4(0.0);
       float sc = 0.0;
       while (visited != 0u) {
