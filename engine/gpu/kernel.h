@@ -1,9 +1,9 @@
 // A compute pipeline built from an embedded SPIR-V module. Its descriptor set layout (push
 // descriptors, or allocated sets under GPU-assisted validation) is read from the module: each
 // variable's Binding decoration and the name of its block type (glslang keeps names). A binding
-// is a storage buffer, or, for a `samplerBuffer` / `usamplerBuffer` variable, a uniform texel
-// buffer named by the variable, viewed as RGBA32F / R32UI texels. Every kernel has a 128-byte
-// push-constant range (the Vulkan minimum).
+// is a storage buffer, or, for a `samplerBuffer` / `usamplerBuffer` / `isamplerBuffer` variable,
+// a uniform texel buffer named by the variable, viewed as RGBA32F / R32UI / R32I texels. Every
+// kernel has a 128-byte push-constant range (the Vulkan minimum).
 #pragma once
 #include <string>
 #include <vector>
