@@ -341,7 +341,11 @@ void Rasterizer::check_backward(const RenderState& st, const GaussianBuffers& pa
 
 // Bytes of per-intersection gradient plane k for `isects` intersections: two vec4 planes and a
 // float plane (splat_layout.h).
-static uint64_t isect_grad_bytes(size_t k, uint64_t isects) { return std::max<uint64_t>(isects, 1) * (k < 2 ? 16 : 4); }
+// The third plane is a whole number of vec4s: the "_block" project_bwd reads it four slots to a texel.
+static uint64_t isect_grad_bytes(size_t k, uint64_t isects) {
+  const uint64_t n = std::max<uint64_t>(isects, 1);
+  return k < 2 ? n * 16 : (n + 3) / 4 * 16;
+}
 
 // The backward's scratch for renders of `n` Gaussians with up to `isects` intersections.
 void Rasterizer::ensure_backward_buffers(size_t n, uint64_t isects) {
@@ -387,7 +391,7 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
   cmd_.mark("rasterize backward");
   ProjectPC pp = st.project_pc_;
   pp.flags = accumulate ? (pp.flags | kFlagAccumulate) : (pp.flags & ~kFlagAccumulate);
-  cmd_.dispatch(accumulate ? "splat/project_bwd_acc" : "splat/project_bwd",
+  cmd_.dispatch((accumulate ? "splat/project_bwd_acc" : "splat/project_bwd") + block_suffix_,
                 {{kParamBindMeans, params.means},
                  {kParamBindLogScales, params.log_scales},
                  {kParamBindQuats, params.quats},

@@ -12,11 +12,30 @@
 layout(local_size_x = kProjectGroupSize) in;
 #define EVF_PARAMS_NO_SH
 #include "splat/params.glsl"
-layout(std430, binding = kProjectBwdBindOffsets) readonly buffer Offsets { uint isect_offset[]; };
 // Per-slot gradients (splat_layout.h): (v_mean2d.xy, v_conic.xy), (v_conic.z, v_opacity, v_rgb.rg), v_rgb.b.
-layout(std430, binding = kProjectBwdBindG0) readonly buffer G0 { vec4 slot_grad_a[]; };
-layout(std430, binding = kProjectBwdBindG1) readonly buffer G1 { vec4 slot_grad_b[]; };
-layout(std430, binding = kProjectBwdBindG2) readonly buffer G2 { float slot_grad_c[]; };
+#ifdef EVF_SLOT_TEXELS
+// The "_block" builds (CPU drivers, with the block compositing kernels) read the offsets and the
+// slots' gradients as texel buffers: on lavapipe a texel fetch at a different index in each lane
+// is straight-line code, a storage-buffer load a loop over the lanes. The third plane is read
+// four slots to a texel (its buffer is a whole number of texels, rasterizer.cpp).
+layout(binding = kProjectBwdBindOffsets) uniform usamplerBuffer Offsets;
+layout(binding = kProjectBwdBindG0) uniform samplerBuffer G0;
+layout(binding = kProjectBwdBindG1) uniform samplerBuffer G1;
+layout(binding = kProjectBwdBindG2) uniform samplerBuffer G2;
+uint isect_offset_at(uint g) { return texelFetch(Offsets, int(g)).x; }
+vec4 slot_grad_a(uint s) { return texelFetch(G0, int(s)); }
+vec4 slot_grad_b(uint s) { return texelFetch(G1, int(s)); }
+float slot_grad_c(uint s) { return texelFetch(G2, int(s >> 2u))[s & 3u]; }
+#else
+layout(std430, binding = kProjectBwdBindOffsets) readonly buffer Offsets { uint isect_offset[]; };
+layout(std430, binding = kProjectBwdBindG0) readonly buffer G0 { vec4 grad_a[]; };
+layout(std430, binding = kProjectBwdBindG1) readonly buffer G1 { vec4 grad_b[]; };
+layout(std430, binding = kProjectBwdBindG2) readonly buffer G2 { float grad_c[]; };
+uint isect_offset_at(uint g) { return isect_offset[g]; }
+vec4 slot_grad_a(uint s) { return grad_a[s]; }
+vec4 slot_grad_b(uint s) { return grad_b[s]; }
+float slot_grad_c(uint s) { return grad_c[s]; }
+#endif
 // Packed [N][3] rows and SH bands ([N][2l+1] rgb triples) as scalar-layout vec3 arrays: one
 // access per triple (on CPU drivers each access is a loop over the SIMD lanes, whatever its width).
 layout(scalar, binding = kProjectBwdBindVMeans) buffer VMeans { vec3 v_means[]; };
@@ -67,15 +86,15 @@ void main() {
     vec2 v_mean2d = vec2(0.0);
     vec3 v_conic = vec3(0.0), v_color = vec3(0.0);
     float v_opac = 0.0;
-    uint begin = isect_offset[g], end = isect_offset[g + 1];
+    uint begin = isect_offset_at(g), end = isect_offset_at(g + 1u);
     // Slots the compositing did not visit, and any emit left unused (sorted past every tile),
     // hold the zeros the gradient planes were filled with.
     for (uint s = begin; s < end; ++s) {
-      vec4 ga = slot_grad_a[s], gb = slot_grad_b[s];
+      vec4 ga = slot_grad_a(s), gb = slot_grad_b(s);
       v_mean2d += ga.xy;
       v_conic += vec3(ga.zw, gb.x);
       v_opac += gb.y;
-      v_color += vec3(gb.zw, slot_grad_c[s]);
+      v_color += vec3(gb.zw, slot_grad_c(s));
     }
     // A Gaussian in no tile (culled) gets zeros. Everything below is computed for every
     // Gaussian and selected at the end (a culled one may give non-finite intermediates).
