@@ -21,6 +21,8 @@ class Buffer {
   Buffer& operator=(const Buffer&) = delete;
 
   bool valid() const { return buffer_ != VK_NULL_HANDLE; }
+  // The size in bytes: what was asked for, rounded up to a whole number of 16 bytes (so a kernel
+  // may read a buffer's last, partly used vec4 as one RGBA32F texel).
   uint64_t size() const { return size_; }
   VkBuffer handle() const { return buffer_; }
   const std::string& name() const { return name_; }

@@ -10,14 +10,16 @@
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
-layout(std430, binding = kEventPairBindCounts) readonly buffer Counts { uvec4 event_counts[]; };
-layout(std430, binding = kEventPairBindFrameS) readonly buffer FrameS { vec4 frame_s[]; };     // planar RGB at t_s
-layout(std430, binding = kEventPairBindFrameJ) readonly buffer FrameJ { vec4 frame_j[]; };     // planar RGB at t_j
+// The inputs are read as texels: on lavapipe straight-line code, where a storage-buffer load is a
+// loop over the lanes (a buffer is a whole number of vec4s, gpu/buffer.h).
+layout(binding = kEventPairBindCounts) uniform usamplerBuffer Counts;  // R32UI
+layout(binding = kEventPairBindFrameS) uniform samplerBuffer FrameS;   // planar RGB at t_s
+layout(binding = kEventPairBindFrameJ) uniform samplerBuffer FrameJ;   // planar RGB at t_j
 layout(std430, binding = kEventPairBindScratch) writeonly buffer Scratch { vec4 scratch[]; };  // [E][D]
 layout(std430, binding = kEventPairBindPartials) writeonly buffer Partials { vec4 partials[]; };
 #ifdef EVF_EVENT_REVERSED
-layout(std430, binding = kEventPairBindFrameRS) readonly buffer FrameRS { vec4 frame_rs[]; };  // the reversed order's t_s
-layout(std430, binding = kEventPairBindFrameRJ) readonly buffer FrameRJ { vec4 frame_rj[]; };  // the reversed order's t_j
+layout(binding = kEventPairBindFrameRS) uniform samplerBuffer FrameRS;  // the reversed order's t_s
+layout(binding = kEventPairBindFrameRJ) uniform samplerBuffer FrameRJ;  // the reversed order's t_j
 layout(std430, binding = kEventPairBindPartialsR) writeonly buffer PartialsR { vec4 partials_r[]; };
 #endif
 layout(push_constant) uniform PC { EventPairPC pc; };
@@ -26,8 +28,16 @@ layout(push_constant) uniform PC { EventPairPC pc; };
 
 // Four pixels' plane values: uint counts, or (binned events) the bits of float amounts.
 vec4 plane_amounts(uint i) {
-  uvec4 v = event_counts[i];
+  int t = int(4u * i);
+  uvec4 v = uvec4(texelFetch(Counts, t).x, texelFetch(Counts, t + 1).x, texelFetch(Counts, t + 2).x,
+                  texelFetch(Counts, t + 3).x);
   return pc.counts_float != 0u ? uintBitsToFloat(v) : vec4(v);
+}
+
+// Log-luminance of the four pixels of quad q of a planar RGB frame.
+vec4 frame_log_luma(samplerBuffer frame, uint q, uint quads) {
+  return event_log_luma(texelFetch(frame, int(q)), texelFetch(frame, int(quads + q)),
+                        texelFetch(frame, int(2u * quads + q)), pc.eps);
 }
 
 void main() {
@@ -39,14 +49,12 @@ void main() {
       uint base = k * 2u * quads;
       e += pc.theta_pos * plane_amounts(base + q) - pc.theta_neg * plane_amounts(base + quads + q);
     }
-    vec4 d = event_log_luma(frame_j[q], frame_j[quads + q], frame_j[2u * quads + q], pc.eps) -
-             event_log_luma(frame_s[q], frame_s[quads + q], frame_s[2u * quads + q], pc.eps);
+    vec4 d = frame_log_luma(FrameJ, q, quads) - frame_log_luma(FrameS, q, quads);
     scratch[q] = e;
     scratch[quads + q] = d;
     v = vec4(dot(e, d), dot(d, d), dot(e, e), 0.0);
 #ifdef EVF_EVENT_REVERSED
-    vec4 d_r = event_log_luma(frame_rj[q], frame_rj[quads + q], frame_rj[2u * quads + q], pc.eps) -
-               event_log_luma(frame_rs[q], frame_rs[quads + q], frame_rs[2u * quads + q], pc.eps);
+    vec4 d_r = frame_log_luma(FrameRJ, q, quads) - frame_log_luma(FrameRS, q, quads);
     v_r = vec4(dot(e, d_r), dot(d_r, d_r), dot(e, e), 0.0);
 #endif
   }

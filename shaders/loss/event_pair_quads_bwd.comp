@@ -6,9 +6,10 @@
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
-layout(std430, binding = kEventPairBwdBindFrameS) readonly buffer FrameS { vec4 frame_s[]; };
-layout(std430, binding = kEventPairBwdBindFrameJ) readonly buffer FrameJ { vec4 frame_j[]; };
-layout(std430, binding = kEventPairBwdBindScratch) readonly buffer Scratch { vec4 scratch[]; };
+// The frames and the scratch are read as texels (straight-line code on lavapipe).
+layout(binding = kEventPairBwdBindFrameS) uniform samplerBuffer FrameS;
+layout(binding = kEventPairBwdBindFrameJ) uniform samplerBuffer FrameJ;
+layout(binding = kEventPairBwdBindScratch) uniform samplerBuffer Scratch;
 layout(std430, binding = kEventPairBwdBindSums) readonly buffer Sums { float sums[]; };
 layout(std430, binding = kEventPairBwdBindGradS) buffer GradS { vec4 grad_s[]; };
 layout(std430, binding = kEventPairBwdBindGradJ) buffer GradJ { vec4 grad_j[]; };
@@ -24,9 +25,11 @@ void main() {
     values[pc.value_index] = pc.value_accumulate != 0u ? values[pc.value_index] + v : v;
   }
   if (q >= quads) return;
-  vec4 g = pc.grad_scale * event_pair_dl_dd(scratch[q], scratch[quads + q], ed, dd, ee, pc.norm_floor2);
+  vec4 g = pc.grad_scale * event_pair_dl_dd(texelFetch(Scratch, int(q)), texelFetch(Scratch, int(quads + q)), ed, dd,
+                                            ee, pc.norm_floor2);
   uint r = q, gr = quads + q, b = 2u * quads + q;
-  vec4 yj = event_luma(frame_j[r], frame_j[gr], frame_j[b]), ys = event_luma(frame_s[r], frame_s[gr], frame_s[b]);
+  vec4 yj = event_luma(texelFetch(FrameJ, int(r)), texelFetch(FrameJ, int(gr)), texelFetch(FrameJ, int(b)));
+  vec4 ys = event_luma(texelFetch(FrameS, int(r)), texelFetch(FrameS, int(gr)), texelFetch(FrameS, int(b)));
   grad_j[r] += g * event_log_luma_grad(yj, kEventLuma.r, pc.eps);
   grad_j[gr] += g * event_log_luma_grad(yj, kEventLuma.g, pc.eps);
   grad_j[b] += g * event_log_luma_grad(yj, kEventLuma.b, pc.eps);

@@ -8,7 +8,7 @@
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
-layout(std430, binding = kSsimBwdHBindD) readonly buffer D { vec4 dmap[]; };  // see loss_layout.h
+layout(binding = kSsimBwdHBindD) uniform samplerBuffer D;  // see loss_layout.h
 layout(std430, binding = kSsimBwdHBindH) writeonly buffer H { vec4 hmap[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
@@ -28,7 +28,7 @@ void main() {
   [[unroll]] for (int r = 0; r < kSpan; ++r) {
     int xx = x0 - kSsimRadius + r;
     if (xx < 0 || xx >= w) continue;
-    vec3 v = dmap[row + uint(xx)].xyz;
+    vec3 v = texelFetch(D, int(row + uint(xx))).xyz;
     [[unroll]] for (int o = 0; o < kCols; ++o) {
       int k = r - o;
       if (k >= 0 && k <= 2 * kSsimRadius) acc[o] += kSsimG[k] * v;

@@ -9,9 +9,9 @@
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
-layout(std430, binding = kSsimBwdVBindA) readonly buffer A { float img_a[]; };
-layout(std430, binding = kSsimBwdVBindB) readonly buffer B { float img_b[]; };
-layout(std430, binding = kSsimBwdVBindH) readonly buffer H { vec4 hmap[]; };  // see loss_layout.h
+layout(binding = kSsimBwdVBindA) uniform samplerBuffer A;
+layout(binding = kSsimBwdVBindB) uniform samplerBuffer B;
+layout(binding = kSsimBwdVBindH) uniform samplerBuffer H;  // see loss_layout.h
 layout(std430, binding = kSsimBwdVBindGrad) buffer Grad { float grad[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
 
@@ -34,7 +34,7 @@ void main() {
   [[unroll]] for (int r = 0; r < kSpan; ++r) {
     int yy = y0 - kSsimRadius + r;
     if (yy < 0 || yy >= h) continue;
-    vec3 hv = hmap[col + uint(yy) * pc.width].xyz;
+    vec3 hv = texelFetch(H, int(col + uint(yy) * pc.width)).xyz;
     [[unroll]] for (int o = 0; o < kRows; ++o) {
       int k = r - o;
       if (k >= 0 && k <= 2 * kSsimRadius) acc[o] += kSsimG[k] * hv;
@@ -43,7 +43,7 @@ void main() {
   [[unroll]] for (int o = 0; o < kRows; ++o) {
     if (y0 + o >= h) break;
     uint i = col + uint(y0 + o) * pc.width;
-    float a = img_a[i], b = img_b[i];
+    float a = texel_float(A, i), b = texel_float(B, i);
     float d_ssim = acc[o].x + 2.0 * a * acc[o].y + b * acc[o].z;
     float diff = a - b;
     float d_pix = (pc.flags & kLossPixelL2) != 0u ? 2.0 * diff : sign(diff);

@@ -7,8 +7,8 @@
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
-layout(std430, binding = kSsimHBindA) readonly buffer A { float img_a[]; };
-layout(std430, binding = kSsimHBindB) readonly buffer B { float img_b[]; };
+layout(binding = kSsimHBindA) uniform samplerBuffer A;
+layout(binding = kSsimHBindB) uniform samplerBuffer B;
 layout(std430, binding = kSsimHBindH) writeonly buffer H { vec4 hmap[]; };  // see loss_layout.h
 layout(push_constant) uniform PC { SsimPC pc; };
 
@@ -30,7 +30,7 @@ void main() {
   [[unroll]] for (int r = 0; r < kSpan; ++r) {
     int xx = x0 - kSsimRadius + r;
     if (xx < 0 || xx >= w) continue;
-    float a = img_a[row + uint(xx)], b = img_b[row + uint(xx)];
+    float a = texel_float(A, row + uint(xx)), b = texel_float(B, row + uint(xx));
     vec4 v = vec4(a, b, a * a, b * b);
     float ab = a * b;
     [[unroll]] for (int o = 0; o < kCols; ++o) {

@@ -9,9 +9,9 @@
 #include "loss/ssim_math.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
-layout(std430, binding = kSsimVBindA) readonly buffer A { float img_a[]; };
-layout(std430, binding = kSsimVBindB) readonly buffer B { float img_b[]; };
-layout(std430, binding = kSsimVBindH) readonly buffer H { vec4 hmap[]; };  // see loss_layout.h
+layout(binding = kSsimVBindA) uniform samplerBuffer A;
+layout(binding = kSsimVBindB) uniform samplerBuffer B;
+layout(binding = kSsimVBindH) uniform samplerBuffer H;  // see loss_layout.h
 layout(std430, binding = kSsimVBindD) writeonly buffer D { vec4 dmap[]; };
 layout(std430, binding = kSsimVBindPartials) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant) uniform PC { SsimPC pc; };
@@ -39,8 +39,8 @@ void main() {
       int yy = y0 - kSsimRadius + r;
       if (yy < 0 || yy >= h) continue;
       uint q = col + uint(yy) * pc.width;
-      vec4 hv = hmap[q];
-      float hab = hmap[pc.count + (q >> 2u)][q & 3u];
+      vec4 hv = texelFetch(H, int(q));
+      float hab = texel_float(H, 4u * pc.count + q);
       [[unroll]] for (int o = 0; o < kRows; ++o) {
         int k = r - o;
         if (k >= 0 && k <= 2 * kSsimRadius) {
@@ -53,7 +53,7 @@ void main() {
       if (y0 + o >= h) break;
       uint i = col + uint(y0 + o) * pc.width;
       SsimPixel s = ssim_eval(m[o], mab[o], pc.c1, pc.c2);
-      float diff = img_a[i] - img_b[i];
+      float diff = texel_float(A, i) - texel_float(B, i);
       float e = (pc.flags & kLossPixelL2) != 0u ? diff * diff : abs(diff);
       contrib += vec4(e, s.ssim, 0.0, 0.0);
       if ((pc.flags & kLossWriteGrad) != 0u) {

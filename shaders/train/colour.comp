@@ -6,7 +6,9 @@
 //   decode_bwd: y = g * decode'(x)        (d/d(linear frame) -> d/d(sRGB render))
 //   encode_bwd: y = g * encode'(x)        (d/d(sRGB prediction) -> d/d(linear mean))
 // Four elements per invocation through vec4 accesses (CPU drivers loop over the lanes for every
-// access), one by one only for the last 1-3. Forward and backward share shaders/common/srgb.glsl.
+// storage access), one by one only for the last 1-3; the inputs are read as texels (on lavapipe
+// straight-line code, not a loop over the lanes; a buffer is a whole number of vec4s,
+// gpu/buffer.h). Forward and backward share shaders/common/srgb.glsl.
 #extension GL_GOOGLE_include_directive : require
 #include "train/train_layout.h"
 #include "common/dispatch.glsl"
@@ -15,8 +17,8 @@
 #error EVF_COLOUR_OP selects the conversion (train_layout.h: kColourDecode ...)
 #endif
 layout(local_size_x = kColourGroupSize) in;
-layout(std430, binding = kColourBindX) readonly buffer X { vec4 x[]; };
-layout(std430, binding = kColourBindG) readonly buffer G { vec4 g[]; };
+layout(binding = kColourBindX) uniform samplerBuffer X;
+layout(binding = kColourBindG) uniform samplerBuffer G;
 layout(std430, binding = kColourBindY) writeonly buffer Y { vec4 y[]; };
 layout(push_constant) uniform PC { ColourPC pc; };
 
@@ -33,8 +35,8 @@ float convert(float v, float grad) {
 }
 
 #if EVF_COLOUR_OP >= 2
-#define EVF_GRAD(i, c) g[i][c]
-#define EVF_GRAD4(i) g[i]
+#define EVF_GRAD(i, c) texelFetch(G, int(i))[c]
+#define EVF_GRAD4(i) texelFetch(G, int(i))
 #else
 #define EVF_GRAD(i, c) 0.0
 #define EVF_GRAD4(i) vec4(0.0)
@@ -44,9 +46,9 @@ void main() {
   uint i = evf_linear_invocation(kColourGroupSize);
   if (i * 4u >= pc.n) return;
   if (i * 4u + 4u <= pc.n) {
-    vec4 v = x[i], gr = EVF_GRAD4(i);
+    vec4 v = texelFetch(X, int(i)), gr = EVF_GRAD4(i);
     y[i] = vec4(convert(v.x, gr.x), convert(v.y, gr.y), convert(v.z, gr.z), convert(v.w, gr.w));
     return;
   }
-  for (uint c = 0u; i * 4u + c < pc.n; ++c) y[i][c] = convert(x[i][c], EVF_GRAD(i, c));
+  for (uint c = 0u; i * 4u + c < pc.n; ++c) y[i][c] = convert(texelFetch(X, int(i))[c], EVF_GRAD(i, c));
 }
