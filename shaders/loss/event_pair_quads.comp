@@ -23,6 +23,9 @@ layout(binding = kEventPairBindFrameRJ) uniform samplerBuffer FrameRJ;  // the r
 layout(std430, binding = kEventPairBindPartialsR) writeonly buffer PartialsR { vec4 partials_r[]; };
 #endif
 layout(push_constant) uniform PC { EventPairPC pc; };
+#ifdef EVF_EVENT_REVERSED
+#define EVF_LOSS_GROUP_SUM2
+#endif
 #include "loss/ssim_math.glsl"
 #include "loss/event_math.glsl"
 
@@ -58,11 +61,15 @@ void main() {
     v_r = vec4(dot(e, d_r), dot(d_r, d_r), dot(e, e), 0.0);
 #endif
   }
+#ifdef EVF_EVENT_REVERSED
+  vec4 total, total_r;
+  loss_group_sum2(v, v_r, total, total_r);
+  if (gl_LocalInvocationIndex == 0u) {
+    partials[evf_linear_group()] = total;
+    partials_r[evf_linear_group()] = total_r;
+  }
+#else
   vec4 total = loss_group_sum(v);
   if (gl_LocalInvocationIndex == 0u) partials[evf_linear_group()] = total;
-#ifdef EVF_EVENT_REVERSED
-  barrier();  // the first sum's last reads before the second one's writes
-  vec4 total_r = loss_group_sum(v_r);
-  if (gl_LocalInvocationIndex == 0u) partials_r[evf_linear_group()] = total_r;
 #endif
 }

@@ -54,20 +54,48 @@ float texel_float(samplerBuffer plane, uint i) { return texelFetch(plane, int(i 
 
 // Fixed-order workgroup sum of a vec4: 16 invocations each add 16 values in order, then one adds
 // the 16 results in order (two barriers: barriers are costly on CPU drivers). Every invocation
-// must call it; the result is valid in invocation 0.
+// must call it; the result is valid in invocation 0. The loops' trip counts are 0 outside the
+// invocations that add: a constant count would be unrolled, and on CPU drivers every SIMD vector
+// of the workgroup would then run the loads, masked off, as loops over its lanes.
 shared vec4 evf_loss_red[kLossGroupSize];
 vec4 loss_group_sum(vec4 v) {
   uint lid = gl_LocalInvocationIndex;
   evf_loss_red[lid] = v;
   barrier();
-  if (lid < 16u) {
-    vec4 s = vec4(0.0);
-    for (uint k = 0u; k < 16u; ++k) s += evf_loss_red[lid * 16u + k];
-    evf_loss_red[lid * 16u] = s;
-  }
+  uint n = lid < 16u ? 16u : 0u;
+  vec4 s = vec4(0.0);
+  for (uint k = 0u; k < n; ++k) s += evf_loss_red[lid * 16u + k];
+  if (n != 0u) evf_loss_red[lid * 16u] = s;
   barrier();
   vec4 total = vec4(0.0);
-  if (lid == 0u)
-    for (uint k = 0u; k < 16u; ++k) total += evf_loss_red[k * 16u];
+  n = lid == 0u ? 16u : 0u;
+  for (uint k = 0u; k < n; ++k) total += evf_loss_red[k * 16u];
   return total;
 }
+#ifdef EVF_LOSS_GROUP_SUM2
+// Two sums at once, each in the order above, behind the same two barriers.
+shared vec4 evf_loss_red2[kLossGroupSize];
+void loss_group_sum2(vec4 a, vec4 b, out vec4 total_a, out vec4 total_b) {
+  uint lid = gl_LocalInvocationIndex;
+  evf_loss_red[lid] = a;
+  evf_loss_red2[lid] = b;
+  barrier();
+  uint n = lid < 16u ? 16u : 0u;
+  vec4 sa = vec4(0.0), sb = vec4(0.0);
+  for (uint k = 0u; k < n; ++k) {
+    sa += evf_loss_red[lid * 16u + k];
+    sb += evf_loss_red2[lid * 16u + k];
+  }
+  if (n != 0u) {
+    evf_loss_red[lid * 16u] = sa;
+    evf_loss_red2[lid * 16u] = sb;
+  }
+  barrier();
+  total_a = total_b = vec4(0.0);
+  n = lid == 0u ? 16u : 0u;
+  for (uint k = 0u; k < n; ++k) {
+    total_a += evf_loss_red[k * 16u];
+    total_b += evf_loss_red2[k * 16u];
+  }
+}
+#endif
