@@ -5,10 +5,39 @@
 // Scalar block layout (a vec3 array's stride is 12 bytes): the packed [N][3] rows are read one vec3
 // at a time. On CPU drivers every buffer access is a loop over the SIMD lanes whatever its width,
 // so one vec3 access costs what one float does.
+#ifdef EVF_PARAM_TEXELS
+#ifndef EVF_PARAMS_NO_SH
+#error the texel build reads no SH bands: project_bwd's "_block" builds only
+#endif
+// project_bwd's "_block" builds (CPU drivers, beside the block compositing kernels) read the parameters as
+// RGBA32F texel buffers: on lavapipe a texel fetch at a different index in each lane is
+// straight-line code, a storage-buffer load a loop over the lanes. A packed triple is read as the
+// one or two texels it spans (a buffer is a whole number of vec4s, gpu/buffer.h; the second
+// index is clamped to the view, where a triple that fits in one texel ignores it).
+layout(binding = kParamBindMeans) uniform samplerBuffer Means;          // [N][3]
+layout(binding = kParamBindLogScales) uniform samplerBuffer LogScales;  // [N][3]
+layout(binding = kParamBindQuats) uniform samplerBuffer Quats;          // [N] wxyz
+layout(binding = kParamBindOpacities) uniform samplerBuffer Opacities;  // [N]
+float param_float(samplerBuffer b, uint i) { return texelFetch(b, int(i >> 2u))[i & 3u]; }
+vec3 param_vec3(samplerBuffer b, uint i) {
+  uint f = 3u * i, t = f >> 2u;
+  vec4 lo = texelFetch(b, int(t)), hi = texelFetch(b, min(int(t) + 1, textureSize(b) - 1));
+  uint o = f & 3u;
+  return o == 0u ? lo.xyz : o == 1u ? lo.yzw : o == 2u ? vec3(lo.zw, hi.x) : vec3(lo.w, hi.xy);
+}
+vec3 load_mean(uint g) { return param_vec3(Means, g); }
+vec3 load_log_scale(uint g) { return param_vec3(LogScales, g); }
+vec4 load_quat(uint g) { return texelFetch(Quats, int(g)); }
+float load_opacity_logit(uint g) { return param_float(Opacities, g); }
+#else
 layout(scalar, binding = kParamBindMeans) readonly buffer Means { vec3 means[]; };                   // [N]
 layout(scalar, binding = kParamBindLogScales) readonly buffer LogScales { vec3 log_scales[]; };      // [N]
 layout(std430, binding = kParamBindQuats) readonly buffer Quats { vec4 quats[]; };                    // [N] wxyz
 layout(std430, binding = kParamBindOpacities) readonly buffer Opacities { float opacity_logits[]; };  // [N]
+vec3 load_mean(uint g) { return means[g]; }
+vec3 load_log_scale(uint g) { return log_scales[g]; }
+vec4 load_quat(uint g) { return quats[g]; }
+float load_opacity_logit(uint g) { return opacity_logits[g]; }
 #ifndef EVF_PARAMS_NO_SH  // project_bwd reads the colours project computed, not the bands
 // One vec3 (a coefficient's rgb) per access: [N][1], [N][3], [N][5], [N][7].
 layout(scalar, binding = kParamBindSh0) readonly buffer Sh0 { vec3 sh0[]; };
@@ -16,14 +45,11 @@ layout(scalar, binding = kParamBindSh1) readonly buffer Sh1 { vec3 sh1[]; };
 layout(scalar, binding = kParamBindSh2) readonly buffer Sh2 { vec3 sh2[]; };
 layout(scalar, binding = kParamBindSh3) readonly buffer Sh3 { vec3 sh3[]; };
 #endif
+#endif
 
 // Every access below uses constant indices and no data-dependent branch: CPU drivers (lavapipe)
 // run both sides of an if and turn each buffer access into a loop over the SIMD lanes, so a
 // generic "coefficient k" accessor would touch every band for every k.
-vec3 load_mean(uint g) { return means[g]; }
-vec3 load_log_scale(uint g) { return log_scales[g]; }
-vec4 load_quat(uint g) { return quats[g]; }
-
 #ifndef EVF_PARAMS_NO_SH
 // All 16 SH coefficients of Gaussian g; bands above `degree` (at most the buffers' degree) are zero.
 void load_sh_all(uint g, uint degree, out vec3 c[16]) {

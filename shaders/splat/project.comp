@@ -36,7 +36,7 @@ void main() {
   float detd = (cov2d.x + kDilation) * (cov2d.z + kDilation) - cov2d.y * cov2d.y;
   keep = keep && detd > 0.0;
   vec3 conic = conic_of(cov2d);
-  float opacity = 1.0 / (1.0 + exp(-opacity_logits[g]));
+  float opacity = 1.0 / (1.0 + exp(-load_opacity_logit(g)));
   if ((pc.flags & kFlagAntialiased) != 0) opacity *= aa_compensation(cov2d);
   keep = keep && opacity >= kAlphaMin;
   float q_max = 2.0 * log(255.0 * opacity);

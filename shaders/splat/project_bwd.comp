@@ -111,7 +111,7 @@ void main() {
     mat3x2 J = ewa_jacobian(p, cam);
     mat2 cov = J * Sigma_c * transpose(J);
     vec3 cov2d = vec3(cov[0][0], cov[0][1], cov[1][1]);
-    float sig = 1.0 / (1.0 + exp(-opacity_logits[g]));
+    float sig = 1.0 / (1.0 + exp(-load_opacity_logit(g)));
     bool aa = (pc.flags & kFlagAntialiased) != 0;
 
     // Colour: rgb = max(sum_k Y_k sh_k + 0.5, 0).
