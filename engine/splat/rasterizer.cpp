@@ -268,7 +268,7 @@ void Rasterizer::record_raster(RenderState& st) {
   st.keys_.ensure(uint64_t(m) * 4);
   st.gaussian_id_from_slot_.ensure(uint64_t(m) * 4);
   if (m) {
-    cmd_.dispatch("splat/emit",
+    cmd_.dispatch("splat/emit" + block_suffix_,
                   {{kEmitBindProjA, st.proj_mean_conic_},
                    {kEmitBindProjB, st.proj_misc_},
                    {kEmitBindRect, st.tile_rect_},

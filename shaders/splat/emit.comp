@@ -8,10 +8,31 @@
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
 layout(local_size_x = kProjectGroupSize) in;
+#ifdef EVF_EMIT_TEXELS
+// The "_block" build (CPU drivers, beside the block compositing kernels) reads its inputs as texel
+// buffers: on lavapipe a texel fetch at a different index in each lane is straight-line code, a
+// storage-buffer load a loop over the lanes.
+layout(binding = kEmitBindProjA) uniform samplerBuffer ProjA;
+layout(binding = kEmitBindProjB) uniform samplerBuffer ProjB;
+layout(binding = kEmitBindRect) uniform usamplerBuffer Rect;        // R32UI, four per Gaussian
+layout(binding = kEmitBindOffsets) uniform usamplerBuffer Offsets;  // [N+1]
+vec4 proj_a(uint g) { return texelFetch(ProjA, int(g)); }
+vec4 proj_b(uint g) { return texelFetch(ProjB, int(g)); }
+uvec4 rect_of(uint g) {
+  int t = int(4u * g);
+  return uvec4(texelFetch(Rect, t).x, texelFetch(Rect, t + 1).x, texelFetch(Rect, t + 2).x, texelFetch(Rect, t + 3).x);
+}
+uint offset_of(uint g) { return texelFetch(Offsets, int(g)).x; }
+#else
 layout(std430, binding = kEmitBindProjA) readonly buffer ProjA { vec4 proj_mean_conic[]; };
 layout(std430, binding = kEmitBindProjB) readonly buffer ProjB { vec4 proj_misc[]; };
 layout(std430, binding = kEmitBindRect) readonly buffer Rect { uvec4 tile_rect[]; };
-layout(std430, binding = kEmitBindOffsets) readonly buffer Offsets { uint isect_offset[]; };   // [N+1]
+layout(std430, binding = kEmitBindOffsets) readonly buffer Offsets { uint isect_offset[]; };  // [N+1]
+vec4 proj_a(uint g) { return proj_mean_conic[g]; }
+vec4 proj_b(uint g) { return proj_misc[g]; }
+uvec4 rect_of(uint g) { return tile_rect[g]; }
+uint offset_of(uint g) { return isect_offset[g]; }
+#endif
 layout(std430, binding = kEmitBindKeys) writeonly buffer Keys { uint keys[]; };
 layout(std430, binding = kEmitBindGid) writeonly buffer Gid { uint gaussian_id_from_slot[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
@@ -19,15 +40,15 @@ layout(push_constant) uniform PC { ProjectPC pc; };
 void main() {
   uint g = evf_linear_invocation(kProjectGroupSize);
   if (g >= pc.num_gaussians) return;
-  uint begin = isect_offset[g], end = isect_offset[g + 1];
+  uint begin = offset_of(g), end = offset_of(g + 1u);
   if (begin == end) return;
-  vec4 a = proj_mean_conic[g], b = proj_misc[g];
+  vec4 a = proj_a(g), b = proj_b(g);
   vec2 mean2d = a.xy;
   vec3 conic = vec3(a.zw, b.x);
   float q_max = b.w;
   float zr = (2.0 * b.z + 1.0) / (b.z + 1.0);  // monotonic map of depth into [1, 2)
   uint depth_key = (floatBitsToUint(zr) & 0x7FFFFFu) >> (23u - pc.depth_bits);
-  uvec4 r = tile_rect[g];
+  uvec4 r = rect_of(g);
   uint slot = begin;
   for (uint ty = r.y; ty < r.w; ++ty)
     for (uint tx = r.x; tx < r.z; ++tx) {
