@@ -47,7 +47,7 @@ void record_colour(gpu::Commands& cmd, uint32_t op, uint64_t n, const gpu::Buffe
   static_assert(shaderio::kColourDecode == 0 && shaderio::kColourEncode == 1 && shaderio::kColourDecodeBwd == 2 &&
                 shaderio::kColourEncodeBwd == 3);
   if (op > shaderio::kColourEncodeBwd) throw std::invalid_argument("colour conversion: unknown op");
-  shaderio::ColourPC pc{uint32_t(n), 0, 0, 0};
+  shaderio::ColourPC pc{uint32_t(n), 0.0f, 0, 0};
   const gpu::Groups groups =
       cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(n, 4), shaderio::kColourGroupSize));
   if (op >= shaderio::kColourDecodeBwd)  // the forward builds have no gradient binding
@@ -57,16 +57,25 @@ void record_colour(gpu::Commands& cmd, uint32_t op, uint64_t n, const gpu::Buffe
     cmd.dispatch(kNames[op], {{shaderio::kColourBindX, x}, {shaderio::kColourBindY, y}}, pc, groups);
 }
 
+void record_decode_mean(gpu::Commands& cmd, uint64_t n, float scale, bool add, const gpu::Buffer& x,
+                        const gpu::Buffer& y, const gpu::Buffer& mean) {
+  shaderio::ColourPC pc{uint32_t(n), scale, add ? 1u : 0u, 0};
+  cmd.dispatch("train/colour_decode_mean",
+               {{shaderio::kColourBindX, x}, {shaderio::kColourBindY, y}, {shaderio::kColourBindMean, mean}}, pc,
+               cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(n, 4), shaderio::kColourGroupSize)));
+}
+
 void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const gpu::Buffer* flow) {
   if (renders.size() != frames_) throw std::invalid_argument("image model: wrong number of renders");
   if (upsample_ > 1 && !flow) throw std::invalid_argument("image model: upsampling needs the view's flow");
   renders_ = renders;
   flow_ = flow;
   if (identity_) return;
-  for (uint32_t i = 0; i < frames_; ++i) colour(cmd, shaderio::kColourDecode, *renders[i], *renders[i], linear_[i]);
-  if (frames_ > 1)
-    for (uint32_t i = 0; i < frames_; ++i)
-      record_accumulate(cmd, values_, 1.0f / float(mean_count()), i > 0, linear_[i], mean_);
+  for (uint32_t i = 0; i < frames_; ++i)
+    if (frames_ > 1)
+      record_decode_mean(cmd, values_, 1.0f / float(mean_count()), i > 0, *renders[i], linear_[i], mean_);
+    else
+      colour(cmd, shaderio::kColourDecode, *renders[i], *renders[i], linear_[i]);
   if (upsample_ > 1) upsample_forward(cmd, *flow);
   const gpu::Buffer& m = frames_ > 1 ? mean_ : linear_[0];
   if (space_ == LossSpace::Srgb) colour(cmd, shaderio::kColourEncode, m, m, encoded_);

@@ -30,6 +30,10 @@ namespace evflow {
 void record_colour(gpu::Commands& cmd, uint32_t op, uint64_t n, const gpu::Buffer& x, const gpu::Buffer& g,
                    const gpu::Buffer& y);
 
+// Records y = decode(x) and mean = (add ? mean : 0) + scale * y over n floats, in one pass
+// (train/colour_decode_mean).
+void record_decode_mean(gpu::Commands& cmd, uint64_t n, float scale, bool add, const gpu::Buffer& x,
+                        const gpu::Buffer& y, const gpu::Buffer& mean);
 // Records y = (add ? y : 0) + scale * x over n floats.
 void record_accumulate(gpu::Commands& cmd, uint64_t n, float scale, bool add, const gpu::Buffer& x,
                        const gpu::Buffer& y);

@@ -5,6 +5,8 @@
 //   encode:     y = encode(x)             (linear mean -> sRGB, loss_space=srgb)
 //   decode_bwd: y = g * decode'(x)        (d/d(linear frame) -> d/d(sRGB render))
 //   encode_bwd: y = g * encode'(x)        (d/d(sRGB prediction) -> d/d(linear mean))
+//   decode_mean (EVF_COLOUR_MEAN, with decode): also Mean = (accumulate ? Mean : 0) + scale * y,
+//               the exposure's mean in the same pass (what train/accumulate adds, bit for bit)
 // Four elements per invocation through vec4 accesses (CPU drivers loop over the lanes for every
 // storage access), one by one only for the last 1-3; the inputs are read as texels (on lavapipe
 // straight-line code, not a loop over the lanes; a buffer is a whole number of vec4s,
@@ -20,6 +22,9 @@ layout(local_size_x = kColourGroupSize) in;
 layout(binding = kColourBindX) uniform samplerBuffer X;
 layout(binding = kColourBindG) uniform samplerBuffer G;
 layout(std430, binding = kColourBindY) writeonly buffer Y { vec4 y[]; };
+#ifdef EVF_COLOUR_MEAN
+layout(std430, binding = kColourBindMean) buffer Mean { vec4 mean[]; };
+#endif
 layout(push_constant) uniform PC { ColourPC pc; };
 
 float convert(float v, float grad) {
@@ -47,8 +52,18 @@ void main() {
   if (i * 4u >= pc.n) return;
   if (i * 4u + 4u <= pc.n) {
     vec4 v = texelFetch(X, int(i)), gr = EVF_GRAD4(i);
-    y[i] = vec4(convert(v.x, gr.x), convert(v.y, gr.y), convert(v.z, gr.z), convert(v.w, gr.w));
+    vec4 r = vec4(convert(v.x, gr.x), convert(v.y, gr.y), convert(v.z, gr.z), convert(v.w, gr.w));
+    y[i] = r;
+#ifdef EVF_COLOUR_MEAN
+    mean[i] = (pc.accumulate != 0u ? mean[i] : vec4(0.0)) + pc.scale * r;
+#endif
     return;
   }
-  for (uint c = 0u; i * 4u + c < pc.n; ++c) y[i][c] = convert(texelFetch(X, int(i))[c], EVF_GRAD(i, c));
+  for (uint c = 0u; i * 4u + c < pc.n; ++c) {
+    float r = convert(texelFetch(X, int(i))[c], EVF_GRAD(i, c));
+    y[i][c] = r;
+#ifdef EVF_COLOUR_MEAN
+    mean[i][c] = (pc.accumulate != 0u ? mean[i][c] : 0.0) + pc.scale * r;
+#endif
+  }
 }

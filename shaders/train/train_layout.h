@@ -16,13 +16,16 @@ EVF_CONST(uint, kColourGroupSize, 256u)
 EVF_BIND(kColourBindX, 0u, X)
 EVF_BIND(kColourBindG, 1u, G)
 EVF_BIND(kColourBindY, 2u, Y)
+EVF_BIND(kColourBindMean, 3u, Mean)  // train/colour_decode_mean: the frames' mean, added to
 EVF_CONST(uint, kColourDecode, 0u)
 EVF_CONST(uint, kColourEncode, 1u)
 EVF_CONST(uint, kColourDecodeBwd, 2u)
 EVF_CONST(uint, kColourEncodeBwd, 3u)
 struct ColourPC {
   uint n;
-  uint pad0, pad1, pad2;
+  float scale;      // train/colour_decode_mean: Mean = (accumulate ? Mean : 0) + scale * y
+  uint accumulate;
+  uint pad0;
 };
 
 // Flow-upsampled blur (train/upsample, train/upsample_bwd; engine/train/image_model.h). For
