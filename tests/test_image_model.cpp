@@ -16,13 +16,16 @@ using namespace evflow;
 namespace {
 
 double decode(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
-double decode_deriv(double v) { return v <= 0.04045 ? 1.0 / 12.92 : (2.4 / 1.055) * std::pow((v + 0.055) / 1.055, 1.4); }
+double decode_deriv(double v) {
+  return v <= 0.04045 ? 1.0 / 12.92 : (2.4 / 1.055) * std::pow((v + 0.055) / 1.055, 1.4);
+}
 
 }  // namespace
 
-TEST_CASE("image model: the blur mean and the renders' gradients match the double reference when H*W*3 is not a "
-          "multiple of 4",
-          "[train]") {
+TEST_CASE(
+    "image model: the blur mean and the renders' gradients match the double reference when H*W*3 is not a "
+    "multiple of 4",
+    "[train]") {
   auto& ctx = test::gpu_context();
   for (const auto [W, H] : {std::pair<uint32_t, uint32_t>{7, 5}, {9, 6}, {3, 1}}) {
     const uint32_t F = 5, n = 3 * W * H;
