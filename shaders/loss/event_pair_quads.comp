@@ -28,12 +28,11 @@ layout(push_constant) uniform PC { EventPairPC pc; };
 #endif
 #include "loss/ssim_math.glsl"
 #include "loss/event_math.glsl"
+#include "common/texel.glsl"
 
 // Four pixels' plane values: uint counts, or (binned events) the bits of float amounts.
 vec4 plane_amounts(uint i) {
-  int t = int(4u * i);
-  uvec4 v = uvec4(texelFetch(Counts, t).x, texelFetch(Counts, t + 1).x, texelFetch(Counts, t + 2).x,
-                  texelFetch(Counts, t + 3).x);
+  uvec4 v = evf_texel_uvec4(Counts, i);
   return pc.counts_float != 0u ? uintBitsToFloat(v) : vec4(v);
 }
 

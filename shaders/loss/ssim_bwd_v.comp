@@ -7,6 +7,7 @@
 #extension GL_EXT_control_flow_attributes : require
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
+#include "common/texel.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
 layout(binding = kSsimBwdVBindA) uniform samplerBuffer A;
@@ -43,7 +44,7 @@ void main() {
   [[unroll]] for (int o = 0; o < kRows; ++o) {
     if (y0 + o >= h) break;
     uint i = col + uint(y0 + o) * pc.width;
-    float a = texel_float(A, i), b = texel_float(B, i);
+    float a = evf_texel_float(A, i), b = evf_texel_float(B, i);
     float d_ssim = acc[o].x + 2.0 * a * acc[o].y + b * acc[o].z;
     float diff = a - b;
     float d_pix = (pc.flags & kLossPixelL2) != 0u ? 2.0 * diff : sign(diff);

@@ -5,6 +5,7 @@
 #extension GL_EXT_control_flow_attributes : require
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
+#include "common/texel.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
 layout(binding = kSsimHBindA) uniform samplerBuffer A;
@@ -30,7 +31,7 @@ void main() {
   [[unroll]] for (int r = 0; r < kSpan; ++r) {
     int xx = x0 - kSsimRadius + r;
     if (xx < 0 || xx >= w) continue;
-    float a = texel_float(A, row + uint(xx)), b = texel_float(B, row + uint(xx));
+    float a = evf_texel_float(A, row + uint(xx)), b = evf_texel_float(B, row + uint(xx));
     vec4 v = vec4(a, b, a * a, b * b);
     float ab = a * b;
     [[unroll]] for (int o = 0; o < kCols; ++o) {

@@ -47,11 +47,6 @@ SsimPixel ssim_eval(vec4 m, float mab, float c1, float c2) {
   return r;
 }
 
-// Element i of a float plane bound as RGBA32F texels (the SSIM passes read their inputs as texels:
-// on lavapipe straight-line code, where a storage-buffer load is a loop over the lanes; a buffer
-// is a whole number of vec4s, gpu/buffer.h).
-float texel_float(samplerBuffer plane, uint i) { return texelFetch(plane, int(i >> 2u))[i & 3u]; }
-
 // Fixed-order workgroup sum of a vec4: 16 invocations each add 16 values in order, then one adds
 // the 16 results in order (two barriers: barriers are costly on CPU drivers). Every invocation
 // must call it; the result is valid in invocation 0. The loops' trip counts are 0 outside the

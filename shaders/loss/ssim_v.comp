@@ -7,6 +7,7 @@
 #extension GL_EXT_control_flow_attributes : require
 #include "loss/loss_layout.h"
 #include "loss/ssim_math.glsl"
+#include "common/texel.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = kLossGroupSize) in;
 layout(binding = kSsimVBindA) uniform samplerBuffer A;
@@ -40,7 +41,7 @@ void main() {
       if (yy < 0 || yy >= h) continue;
       uint q = col + uint(yy) * pc.width;
       vec4 hv = texelFetch(H, int(q));
-      float hab = texel_float(H, 4u * pc.count + q);
+      float hab = evf_texel_float(H, 4u * pc.count + q);
       [[unroll]] for (int o = 0; o < kRows; ++o) {
         int k = r - o;
         if (k >= 0 && k <= 2 * kSsimRadius) {
@@ -53,7 +54,7 @@ void main() {
       if (y0 + o >= h) break;
       uint i = col + uint(y0 + o) * pc.width;
       SsimPixel s = ssim_eval(m[o], mab[o], pc.c1, pc.c2);
-      float diff = texel_float(A, i) - texel_float(B, i);
+      float diff = evf_texel_float(A, i) - evf_texel_float(B, i);
       float e = (pc.flags & kLossPixelL2) != 0u ? diff * diff : abs(diff);
       contrib += vec4(e, s.ssim, 0.0, 0.0);
       if ((pc.flags & kLossWriteGrad) != 0u) {

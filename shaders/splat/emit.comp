@@ -7,6 +7,7 @@
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
+#include "common/texel.glsl"
 layout(local_size_x = kProjectGroupSize) in;
 #ifdef EVF_EMIT_TEXELS
 // The "_block" build (CPU drivers, beside the block compositing kernels) reads its inputs as texel
@@ -18,10 +19,7 @@ layout(binding = kEmitBindRect) uniform usamplerBuffer Rect;        // R32UI, fo
 layout(binding = kEmitBindOffsets) uniform usamplerBuffer Offsets;  // [N+1]
 vec4 proj_a(uint g) { return texelFetch(ProjA, int(g)); }
 vec4 proj_b(uint g) { return texelFetch(ProjB, int(g)); }
-uvec4 rect_of(uint g) {
-  int t = int(4u * g);
-  return uvec4(texelFetch(Rect, t).x, texelFetch(Rect, t + 1).x, texelFetch(Rect, t + 2).x, texelFetch(Rect, t + 3).x);
-}
+uvec4 rect_of(uint g) { return evf_texel_uvec4(Rect, g); }
 uint offset_of(uint g) { return texelFetch(Offsets, int(g)).x; }
 #else
 layout(std430, binding = kEmitBindProjA) readonly buffer ProjA { vec4 proj_mean_conic[]; };

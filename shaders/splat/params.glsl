@@ -9,6 +9,7 @@
 #ifndef EVF_PARAMS_NO_SH
 #error the texel build reads no SH bands: project_bwd's "_block" builds only
 #endif
+#include "common/texel.glsl"
 // project_bwd's "_block" builds (CPU drivers, beside the block compositing kernels) read the parameters as
 // RGBA32F texel buffers: on lavapipe a texel fetch at a different index in each lane is
 // straight-line code, a storage-buffer load a loop over the lanes. A packed triple is read as the
@@ -18,7 +19,6 @@ layout(binding = kParamBindMeans) uniform samplerBuffer Means;          // [N][3
 layout(binding = kParamBindLogScales) uniform samplerBuffer LogScales;  // [N][3]
 layout(binding = kParamBindQuats) uniform samplerBuffer Quats;          // [N] wxyz
 layout(binding = kParamBindOpacities) uniform samplerBuffer Opacities;  // [N]
-float param_float(samplerBuffer b, uint i) { return texelFetch(b, int(i >> 2u))[i & 3u]; }
 vec3 param_vec3(samplerBuffer b, uint i) {
   uint f = 3u * i, t = f >> 2u;
   vec4 lo = texelFetch(b, int(t)), hi = texelFetch(b, min(int(t) + 1, textureSize(b) - 1));
@@ -28,7 +28,7 @@ vec3 param_vec3(samplerBuffer b, uint i) {
 vec3 load_mean(uint g) { return param_vec3(Means, g); }
 vec3 load_log_scale(uint g) { return param_vec3(LogScales, g); }
 vec4 load_quat(uint g) { return texelFetch(Quats, int(g)); }
-float load_opacity_logit(uint g) { return param_float(Opacities, g); }
+float load_opacity_logit(uint g) { return evf_texel_float(Opacities, g); }
 #else
 layout(scalar, binding = kParamBindMeans) readonly buffer Means { vec3 means[]; };                   // [N]
 layout(scalar, binding = kParamBindLogScales) readonly buffer LogScales { vec3 log_scales[]; };      // [N]

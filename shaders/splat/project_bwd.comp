@@ -9,6 +9,7 @@
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
+#include "common/texel.glsl"
 layout(local_size_x = kProjectGroupSize) in;
 #define EVF_PARAMS_NO_SH
 #include "splat/params.glsl"
@@ -25,7 +26,7 @@ layout(binding = kProjectBwdBindG2) uniform samplerBuffer G2;
 uint isect_offset_at(uint g) { return texelFetch(Offsets, int(g)).x; }
 vec4 slot_grad_a(uint s) { return texelFetch(G0, int(s)); }
 vec4 slot_grad_b(uint s) { return texelFetch(G1, int(s)); }
-float slot_grad_c(uint s) { return texelFetch(G2, int(s >> 2u))[s & 3u]; }
+float slot_grad_c(uint s) { return evf_texel_float(G2, s); }
 #else
 layout(std430, binding = kProjectBwdBindOffsets) readonly buffer Offsets { uint isect_offset[]; };
 layout(std430, binding = kProjectBwdBindG0) readonly buffer G0 { vec4 grad_a[]; };
