@@ -11,8 +11,7 @@
 layout(local_size_x = kProjectGroupSize) in;
 #ifdef EVF_EMIT_TEXELS
 // The "_block" build (CPU drivers, beside the block compositing kernels) reads its inputs as texel
-// buffers: on lavapipe a texel fetch at a different index in each lane is straight-line code, a
-// storage-buffer load a loop over the lanes.
+// buffers (why: common/texel.glsl).
 layout(binding = kEmitBindProjA) uniform samplerBuffer ProjA;
 layout(binding = kEmitBindProjB) uniform samplerBuffer ProjB;
 layout(binding = kEmitBindRect) uniform usamplerBuffer Rect;        // R32UI, four per Gaussian

@@ -10,11 +10,10 @@
 #error the texel build reads no SH bands: project_bwd's "_block" builds only
 #endif
 #include "common/texel.glsl"
-// project_bwd's "_block" builds (CPU drivers, beside the block compositing kernels) read the parameters as
-// RGBA32F texel buffers: on lavapipe a texel fetch at a different index in each lane is
-// straight-line code, a storage-buffer load a loop over the lanes. A packed triple is read as the
-// one or two texels it spans (a buffer is a whole number of vec4s, gpu/buffer.h; the second
-// index is clamped to the view, where a triple that fits in one texel ignores it).
+// project_bwd's "_block" builds (CPU drivers, beside the block compositing kernels) read the
+// parameters as RGBA32F texel buffers (why: common/texel.glsl). A packed triple is read as the one
+// or two texels it spans (the second index clamped to the view, where a triple that fits in one
+// texel ignores it).
 layout(binding = kParamBindMeans) uniform samplerBuffer Means;          // [N][3]
 layout(binding = kParamBindLogScales) uniform samplerBuffer LogScales;  // [N][3]
 layout(binding = kParamBindQuats) uniform samplerBuffer Quats;          // [N] wxyz

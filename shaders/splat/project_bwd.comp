@@ -16,9 +16,8 @@ layout(local_size_x = kProjectGroupSize) in;
 // Per-slot gradients (splat_layout.h): (v_mean2d.xy, v_conic.xy), (v_conic.z, v_opacity, v_rgb.rg), v_rgb.b.
 #ifdef EVF_SLOT_TEXELS
 // The "_block" builds (CPU drivers, with the block compositing kernels) read the offsets and the
-// slots' gradients as texel buffers: on lavapipe a texel fetch at a different index in each lane
-// is straight-line code, a storage-buffer load a loop over the lanes. The third plane is read
-// four slots to a texel (its buffer is a whole number of texels, rasterizer.cpp).
+// slots' gradients as texel buffers (why: common/texel.glsl). The third plane is read four slots
+// to a texel (its buffer is a whole number of texels, rasterizer.cpp).
 layout(binding = kProjectBwdBindOffsets) uniform usamplerBuffer Offsets;
 layout(binding = kProjectBwdBindG0) uniform samplerBuffer G0;
 layout(binding = kProjectBwdBindG1) uniform samplerBuffer G1;
