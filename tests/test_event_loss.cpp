@@ -47,6 +47,24 @@ void host_counts(const EventStream& ev, const ExposureFrames& f, reference::Even
   }
 }
 
+// An exposure over [t0, t1] whose 2N+1 = rgb.size() frames are `rgb`, in time-reversed order when
+// `reversed` (as the trainer's direction check scores them), with gradients into `grad` when given.
+ExposureFrames exposure_of(std::vector<gpu::Buffer>& rgb, std::vector<gpu::Buffer>* grad, uint32_t w, uint32_t h,
+                           uint32_t view, EventWindow window, uint64_t seed, bool reversed) {
+  const uint32_t F = uint32_t(rgb.size());
+  ExposureFrames f;
+  f.view = view;
+  f.width = w, f.height = h;
+  f.t0 = window.t0, f.t1 = window.t1;
+  f.u = ExposureTrajectory::virtual_times(int(F - 1) / 2);
+  f.seed = seed;
+  for (uint32_t i = 0; i < F; ++i) {
+    f.rgb.push_back(&rgb[reversed ? F - 1 - i : i]);
+    if (grad) f.grad.push_back(&(*grad)[i]);
+  }
+  return f;
+}
+
 struct Run {
   double value = 0;
   std::vector<std::vector<float>> grad;  // per frame, the term's share (initial values removed)
@@ -242,16 +260,7 @@ TEST_CASE("event loss: the reversed order scored beside the forward record equal
     grad.emplace_back(ctx, n * 4, "frame_grad");
   }
   auto frames_of = [&](bool reversed, bool with_grad) {
-    ExposureFrames f;
-    f.width = W, f.height = H;
-    f.t0 = 0.0, f.t1 = 1.0;
-    f.u = ExposureTrajectory::virtual_times(3);
-    f.seed = 47;
-    for (uint32_t i = 0; i < F; ++i) {
-      f.rgb.push_back(&rgb[reversed ? F - 1 - i : i]);
-      if (with_grad) f.grad.push_back(&grad[i]);
-    }
-    return f;
+    return exposure_of(rgb, with_grad ? &grad : nullptr, W, H, 0, {0.0, 1.0}, 47, reversed);
   };
   for (uint32_t pool : {1u, 2u}) {
     INFO("pool " << pool);
@@ -312,17 +321,7 @@ TEST_CASE(
     grad.back().write(std::vector<float>(n, 0.0f));
   }
   auto frames_of = [&](uint32_t view, bool reversed, bool with_grad) {
-    ExposureFrames f;
-    f.view = view;
-    f.width = W, f.height = H;
-    f.t0 = windows[view].t0, f.t1 = windows[view].t1;
-    f.u = ExposureTrajectory::virtual_times(3);
-    f.seed = 31;
-    for (uint32_t i = 0; i < F; ++i) {
-      f.rgb.push_back(&rgb[reversed ? F - 1 - i : i]);
-      if (with_grad) f.grad.push_back(&grad[i]);
-    }
-    return f;
+    return exposure_of(rgb, with_grad ? &grad : nullptr, W, H, view, windows[view], 31, reversed);
   };
   // Each value from a fresh term: nothing cached.
   auto fresh_value = [&](uint32_t view, bool reversed) {

@@ -24,6 +24,7 @@
 #include "gpu_fixture.h"
 #include "io/gltf_splats.h"
 #include "io/ply_splats.h"
+#include "reference/srgb_reference.h"
 #include "splat/rasterizer.h"
 
 namespace fs = std::filesystem;
@@ -494,7 +495,7 @@ TEST_CASE("the glb holds KHR_gaussian_splatting as specified", "[export]") {
     for (int ch = 0; ch < 3; ++ch) {
       REQUIRE(sh21[i * 3 + ch] == c.sh[(i * 16 + 5) * 3 + ch]);
       const double srgb = std::clamp(0.28209479177387814 * c.sh[i * 16 * 3 + ch] + 0.5, 0.0, 1.0);
-      const double lin = srgb <= 0.04045 ? srgb / 12.92 : std::pow((srgb + 0.055) / 1.055, 2.4);
+      const double lin = reference::srgb_decode(srgb);
       REQUIRE(color[i * 4 + ch] == Approx(lin).margin(1e-6));
       REQUIRE(scale[i * 3 + ch] == Approx(std::exp(double(c.log_scales[i * 3 + ch]))).epsilon(1e-6));
     }

@@ -9,25 +9,20 @@
 
 #include "gpu/commands.h"
 #include "gpu_fixture.h"
+#include "reference/srgb_reference.h"
 #include "train/image_model.h"
 
 using namespace evflow;
 
-namespace {
-
-double decode(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
-double decode_deriv(double v) {
-  return v <= 0.04045 ? 1.0 / 12.92 : (2.4 / 1.055) * std::pow((v + 0.055) / 1.055, 1.4);
-}
-
-}  // namespace
+using reference::srgb_decode;
+using reference::srgb_decode_deriv;
 
 TEST_CASE(
     "image model: the blur mean and the renders' gradients match the double reference when H*W*3 is not a "
     "multiple of 4",
     "[train]") {
   auto& ctx = test::gpu_context();
-  for (const auto [W, H] : {std::pair<uint32_t, uint32_t>{7, 5}, {9, 6}, {3, 1}}) {
+  for (const auto& [W, H] : {std::pair<uint32_t, uint32_t>{7, 5}, {9, 6}, {3, 1}}) {
     const uint32_t F = 5, n = 3 * W * H;
     INFO(W << "x" << H << ": " << n << " values, " << n % 4 << " in the last vec4");
     std::mt19937 rng(W * 31 + H);
@@ -48,13 +43,13 @@ TEST_CASE(
     const std::vector<float> mean = model.prediction().read<float>(n);
     for (uint32_t k = 0; k < n; ++k) {
       double want = 0;
-      for (auto& r : renders) want += decode(r[k]) / F;
+      for (auto& r : renders) want += srgb_decode(r[k]) / F;
       INFO("element " << k);
       REQUIRE(std::abs(mean[k] - want) < 1e-6);
     }
     for (uint32_t i = 0; i < F; ++i) {
       const std::vector<float> lin = model.linear_frame(i).read<float>(n);
-      for (uint32_t k = 0; k < n; ++k) REQUIRE(std::abs(lin[k] - decode(renders[i][k])) < 1e-6);
+      for (uint32_t k = 0; k < n; ++k) REQUIRE(std::abs(lin[k] - srgb_decode(renders[i][k])) < 1e-6);
     }
 
     // L = sum_k c_k mean_k: d/d(render_i)_k = c_k decode'(render_ik) / F.
@@ -68,7 +63,7 @@ TEST_CASE(
     for (uint32_t i = 0; i < F; ++i) {
       const std::vector<float> g = model.render_grad(i).read<float>(n);
       for (uint32_t k = 0; k < n; ++k) {
-        const double want = c[k] * decode_deriv(renders[i][k]) / F;
+        const double want = c[k] * srgb_decode_deriv(renders[i][k]) / F;
         INFO("frame " << i << " element " << k << ": gpu " << g[k] << ", reference " << want);
         REQUIRE(std::abs(g[k] - want) < 1e-6 + 1e-5 * std::abs(want));
       }

@@ -8,14 +8,13 @@
 
 #include "gpu/commands.h"
 #include "gpu_fixture.h"
+#include "reference/srgb_reference.h"
 #include "reference/upsample_reference.h"
 #include "train/image_model.h"
 
 using namespace evflow;
 
 namespace {
-
-double decode(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
 
 // Random flow planes per interval: a smooth field, a block moving against it (a motion boundary),
 // large displacements near the border, and a few zeroed pixels (where a flow was not finite).
@@ -80,7 +79,7 @@ TEST_CASE("upsampled blur: the mean of 2NM+1 frames and its gradients match the 
   std::vector<std::vector<double>> linear;
   for (auto& r : renders) {
     linear.emplace_back();
-    for (float v : r) linear.back().push_back(decode(v));
+    for (float v : r) linear.back().push_back(reference::srgb_decode(v));
   }
   const std::vector<double> want = reference::upsampled_mean(linear, flow, W, H, M);
   const std::vector<float> got = m.model->prediction().read<float>(3 * W * H);
@@ -105,14 +104,14 @@ TEST_CASE("upsampled blur: the mean of 2NM+1 frames and its gradients match the 
     for (size_t k = i; k < g.size(); k += 7) {
       const double h = 1e-6, x0 = renders[i][k];
       auto loss = [&](double x) {
-        linear[i][k] = decode(x);
+        linear[i][k] = reference::srgb_decode(x);
         const std::vector<double> mean = reference::upsampled_mean(linear, flow, W, H, M);
         double l = 0;
         for (size_t e = 0; e < mean.size(); ++e) l += c[e] * mean[e];
         return l;
       };
       const double fd = (loss(x0 + h) - loss(x0 - h)) / (2 * h);
-      linear[i][k] = decode(x0);
+      linear[i][k] = reference::srgb_decode(x0);
       ++checked;
       if (std::abs(g[k] - fd) > 1e-3 * std::abs(fd) + 1e-6) {
         ++bad;
@@ -153,7 +152,7 @@ TEST_CASE("upsampled blur: with the true flow, 2NM+1 frames blur a fast pattern 
   const int steps = 240;
   for (int k = 0; k <= steps; ++k) {
     const auto f = frame_at(double(k) / steps);
-    for (size_t e = 0; e < truth.size(); ++e) truth[e] += decode(f[e]) / (steps + 1);
+    for (size_t e = 0; e < truth.size(); ++e) truth[e] += reference::srgb_decode(f[e]) / (steps + 1);
   }
   std::vector<std::vector<float>> renders;
   for (uint32_t i = 0; i < F; ++i) renders.push_back(frame_at(i / 2.0));
