@@ -16,8 +16,11 @@ void main() {
   for (uint g = lid; g < pc.n_partials; g += kReduceGroupSize) s += partials[g];
   red[lid] = s;
   barrier();
+  // Each level's add as a loop of one trip in the invocations that add and none elsewhere: on CPU
+  // drivers an `if` skips nothing, and every SIMD vector would run the masked-off accesses as
+  // loops over its lanes.
   for (uint k = kReduceGroupSize / 2u; k > 0u; k >>= 1u) {
-    if (lid < k) red[lid] += red[lid + k];
+    for (uint t = lid < k ? 1u : 0u; t > 0u; --t) red[lid] += red[lid + k];
     barrier();
   }
   if (lid < pc.n_out) {
