@@ -10,11 +10,11 @@ OUT=runs/main
 mkdir -p "$OUT"
 build/evflow devices
 # simulate the default scene -> train on the blurry views and the events (blur+events) -> evaluate (deblur + novel views) -> export
-# Training: up to 40,000 Gaussians, 4,100 steps of EDI warm-up (one render each), then 1,100
+# Training: up to 60,000 Gaussians, 6,100 steps of EDI warm-up (one render each), then 1,100
 # blur+events steps; no opacity reset (docs/experiments.md, "The main job").
 build/evflow simulate --out "$OUT/data"
-build/evflow train "$OUT/data" --out "$OUT/run" --preset fast method=blur+events max_gaussians=40000 iterations=5200 \
-  edi_warmup=0.78847 opacity_reset_every=0 "${@}"
+build/evflow train "$OUT/data" --out "$OUT/run" --preset fast method=blur+events max_gaussians=60000 iterations=7200 \
+  edi_warmup=0.847222 opacity_reset_every=0 "${@}"
 build/evflow eval "$OUT/run"
 build/evflow export "$OUT/run" --gltf "$OUT/run/splats.glb" --ply "$OUT/run/splats.ply"
 cat "$OUT/run/eval.md"
