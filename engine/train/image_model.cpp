@@ -33,11 +33,20 @@ ImageModel::ImageModel(gpu::Context& ctx, uint32_t frames, uint32_t width, uint3
   }
 }
 
+namespace {
+
+// The workgroups for kernels that take n floats four to an invocation, group_size invocations a group.
+gpu::Groups quad_groups(const gpu::Commands& cmd, uint64_t n, uint32_t group_size) {
+  return cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(n, 4), group_size));
+}
+
+}  // namespace
+
 void record_accumulate(gpu::Commands& cmd, uint64_t n, float scale, bool add, const gpu::Buffer& x,
                        const gpu::Buffer& y) {
   shaderio::AccumulatePC pc{uint32_t(n), scale, add ? 1u : 0u, 0};
   cmd.dispatch("train/accumulate", {{shaderio::kTrainAccumulateBindX, x}, {shaderio::kTrainAccumulateBindY, y}}, pc,
-               cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(n, 4), shaderio::kAccumulateGroupSize)));
+               quad_groups(cmd, n, shaderio::kAccumulateGroupSize));
 }
 
 void record_colour(gpu::Commands& cmd, uint32_t op, uint64_t n, const gpu::Buffer& x, const gpu::Buffer& g,
@@ -48,8 +57,7 @@ void record_colour(gpu::Commands& cmd, uint32_t op, uint64_t n, const gpu::Buffe
                 shaderio::kColourEncodeBwd == 3);
   if (op > shaderio::kColourEncodeBwd) throw std::invalid_argument("colour conversion: unknown op");
   shaderio::ColourPC pc{uint32_t(n), 0.0f, 0, 0};
-  const gpu::Groups groups =
-      cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(n, 4), shaderio::kColourGroupSize));
+  const gpu::Groups groups = quad_groups(cmd, n, shaderio::kColourGroupSize);
   if (op >= shaderio::kColourDecodeBwd)  // the forward builds have no gradient binding
     cmd.dispatch(kNames[op], {{shaderio::kColourBindX, x}, {shaderio::kColourBindG, g}, {shaderio::kColourBindY, y}},
                  pc, groups);
@@ -62,7 +70,7 @@ void record_decode_mean(gpu::Commands& cmd, uint64_t n, float scale, bool add, c
   shaderio::ColourPC pc{uint32_t(n), scale, add ? 1u : 0u, 0};
   cmd.dispatch("train/colour_decode_mean",
                {{shaderio::kColourBindX, x}, {shaderio::kColourBindY, y}, {shaderio::kColourBindMean, mean}}, pc,
-               cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(n, 4), shaderio::kColourGroupSize)));
+               quad_groups(cmd, n, shaderio::kColourGroupSize));
 }
 
 void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const gpu::Buffer* flow) {
