@@ -268,15 +268,27 @@ TEST_CASE("blur+events: the event term tells the true exposure trajectory from i
   test::require_no_validation_messages();
 }
 
-TEST_CASE("EDI warm-up: the mid-exposure pose gradient shifts a trajectory's knots together, keeping its motion",
-          "[train][camera][warmup]") {
+// One training view, for the camera model alone (no images: nothing renders).
+static io::Dataset one_view() {
   io::Dataset data;
   data.train.resize(1);
   data.train[0].camera = Camera::look_at(64, 48, 60.0, {0, 0, 0}, {0, 0, 6}, {0, -1, 0});
+  return data;
+}
+
+// blur+events with an EDI warm-up over the first half of `iterations` steps.
+static TrainConfig half_warmup(uint32_t iterations) {
   TrainConfig cfg;
   cfg.apply_method("blur+events");
-  cfg.iterations = 10;
+  cfg.iterations = iterations;
   cfg.edi_warmup = 0.5;
+  return cfg;
+}
+
+TEST_CASE("EDI warm-up: the mid-exposure pose gradient shifts a trajectory's knots together, keeping its motion",
+          "[train][camera][warmup]") {
+  const io::Dataset data = one_view();
+  const TrainConfig cfg = half_warmup(10);
   CameraModel cameras(data, cfg);
   // A learned motion (drift and yaw growing along the exposure), so that each knot's own
   // gradient differs from the others' in more than scale.
@@ -300,6 +312,34 @@ TEST_CASE("EDI warm-up: the mid-exposure pose gradient shifts a trajectory's kno
   // steps (4.0e-4, 1.6e-4, 0.6e-4 at steps 1-3): a knot moves at most their sum.
   CHECK(moved > 1e-4);
   CHECK(moved <= 6.31e-4);
+}
+
+TEST_CASE("EDI warm-up: the knots' Adam moments start afresh at the first blur step", "[train][camera][warmup]") {
+  const io::Dataset data = one_view();
+  const TrainConfig cfg = half_warmup(1000);  // 500 warm-up steps, all of this one view's
+  CameraModel cameras(data, cfg);
+  // A converged warm-up: small shift gradients, so the moments' second moment is small.
+  for (uint32_t step = 1; step <= 500; ++step) {
+    cameras.begin_step(step);
+    cameras.shift_and_step(0, {1e-4, -2e-4, 1e-4, 3e-5, -1e-4, 2e-5}, step);
+  }
+  REQUIRE(cameras.state()[0].step == 500);
+  // The blur loss's first knot gradients are far larger. From fresh moments Adam's first step
+  // moves each knot by the rate exactly; from the shift's it would move them about twice as far.
+  const std::vector<double> before = cameras.state()[0].knots;
+  const std::vector<lie::Vec6> frames(cameras.frame_times().size(), lie::Vec6{0.8, -0.5, 0.3, 0.2, -0.6, 0.4});
+  cameras.begin_step(501);
+  cameras.backward_and_step(0, frames, 501);
+  const TrajectoryState after = cameras.state()[0];
+  CHECK(after.step == 1);
+  double moved = 0;
+  for (size_t i = 0; i < before.size(); ++i) moved = std::max(moved, std::abs(after.knots[i] - before[i]));
+  CHECK(moved > 0.9 * cfg.lr_trajectory_init);
+  CHECK(moved <= cfg.lr_trajectory_init * (1 + 1e-9));
+  // Only that step restarts them.
+  cameras.begin_step(502);
+  cameras.backward_and_step(0, frames, 502);
+  CHECK(cameras.state()[0].step == 2);
 }
 
 TEST_CASE("EDI warm-up with edi_warmup_motion: the knots learn the exposure's motion and its direction",

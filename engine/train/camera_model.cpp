@@ -104,6 +104,18 @@ void CameraModel::shift_and_step(uint32_t view, const lie::Vec6& g, uint32_t ste
   adam_step(view, sched(step));
 }
 
+// The warm-up's moments are the shift's: one gradient for every knot, small once the mid frames
+// fit EDI. Against them the blur loss's first knot gradients, far larger and differing per knot,
+// would take steps of several times the knots' rate for each view's first tens of visits.
+void CameraModel::begin_step(uint32_t step) {
+  if (kind_ != Kind::Trajectory || knots_from_ == 0 || step != knots_from_ + 1) return;
+  for (TrajectoryState& a : adam_) {
+    a.step = 0;
+    std::fill(a.exp_avg.begin(), a.exp_avg.end(), 0.0);
+    std::fill(a.exp_avg_sq.begin(), a.exp_avg_sq.end(), 0.0);
+  }
+}
+
 void CameraModel::adam_step(uint32_t view, double lr) {
   TrajectoryState& a = adam_[view];
   host_adam_step(params(view), last_grad_.data(), a.exp_avg.data(), a.exp_avg_sq.data(), a.exp_avg.size(), ++a.step,

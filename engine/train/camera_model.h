@@ -41,6 +41,10 @@ class CameraModel {
   // gradient to every knot through the trajectory at the frame's time; one Adam step on the
   // knots' schedule.
   void frame_step(uint32_t view, uint32_t frame, const lie::Vec6& frame_pose_grad, uint32_t step);
+  // Called at the start of every training step. At the first blur step after a warm-up that
+  // only shifted the trajectories, the knots' Adam moments start afresh (training.md, "EDI
+  // warm-up").
+  void begin_step(uint32_t step);
   // What the last backward_and_step applied before Adam (54 knot or 6 delta values; empty for Fixed).
   const std::vector<double>& last_gradient() const { return last_grad_; }
   // Time reversal of a view's trajectory, with its Adam moments (Trajectory only).

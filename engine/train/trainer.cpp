@@ -276,6 +276,7 @@ StepStats Trainer::step() {
   StepStats st;
   st.step = ++step_;
   st.view = view_for_step(step_, data_.train.size(), cfg_.seed);
+  cameras_->begin_step(step_);
   if (warmup_ && warmup_->active(step_)) {
     warmup_step(st);
     return st;
