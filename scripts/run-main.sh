@@ -10,7 +10,7 @@ OUT=runs/main
 mkdir -p "$OUT"
 build/evflow devices
 # simulate the default scene -> train on the blurry views and the events (blur+events) -> evaluate (deblur + novel views) -> export
-# Training: up to 60,000 Gaussians, 6,100 steps of EDI warm-up (one render each), then 1,100
+# Training: up to 60,000 Gaussians, 6,099 steps of EDI warm-up (one render each), then 1,101
 # blur+events steps; no opacity reset (docs/experiments.md, "The main job").
 build/evflow simulate --out "$OUT/data"
 build/evflow train "$OUT/data" --out "$OUT/run" --preset fast method=blur+events max_gaussians=60000 iterations=7200 \
