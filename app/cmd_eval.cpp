@@ -22,7 +22,8 @@ namespace fs = std::filesystem;
 
 // With the simulator's ground truth: how training view `index`'s learned exposure moves the image
 // against the true motion (train/exposure_motion.h); null without a learned trajectory or truth.
-static nlohmann::json motion_json(const RunFolder& run, const io::Dataset& data, size_t index, int& reversed) {
+static nlohmann::json motion_json(const RunFolder& run, const io::Dataset& data, size_t index, int& reversed,
+                                  double& mid_error) {
   const auto& trajs = run.checkpoint.trajectories;
   if (trajs.empty() || trajs[index].knots.size() == 6) return nullptr;
   const io::View& v = data.train[index];
@@ -30,7 +31,11 @@ static nlohmann::json motion_json(const RunFolder& run, const io::Dataset& data,
                                  run.learned_camera(v, index, 0.5), run.learned_camera(v, index, 1.0));
   if (!m) return nullptr;
   reversed += m->reversed();
-  return {{"truth_px", m->truth_px}, {"error_px", m->error_px}, {"reversed", m->reversed()}};
+  mid_error += m->mid_error_px;
+  return {{"truth_px", m->truth_px},
+          {"error_px", m->error_px},
+          {"reversed", m->reversed()},
+          {"mid_error_px", m->mid_error_px}};
 }
 
 // Scores of one set of views, with everything each view's scoring needs.
@@ -80,13 +85,14 @@ struct Scorer {
     nlohmann::json per = nlohmann::json::array();
     double sp = 0, ss = 0;
     int n = 0, reversed = 0;
-    bool motion = false;
+    int motions = 0;  // views with a learned trajectory and ground truth
+    double mid_error = 0;
     for (size_t vi = 0; vi < views.size(); ++vi) {
       if (!views[vi].sharp_mid) continue;
       const metrics::Scores val = score_view(views[vi], vi, train, refine, set);
       per.push_back({{"view", views[vi].name}, {"psnr", val.psnr}, {"ssim", val.ssim}});
-      if (train) per.back()["motion"] = motion_json(run, data, vi, reversed);
-      motion = motion || !per.back().value("motion", nlohmann::json()).is_null();
+      if (train) per.back()["motion"] = motion_json(run, data, vi, reversed, mid_error);
+      motions += !per.back().value("motion", nlohmann::json()).is_null();
       sp += val.psnr;
       ss += val.ssim;
       ++n;
@@ -97,9 +103,11 @@ struct Scorer {
     std::snprintf(line, sizeof line, "| %s | %d | %.2f | %.4f |\n", set, n, sp / n, ss / n);
     md << line;
     std::printf("%-8s %3d views  PSNR %.2f dB  SSIM %.4f\n", set, n, sp / n, ss / n);
-    if (!motion) return;
+    if (!motions) return;
     out[set]["reversed_views"] = reversed;
-    std::printf("         %d of %d learned exposures run against the true motion\n", reversed, n);
+    out[set]["mean_mid_error_px"] = mid_error / motions;
+    std::printf("         %d of %d learned exposures run against the true motion\n", reversed, motions);
+    std::printf("         learned mid-exposure cameras %.2f px from the true ones (mean)\n", mid_error / motions);
   }
 };
 

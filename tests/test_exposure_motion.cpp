@@ -1,6 +1,7 @@
 // The learned exposure's image motion against the simulator's ground truth
 // (engine/train/exposure_motion.h): the true trajectory scores no error, the same trajectory run
-// backwards is called reversed, a still camera errs by the whole motion.
+// backwards is called reversed, a still camera errs by the whole motion, a turned mid-exposure
+// camera is misplaced by the turn.
 #include <catch2/catch.hpp>
 
 #include <filesystem>
@@ -15,7 +16,8 @@ using namespace evflow;
 namespace fs = std::filesystem;
 
 TEST_CASE(
-    "exposure motion: the true trajectory scores ~0 px, run backwards it is reversed, still it errs by the motion",
+    "exposure motion: the true trajectory scores ~0 px, run backwards it is reversed, still it errs by the motion; a "
+    "turned mid camera is misplaced",
     "[sim][gpu]") {
   auto& ctx = test::gpu_context();
   const sim::Scene scene = sim::make_default_scene();
@@ -48,6 +50,14 @@ TEST_CASE(
   const auto still = exposure_motion(dir, v.name, v.gt_camera, v.gt_camera, v.gt_camera);
   REQUIRE(still);
   CHECK(still->error_px == Approx(still->truth_px).epsilon(1e-6));
+  // The true mid-exposure camera is in place; turned by 0.01 rad about its y axis, the learned one
+  // sees every point about fx * 0.01 px away (more towards the image's sides).
+  CHECK(right->mid_error_px < 1e-3);
+  const double turn = 0.01;
+  const auto turned = exposure_motion(dir, v.name, start, v.gt_camera.perturbed({0, 0, 0, 0, turn, 0}), end);
+  REQUIRE(turned);
+  CHECK(turned->mid_error_px > v.gt_camera.fx * turn);
+  CHECK(turned->mid_error_px < 1.3 * v.gt_camera.fx * turn);
   // No ground truth: nothing to say.
   fs::remove_all(dir / "gt");
   CHECK_FALSE(exposure_motion(dir, v.name, start, v.gt_camera, end));

@@ -88,6 +88,21 @@ std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const 
   } catch (const nlohmann::json::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
 }
 
+std::optional<Camera> ground_truth_mid_camera(const fs::path& data, const std::string& name) {
+  const fs::path traj = data / "gt" / "trajectories.json";
+  if (!fs::exists(traj)) return std::nullopt;
+  std::ifstream f(traj);
+  try {
+    const nlohmann::json j = nlohmann::json::parse(f);
+    for (const nlohmann::json& view : j.at("train")) {
+      if (view.at("name") != name) continue;
+      const nlohmann::json& gc = view.at("gt_camera");
+      return camera_of(gc.at("intrinsics"), gc.at("R"), gc.at("t"), gc.at("size"));
+    }
+  } catch (const std::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
+  throw std::runtime_error(traj.string() + ": no training view '" + name + "'");
+}
+
 EndpointError endpoint_error(const std::vector<float>& estimate, const std::vector<float>& truth,
                              const std::vector<uint32_t>& counts) {
   if (truth.size() != counts.size() * 2 || estimate.size() != counts.size() * 2)

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "camera/camera.h"
+
 namespace evflow::sim {
 
 // For each interval [u_j, u_{j+1}] (normalised exposure times) of training view `name`: the
@@ -18,6 +20,10 @@ namespace evflow::sim {
 std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const std::filesystem::path& data,
                                                                           const std::string& name,
                                                                           const std::vector<double>& frame_u);
+
+// The simulator's true mid-exposure camera of training view `name` (gt/trajectories.json's
+// gt_camera); nullopt when `data` has no ground truth.
+std::optional<Camera> ground_truth_mid_camera(const std::filesystem::path& data, const std::string& name);
 
 // A dense flow's endpoint error against the truth (each H * W * 2), over the pixels with events
 // (`counts`, H * W) where the truth is defined.

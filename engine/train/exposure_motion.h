@@ -2,7 +2,9 @@
 // the displacement from the start to the end of the exposure of each surface point seen at
 // mid-exposure, learned (the trajectory's cameras at u = 0, 0.5, 1, the true mid-exposure depth)
 // against true (gt/trajectories.json, gt/depth/<view>.npy). Run backwards, a trajectory that
-// matches the blur but not the time direction scores its error under `reversed_error_px`.
+// matches the blur but not the time direction scores its error under `reversed_error_px`. Where
+// the learned mid-exposure camera sees the scene against the true one is `mid_error_px`: a
+// trajectory with the right motion in the wrong place scores its misplacement there.
 #pragma once
 #include <filesystem>
 #include <optional>
@@ -17,6 +19,7 @@ struct ExposureMotion {
   double truth_px = 0;           // mean length of the true displacement
   double error_px = 0;           // mean endpoint error of the learned displacement
   double reversed_error_px = 0;  // the same with the learned trajectory run backwards
+  double mid_error_px = 0;       // mean distance between each point's pixel in the learned and true mid cameras
   bool reversed() const { return reversed_error_px < error_px; }
 };
 
