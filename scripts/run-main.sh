@@ -11,10 +11,11 @@ mkdir -p "$OUT"
 build/evflow devices
 # simulate the default scene -> train on the blurry views and the events (blur+events) -> evaluate (deblur + novel views) -> export
 # Training: up to 60,000 Gaussians, 6,099 steps of EDI warm-up (one render each), then 1,101
-# blur+events steps; no opacity reset (docs/experiments.md, "The main job").
+# blur+events steps that learn the motion about the mid-exposure poses the warm-up fitted
+# (edi_keep_mid); no opacity reset (docs/experiments.md, "The main job").
 build/evflow simulate --out "$OUT/data"
 build/evflow train "$OUT/data" --out "$OUT/run" --preset fast method=blur+events max_gaussians=60000 iterations=7200 \
-  edi_warmup=0.847222 opacity_reset_every=0 "${@}"
+  edi_warmup=0.847222 edi_keep_mid=true opacity_reset_every=0 "${@}"
 build/evflow eval "$OUT/run"
 build/evflow export "$OUT/run" --gltf "$OUT/run/splats.glb" --ply "$OUT/run/splats.ply"
 cat "$OUT/run/eval.md"

@@ -342,6 +342,67 @@ TEST_CASE("EDI warm-up: the knots' Adam moments start afresh at the first blur s
   CHECK(cameras.state()[0].step == 2);
 }
 
+// The largest difference between two poses' matrices and translations.
+static double pose_gap(const lie::SE3& a, const lie::SE3& b) {
+  double gap = 0;
+  for (int i = 0; i < 9; ++i) gap = std::max(gap, std::abs(a.R[i] - b.R[i]));
+  for (int i = 0; i < 3; ++i) gap = std::max(gap, std::abs(a.t[i] - b.t[i]));
+  return gap;
+}
+
+TEST_CASE("EDI warm-up with edi_keep_mid: the blur steps learn the motion about the warm-up's mid-exposure pose",
+          "[train][camera][warmup]") {
+  const io::Dataset data = one_view();
+  TrainConfig cfg = half_warmup(40);  // 20 warm-up steps, then 20 blur steps
+  cfg.edi_keep_mid = true;
+  CameraModel cameras(data, cfg);
+  const std::vector<lie::Vec6> shift_grads = {{0.3, -0.2, 0.1, 0.05, 0.4, -0.1}, {-0.9, 0.1, 0.3, -0.2, 0.1, 0.3}};
+  for (uint32_t step = 1; step <= 20; ++step) {
+    cameras.begin_step(step);
+    cameras.shift_and_step(0, shift_grads[step % 2], step);
+  }
+  // The warm-up moves the mid pose; keep_mid does not hold it there.
+  const lie::SE3 mid = cameras.trajectories()[0].offset(0.5);
+  CHECK(pose_gap(mid, lie::SE3::identity()) > 1e-3);
+  // Frame gradients that would move the whole trajectory (each frame the same) and bend it
+  // (growing along the exposure).
+  std::vector<lie::Vec6> frames;
+  for (size_t f = 0; f < cameras.frame_times().size(); ++f)
+    frames.push_back({0.8 + 0.3 * f, -0.5, 0.3 * f, 0.2, -0.6 + 0.2 * f, 0.4});
+  const ExposureTrajectory before = cameras.trajectories()[0];
+  for (uint32_t step = 21; step <= 40; ++step) {
+    cameras.begin_step(step);
+    cameras.backward_and_step(0, frames, step);
+  }
+  const ExposureTrajectory& after = cameras.trajectories()[0];
+  CHECK(pose_gap(after.offset(0.5), mid) < 1e-12);
+  // Adam's moments hold no part that would move T(0.5): along the Bernstein weights at 0.5 the
+  // first moment sums to zero in every component.
+  const auto b = ExposureTrajectory::bernstein_weights(0.5);
+  const std::vector<double> m = cameras.state()[0].exp_avg;
+  for (int c = 0; c < ExposureTrajectory::kDof; ++c) {
+    double along = 0, size = 0;
+    for (int j = 0; j < ExposureTrajectory::kKnots; ++j) {
+      along += b[j] * m[j * 6 + c];
+      size = std::max(size, std::abs(m[j * 6 + c]));
+    }
+    CHECK(size > 0);
+    CHECK(std::abs(along) < 1e-12 * size);
+  }
+  // The motion itself was learned: the exposure's ends moved apart, by tens of Adam steps.
+  CHECK(pose_gap(after.offset(0.0), before.offset(0.0)) > 0.02);
+  CHECK(pose_gap(after.offset(1.0), before.offset(1.0)) > 0.02);
+  // Without the key the same steps move the mid pose too.
+  cfg.edi_keep_mid = false;
+  CameraModel free(data, cfg);
+  for (uint32_t step = 1; step <= 20; ++step) free.shift_and_step(0, shift_grads[step % 2], step);
+  for (uint32_t step = 21; step <= 40; ++step) {
+    free.begin_step(step);
+    free.backward_and_step(0, frames, step);
+  }
+  CHECK(pose_gap(free.trajectories()[0].offset(0.5), mid) > 0.02);
+}
+
 TEST_CASE("EDI warm-up with edi_warmup_motion: the knots learn the exposure's motion and its direction",
           "[gpu][train][camera][warmup]") {
   auto& ctx = test::gpu_context();

@@ -20,6 +20,7 @@ CameraModel::CameraModel(const io::Dataset& data, const TrainConfig& cfg)
       kind_(kind_of(cfg)),
       iterations_(cfg.iterations),
       warmup_steps_(cfg.edi_warmup_steps()),
+      keep_mid_(cfg.edi_keep_mid && kind_ == Kind::Trajectory && warmup_steps_ > 0),
       knots_from_(cfg.edi_motion_steps() > 0 ? 0 : warmup_steps_),  // < iterations (check_edi_warmup)
       lr_pose_init_(cfg.lr_pose_init),
       lr_pose_final_(cfg.lr_pose_final) {
@@ -71,6 +72,13 @@ void CameraModel::backward_and_step(uint32_t view, const std::vector<lie::Vec6>&
       for (size_t k = 0; k < kg.size(); ++k) knot_grad[k] += kg[k];
     }
     last_grad_.assign(knot_grad.begin(), knot_grad.end());
+    if (keep_mid_ && step > warmup_steps_) {
+      const lie::SE3 mid = trajectories_[view].offset(0.5);
+      without_mid_move(last_grad_.data());
+      adam_step(view, rate(step));
+      keep_mid(view, mid);
+      return;
+    }
   } else {
     // c2w Exp(delta) Exp(g-step) = c2w Exp(delta + J_r(delta)^-1 g-step): dL/ddelta = J_r(delta)^T g.
     const lie::Vec6 d = lie::mul_transposed(lie::se3_right_jacobian(deltas_[view]), g.back());
@@ -120,6 +128,38 @@ void CameraModel::adam_step(uint32_t view, double lr) {
   TrajectoryState& a = adam_[view];
   host_adam_step(params(view), last_grad_.data(), a.exp_avg.data(), a.exp_avg_sq.data(), a.exp_avg.size(), ++a.step,
                  lr);
+}
+
+// Removes from a knot gradient, component by component, its part along the Bernstein weights at
+// u = 0.5: to first order the part that moves T(0.5). Adam's moments then hold the motion's
+// gradient alone; with the mid-exposure pose's part in them, which keep_mid undoes at every step,
+// its normalised steps would shrink the motion's and the motions go wrong (experiments.md).
+void CameraModel::without_mid_move(double* grad) {
+  const auto b = ExposureTrajectory::bernstein_weights(0.5);
+  double bb = 0;
+  for (double x : b) bb += x * x;
+  for (int c = 0; c < ExposureTrajectory::kDof; ++c) {
+    double bg = 0;
+    for (int j = 0; j < ExposureTrajectory::kKnots; ++j) bg += b[j] * grad[j * ExposureTrajectory::kDof + c];
+    for (int j = 0; j < ExposureTrajectory::kKnots; ++j) grad[j * ExposureTrajectory::kDof + c] -= b[j] * bg / bb;
+  }
+}
+
+// Adds one se(3) vector c to every knot so that T(0.5) is `mid` again. Adding c to each knot moves
+// T(0.5) by about Exp(c) on the right (the Bernstein weights sum to one; exact for commuting
+// knots), so c is refined by the remaining right-hand error: each pass shrinks the error by about
+// the knots' size (1e-2 for exposure-sized motions), so a few passes reach rounding.
+void CameraModel::keep_mid(uint32_t view, const lie::SE3& mid) {
+  ExposureTrajectory& tr = trajectories_[view];
+  for (int pass = 0; pass < 12; ++pass) {
+    const lie::Vec6 c = lie::se3_log(tr.offset(0.5).inverse() * mid);
+    double size = 0;
+    for (int k = 0; k < ExposureTrajectory::kDof; ++k) {
+      size = std::max(size, std::abs(c[k]));
+      for (int j = 0; j < ExposureTrajectory::kKnots; ++j) tr.data()[j * ExposureTrajectory::kDof + k] += c[k];
+    }
+    if (size < 1e-15) return;
+  }
 }
 
 // T'(u) = T(1 - u) up to the order of the factors (exact for commuting knots, close for

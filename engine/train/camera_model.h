@@ -30,7 +30,10 @@ class CameraModel {
   const std::vector<ExposureTrajectory>& trajectories() const { return trajectories_; }
 
   // The frames' pose gradients (se(3), translation first, one per frame in frame order) to the
-  // view's parameters; one Adam step on them at training step `step`. No-op for Fixed.
+  // view's parameters; one Adam step on them at training step `step`. No-op for Fixed. With
+  // edi_keep_mid, a blur step after the EDI warm-up steps only the motion: the gradient's part
+  // that would move the mid-exposure pose is removed before Adam (without_mid_move), and all knots
+  // are shifted alike after it so that T(0.5) is exactly the pose before the step (keep_mid).
   void backward_and_step(uint32_t view, const std::vector<lie::Vec6>& frame_pose_grads, uint32_t step);
   // EDI warm-up (Trajectory only): frame u = 0.5's pose gradient applied to every knot alike, so
   // the trajectory shifts as a whole and keeps its shape (one frame says nothing about the
@@ -57,6 +60,8 @@ class CameraModel {
 
  private:
   void adam_step(uint32_t view, double lr);
+  static void without_mid_move(double* knot_grad);
+  void keep_mid(uint32_t view, const lie::SE3& mid);
   double rate(uint32_t step) const;
   double* params(uint32_t view);
   const double* params(uint32_t view) const;
@@ -65,6 +70,7 @@ class CameraModel {
   std::vector<double> times_;
   uint32_t iterations_;
   uint32_t warmup_steps_;
+  bool keep_mid_;        // edi_keep_mid: blur steps after the warm-up keep T(0.5)
   uint32_t knots_from_;  // the knots' schedule starts here, where the motion is first learned
   double lr_init_ = 0, lr_final_ = 0;
   double lr_pose_init_, lr_pose_final_;  // the warm-up's shifts

@@ -12,6 +12,8 @@ void check_edi_warmup(const TrainConfig& cfg, const io::Dataset& data) {
   require_fraction("edi_warmup_motion", cfg.edi_warmup_motion);
   if (cfg.edi_warmup == 0 && cfg.edi_warmup_motion > 0)
     throw std::invalid_argument("edi_warmup_motion > 0 is a share of the EDI warm-up: it needs edi_warmup > 0");
+  if (cfg.edi_warmup == 0 && cfg.edi_keep_mid)
+    throw std::invalid_argument("edi_keep_mid keeps the mid pose the EDI warm-up fitted: it needs edi_warmup > 0");
   if (cfg.edi_warmup == 0) return;
   if (cfg.mode != TrainMode::Blur)
     throw std::invalid_argument(

@@ -276,6 +276,12 @@ std::vector<Setting> blur_settings() {
             "splats are still coarse; the rest of the warm-up fits the mid-exposure frame, keeping the motion's "
             "shape ([training.md](training.md#edi-warm-up)); the knots' schedule then runs over the whole run; 0: "
             "off; in [0, 1]"),
+      field("edi_keep_mid", &TrainConfig::edi_keep_mid,
+            "after an EDI warm-up, each blur step keeps every trajectory's mid-exposure pose where the warm-up "
+            "left it: the knots' gradient loses its part that moves T(0.5) before Adam, and one common shift of "
+            "all nine knots after the step restores T(0.5) exactly, so the blur phase learns the motion about "
+            "the pose the mid frames fitted to EDI "
+            "([training.md](training.md#edi-warm-up)); needs `edi_warmup` > 0"),
       field("splats_from", &TrainConfig::splats_from,
             "fraction of the blur steps before which the Gaussians are frozen and only the knots learn: the blur "
             "loss fits the exposure's motion to the splats as they are instead of blurring them to match a "
