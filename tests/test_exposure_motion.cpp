@@ -16,8 +16,8 @@ using namespace evflow;
 namespace fs = std::filesystem;
 
 TEST_CASE(
-    "exposure motion: the true trajectory scores ~0 px, run backwards it is reversed, still it errs by the motion; a "
-    "turned mid camera is misplaced",
+    "exposure motion: the true trajectory scores ~0 px, run backwards it is reversed, still it errs by the motion, "
+    "turned at mid-exposure it is misplaced",
     "[sim][gpu]") {
   auto& ctx = test::gpu_context();
   const sim::Scene scene = sim::make_default_scene();
