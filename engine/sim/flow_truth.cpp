@@ -44,32 +44,50 @@ std::vector<float> positions_at(const nlohmann::json& view, const Camera& mid, c
   return pos;
 }
 
+// Training view `name`'s entry in the parsed trajectories of `traj`.
+const nlohmann::json& train_view(const nlohmann::json& j, const fs::path& traj, const std::string& name) {
+  for (const nlohmann::json& view : j.at("train"))
+    if (view.at("name") == name) return view;
+  throw std::runtime_error(traj.string() + ": no training view '" + name + "'");
+}
+
+// A view's true mid-exposure camera.
+Camera gt_camera_of(const nlohmann::json& view) {
+  const nlohmann::json& gc = view.at("gt_camera");
+  return camera_of(gc.at("intrinsics"), gc.at("R"), gc.at("t"), gc.at("size"));
+}
+
 // The interval flows of training view `name` from the trajectories parsed from `traj`.
 std::vector<std::vector<float>> interval_flow_of(const nlohmann::json& j, const fs::path& traj, const std::string& name,
                                                  const fs::path& depth_file, const std::vector<double>& frame_u) {
-  for (const nlohmann::json& view : j.at("train")) {
-    if (view.at("name") != name) continue;
-    if (view.at("subframes").size() < 2)
-      throw std::runtime_error(traj.string() + ": view '" + name + "' has " +
-                               std::to_string(view.at("subframes").size()) + " subframes; the flow needs at least 2");
-    const nlohmann::json& gc = view.at("gt_camera");
-    const Camera mid = camera_of(gc.at("intrinsics"), gc.at("R"), gc.at("t"), gc.at("size"));
-    const std::vector<double> d = io::read_npy_double(depth_file);
-    if (d.size() != size_t(mid.width) * mid.height)
-      throw std::runtime_error(depth_file.string() + ": " + std::to_string(d.size()) + " values for a " +
-                               std::to_string(mid.width) + "x" + std::to_string(mid.height) + " camera");
-    const std::vector<float> depth(d.begin(), d.end());
-    std::vector<std::vector<float>> out;
-    std::vector<float> prev = positions_at(view, mid, depth, frame_u[0]);
-    for (size_t k = 1; k < frame_u.size(); ++k) {
-      std::vector<float> cur = positions_at(view, mid, depth, frame_u[k]), flow(cur.size());
-      for (size_t i = 0; i < cur.size(); ++i) flow[i] = cur[i] - prev[i];
-      out.push_back(std::move(flow));
-      prev = std::move(cur);
-    }
-    return out;
+  const nlohmann::json& view = train_view(j, traj, name);
+  if (view.at("subframes").size() < 2)
+    throw std::runtime_error(traj.string() + ": view '" + name + "' has " +
+                             std::to_string(view.at("subframes").size()) + " subframes; the flow needs at least 2");
+  const Camera mid = gt_camera_of(view);
+  const std::vector<double> d = io::read_npy_double(depth_file);
+  if (d.size() != size_t(mid.width) * mid.height)
+    throw std::runtime_error(depth_file.string() + ": " + std::to_string(d.size()) + " values for a " +
+                             std::to_string(mid.width) + "x" + std::to_string(mid.height) + " camera");
+  const std::vector<float> depth(d.begin(), d.end());
+  std::vector<std::vector<float>> out;
+  std::vector<float> prev = positions_at(view, mid, depth, frame_u[0]);
+  for (size_t k = 1; k < frame_u.size(); ++k) {
+    std::vector<float> cur = positions_at(view, mid, depth, frame_u[k]), flow(cur.size());
+    for (size_t i = 0; i < cur.size(); ++i) flow[i] = cur[i] - prev[i];
+    out.push_back(std::move(flow));
+    prev = std::move(cur);
   }
-  throw std::runtime_error(traj.string() + ": no training view '" + name + "'");
+  return out;
+}
+
+// gt/trajectories.json parsed, or nullopt where the dataset has none.
+std::optional<nlohmann::json> read_trajectories(const fs::path& traj) {
+  if (!fs::exists(traj)) return std::nullopt;
+  std::ifstream f(traj);
+  try {
+    return nlohmann::json::parse(f);
+  } catch (const std::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
 }
 
 }  // namespace
@@ -77,30 +95,21 @@ std::vector<std::vector<float>> interval_flow_of(const nlohmann::json& j, const 
 std::optional<std::vector<std::vector<float>>> ground_truth_interval_flow(const fs::path& data, const std::string& name,
                                                                           const std::vector<double>& frame_u) {
   const fs::path traj = data / "gt" / "trajectories.json", depth_file = data / "gt" / "depth" / (name + ".npy");
-  if (!fs::exists(traj) || !fs::exists(depth_file)) return std::nullopt;
-  std::ifstream f(traj);
-  nlohmann::json j;
+  if (!fs::exists(depth_file)) return std::nullopt;
+  const auto j = read_trajectories(traj);
+  if (!j) return std::nullopt;
   try {
-    j = nlohmann::json::parse(f);
-  } catch (const std::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
-  try {
-    return interval_flow_of(j, traj, name, depth_file, frame_u);
+    return interval_flow_of(*j, traj, name, depth_file, frame_u);
   } catch (const nlohmann::json::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
 }
 
 std::optional<Camera> ground_truth_mid_camera(const fs::path& data, const std::string& name) {
   const fs::path traj = data / "gt" / "trajectories.json";
-  if (!fs::exists(traj)) return std::nullopt;
-  std::ifstream f(traj);
+  const auto j = read_trajectories(traj);
+  if (!j) return std::nullopt;
   try {
-    const nlohmann::json j = nlohmann::json::parse(f);
-    for (const nlohmann::json& view : j.at("train")) {
-      if (view.at("name") != name) continue;
-      const nlohmann::json& gc = view.at("gt_camera");
-      return camera_of(gc.at("intrinsics"), gc.at("R"), gc.at("t"), gc.at("size"));
-    }
-  } catch (const std::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
-  throw std::runtime_error(traj.string() + ": no training view '" + name + "'");
+    return gt_camera_of(train_view(*j, traj, name));
+  } catch (const nlohmann::json::exception& e) { throw std::runtime_error(traj.string() + ": " + e.what()); }
 }
 
 EndpointError endpoint_error(const std::vector<float>& estimate, const std::vector<float>& truth,
