@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -72,19 +73,46 @@ TEST_CASE("checkpoints: a flipped bit in any byte, a cut and a grown file are re
   fs::remove_all(dir);
 }
 
-TEST_CASE("checkpoints: version 4 files (before the checksum) are still read", "[checkpoint]") {
+TEST_CASE("checkpoints: the mid-exposure pose's moments round-trip; versions 4 and 5 are still read", "[checkpoint]") {
   const fs::path dir = fresh_dir("evf_ckpt_v4");
-  const Checkpoint c = small_checkpoint();
-  write_checkpoint(dir / "v5.ckpt", c);
-  std::string v4 = test::slurp(dir / "v5.ckpt");
-  v4.resize(v4.size() - 4);  // version 4 = version 5 without the trailing CRC-32
+  Checkpoint c = small_checkpoint();
+  TrajectoryState moving = c.trajectories[0];
+  moving.mid_step = 12;
+  moving.mid_exp_avg = {1e-3, -2e-3, 3e-3, 0, 5e-4, -1e-4};
+  moving.mid_exp_avg_sq = std::vector<double>(6, 4e-6);
+  c.trajectories.push_back(moving);
+  write_checkpoint(dir / "v6.ckpt", c);
+  const Checkpoint r6 = read_checkpoint(dir / "v6.ckpt");
+  REQUIRE(r6.trajectories.size() == 2);
+  CHECK(r6.trajectories[0].mid_exp_avg.empty());
+  CHECK(r6.trajectories[1].mid_step == 12);
+  CHECK(r6.trajectories[1].mid_exp_avg == moving.mid_exp_avg);
+  CHECK(r6.trajectories[1].mid_exp_avg_sq == moving.mid_exp_avg_sq);
+  moving.mid_exp_avg_sq.pop_back();
+  c.trajectories[1] = moving;
+  CHECK_THROWS_WITH(write_checkpoint(dir / "bad.ckpt", c), Contains("bad.ckpt") && Contains("mid-exposure"));
+  // Without mid moments, version 6 is version 5 with a zero count after each camera state (the
+  // last one: before the checksum), and version 5 is version 4 followed by the checksum.
+  c.trajectories.pop_back();
+  write_checkpoint(dir / "v6.ckpt", c);
+  std::string v5 = test::slurp(dir / "v6.ckpt");
+  REQUIRE(v5.compare(v5.size() - 8, 4, std::string(4, '\0')) == 0);
+  v5.erase(v5.size() - 8, 4);
+  v5[7] = '5';
+  const uint32_t crc = io::crc32(v5.data(), v5.size() - 4);
+  std::memcpy(v5.data() + v5.size() - 4, &crc, 4);
+  std::string v4 = v5.substr(0, v5.size() - 4);
   v4[7] = '4';
-  write_bytes(dir / "v4.ckpt", v4);
-  const Checkpoint r = read_checkpoint(dir / "v4.ckpt");
-  REQUIRE(r.step == c.step);
-  REQUIRE(r.cloud.means == c.cloud.means);
-  REQUIRE(r.optimizer[0].exp_avg_sq == c.optimizer[0].exp_avg_sq);
-  REQUIRE(r.trajectories[0].knots == c.trajectories[0].knots);
+  for (const auto& [name, bytes] : {std::pair{"v5.ckpt", v5}, std::pair{"v4.ckpt", v4}}) {
+    INFO(name);
+    write_bytes(dir / name, bytes);
+    const Checkpoint r = read_checkpoint(dir / name);
+    REQUIRE(r.step == c.step);
+    REQUIRE(r.cloud.means == c.cloud.means);
+    REQUIRE(r.optimizer[0].exp_avg_sq == c.optimizer[0].exp_avg_sq);
+    REQUIRE(r.trajectories[0].knots == c.trajectories[0].knots);
+    REQUIRE(r.trajectories[0].mid_exp_avg.empty());
+  }
   v4[7] = '3';
   write_bytes(dir / "v3.ckpt", v4);
   REQUIRE_THROWS_WITH(read_checkpoint(dir / "v3.ckpt"), Contains("v3.ckpt") && Contains("not an EvFlow checkpoint"));

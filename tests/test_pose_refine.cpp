@@ -7,10 +7,13 @@
 #include <filesystem>
 
 #include "camera/trajectory.h"
+#include "cli_helpers.h"
 #include "events/event_model.h"
 #include "gpu_fixture.h"
 #include "loss/event_loss.h"
+#include "optim/schedule.h"
 #include "splat/synthetic.h"
+#include "train/checkpoint.h"
 #include "train/pose_refine.h"
 #include "train/synthetic_dataset.h"
 #include "train/trainer.h"
@@ -401,6 +404,66 @@ TEST_CASE("EDI warm-up with edi_keep_mid: the blur steps learn the motion about 
     free.backward_and_step(0, frames, step);
   }
   CHECK(pose_gap(free.trajectories()[0].offset(0.5), mid) > 0.02);
+}
+
+TEST_CASE("EDI warm-up with edi_mid_lr: the kept mid-exposure pose moves by its own slow Adam, resumable",
+          "[train][camera][warmup]") {
+  const io::Dataset data = one_view();
+  TrainConfig cfg = half_warmup(40);  // 20 warm-up steps, then 20 blur steps
+  cfg.edi_keep_mid = true;
+  cfg.edi_mid_lr = 2e-4;
+  CameraModel cameras(data, cfg);
+  for (uint32_t step = 1; step <= 20; ++step) cameras.shift_and_step(0, {0.3, -0.2, 0.1, 0.05, 0.4, -0.1}, step);
+  const lie::SE3 mid = cameras.trajectories()[0].offset(0.5);
+  // Every frame pushed the same way: the whole trajectory would shift, so the part along the
+  // Bernstein weights keeps its sign in every component, and Adam's normalised steps are the
+  // rate, decayed as the knots' rate is, each against that sign.
+  const lie::Vec6 push{0.8, -0.5, 0.3, 0.2, -0.6, 0.4};
+  const std::vector<lie::Vec6> frames(cameras.frame_times().size(), push);
+  auto blur_steps = [&](CameraModel& m, uint32_t from, uint32_t to) {
+    for (uint32_t step = from; step <= to; ++step) {
+      m.begin_step(step);
+      m.backward_and_step(0, frames, step);
+    }
+  };
+  blur_steps(cameras, 21, 30);
+  const ExponentialDecay knots{cfg.lr_trajectory_init, cfg.lr_trajectory_final, 20};
+  double travel = 0;  // the sum of the mid pose's rates over the ten steps
+  for (uint32_t k = 1; k <= 10; ++k) travel += cfg.edi_mid_lr * knots(k) / cfg.lr_trajectory_init;
+  const lie::Vec6 moved = lie::se3_log(mid.inverse() * cameras.trajectories()[0].offset(0.5));
+  for (int c = 0; c < 6; ++c) {
+    INFO("component " << c);
+    CHECK(moved[c] == Approx(-travel * (push[c] > 0 ? 1 : -1)).epsilon(0.02));
+  }
+  const TrajectoryState saved = cameras.state()[0];
+  CHECK(saved.mid_step == 10);
+  REQUIRE(saved.mid_exp_avg.size() == 6);
+  // Resumed from its state (through a checkpoint file), a model continues as the one that ran on.
+  const std::filesystem::path dir = test::fresh_dir("evf_mid_lr");
+  Checkpoint ck;
+  ck.cloud.resize(0, 0);
+  ck.trajectories = cameras.state();
+  write_checkpoint(dir / "c.ckpt", ck);
+  CameraModel resumed(data, cfg);
+  resumed.load(read_checkpoint(dir / "c.ckpt").trajectories, cfg);
+  blur_steps(cameras, 31, 40);
+  blur_steps(resumed, 31, 40);
+  CHECK(resumed.state()[0].knots == cameras.state()[0].knots);
+  CHECK(resumed.state()[0].mid_exp_avg_sq == cameras.state()[0].mid_exp_avg_sq);
+  // A model that does not move the mid pose drops the moments; one that does and finds none
+  // starts them afresh.
+  cfg.edi_mid_lr = 0;
+  CameraModel held(data, cfg);
+  held.load({saved}, cfg);
+  CHECK(held.state()[0].mid_exp_avg.empty());
+  cfg.edi_mid_lr = 2e-4;
+  TrajectoryState old = saved;
+  old.mid_exp_avg.clear(), old.mid_exp_avg_sq.clear();
+  CameraModel fresh(data, cfg);
+  fresh.load({old}, cfg);
+  CHECK(fresh.state()[0].mid_step == 0);
+  CHECK(fresh.state()[0].mid_exp_avg == std::vector<double>(6, 0.0));
+  std::filesystem::remove_all(dir);
 }
 
 TEST_CASE("EDI warm-up with edi_warmup_motion: the knots learn the exposure's motion and its direction",

@@ -231,6 +231,7 @@ TEST_CASE("trainer: EDI warm-up settings that cannot work are refused, naming th
   refused([](TrainConfig& c) { c.edi_warmup_motion = -0.5; }, "edi_warmup_motion must be in [0, 1]");
   refused([](TrainConfig& c) { c.edi_warmup = 0, c.edi_warmup_motion = 0.2; }, "needs edi_warmup > 0");
   refused([](TrainConfig& c) { c.edi_warmup = 0, c.edi_keep_mid = true; }, "edi_keep_mid keeps the mid pose");
+  refused([](TrainConfig& c) { c.edi_warmup = 0.5, c.edi_mid_lr = 1e-4; }, "needs edi_keep_mid=true");
   io::Dataset no_events = data;
   no_events.events = {};
   TrainConfig cfg;

@@ -21,6 +21,7 @@ CameraModel::CameraModel(const io::Dataset& data, const TrainConfig& cfg)
       iterations_(cfg.iterations),
       warmup_steps_(cfg.edi_warmup_steps()),
       keep_mid_(cfg.edi_keep_mid && kind_ == Kind::Trajectory && warmup_steps_ > 0),
+      mid_lr_(keep_mid_ ? cfg.edi_mid_lr : 0.0),
       knots_from_(cfg.edi_motion_steps() > 0 ? 0 : warmup_steps_),  // < iterations (check_edi_warmup)
       lr_pose_init_(cfg.lr_pose_init),
       lr_pose_final_(cfg.lr_pose_final) {
@@ -37,6 +38,8 @@ CameraModel::CameraModel(const io::Dataset& data, const TrainConfig& cfg)
   }
   const size_t dof = kind_ == Kind::Trajectory ? ExposureTrajectory::kSize : 6;
   if (kind_ != Kind::Fixed) adam_.assign(nv, {0, {}, std::vector<double>(dof, 0.0), std::vector<double>(dof, 0.0)});
+  if (mid_lr_ > 0)
+    for (TrajectoryState& a : adam_) a.mid_exp_avg = a.mid_exp_avg_sq = std::vector<double>(6, 0.0);
 }
 
 Camera CameraModel::frame_camera(uint32_t view, uint32_t frame) const {
@@ -73,8 +76,8 @@ void CameraModel::backward_and_step(uint32_t view, const std::vector<lie::Vec6>&
     }
     last_grad_.assign(knot_grad.begin(), knot_grad.end());
     if (keep_mid_ && step > warmup_steps_) {
-      const lie::SE3 mid = trajectories_[view].offset(0.5);
-      without_mid_move(last_grad_.data());
+      const lie::Vec6 mid_grad = without_mid_move(last_grad_.data());
+      const lie::SE3 mid = moved_mid(view, mid_grad, step);
       adam_step(view, rate(step));
       keep_mid(view, mid);
       return;
@@ -134,15 +137,35 @@ void CameraModel::adam_step(uint32_t view, double lr) {
 // u = 0.5: to first order the part that moves T(0.5). Adam's moments then hold the motion's
 // gradient alone; with the mid-exposure pose's part in them, which keep_mid undoes at every step,
 // its normalised steps would shrink the motion's and the motions go wrong (experiments.md).
-void CameraModel::without_mid_move(double* grad) {
+// Returns the removed part's size per component: moving the knots by s b_j moves T(0.5) by about
+// Exp(s |b|^2) on the right, so it is the loss's gradient for a right move of T(0.5), up to the
+// factor |b|^2 that Adam does not see.
+lie::Vec6 CameraModel::without_mid_move(double* grad) {
   const auto b = ExposureTrajectory::bernstein_weights(0.5);
   double bb = 0;
   for (double x : b) bb += x * x;
+  lie::Vec6 along{};
   for (int c = 0; c < ExposureTrajectory::kDof; ++c) {
-    double bg = 0;
+    double& bg = along[c];
     for (int j = 0; j < ExposureTrajectory::kKnots; ++j) bg += b[j] * grad[j * ExposureTrajectory::kDof + c];
     for (int j = 0; j < ExposureTrajectory::kKnots; ++j) grad[j * ExposureTrajectory::kDof + c] -= b[j] * bg / bb;
   }
+  return along;
+}
+
+// The mid-exposure pose this blur step keeps: the one before it, or (edi_mid_lr > 0) that pose
+// moved on the right by one step of its own Adam on `mid_grad`, at edi_mid_lr decayed as the
+// knots' rate is. Slow and smooth, so that a view the warm-up left a pixel off can still settle
+// while the first, sign-like steps of fresh moments cannot throw a view into a neighbouring basin
+// of the blur loss (experiments.md).
+lie::SE3 CameraModel::moved_mid(uint32_t view, const lie::Vec6& mid_grad, uint32_t step) {
+  const lie::SE3 mid = trajectories_[view].offset(0.5);
+  if (mid_lr_ <= 0) return mid;
+  TrajectoryState& a = adam_[view];
+  lie::Vec6 move{};
+  host_adam_step(move.data(), mid_grad.data(), a.mid_exp_avg.data(), a.mid_exp_avg_sq.data(), move.size(), ++a.mid_step,
+                 mid_lr_ * rate(step) / lr_init_);
+  return mid * lie::se3_exp(move);
 }
 
 // Adds one se(3) vector c to every knot so that T(0.5) is `mid` again. Adding c to each knot moves
@@ -194,9 +217,16 @@ void CameraModel::load(const std::vector<TrajectoryState>& saved, const TrainCon
                                 std::to_string(saved[0].knots.size()) + " values; this run (mode " +
                                 std::string(mode_name(cfg.mode)) + (cfg.pose_refine ? ", pose_refine" : "") + ") has " +
                                 std::to_string(want) + " of " + std::to_string(dof));
+  // The mid pose's moments: kept when this run moves the mid pose and they were saved; fresh when
+  // it moves it and they were not (a checkpoint of a run without edi_mid_lr); dropped otherwise.
   for (uint32_t v = 0; v < want; ++v) {
     std::copy(saved[v].knots.begin(), saved[v].knots.end(), params(v));
-    adam_[v] = saved[v];
+    TrajectoryState a = saved[v];
+    if (mid_lr_ <= 0 || a.mid_exp_avg.size() != 6) {
+      a.mid_step = 0;
+      a.mid_exp_avg = a.mid_exp_avg_sq = std::vector<double>(mid_lr_ > 0 ? 6 : 0, 0.0);
+    }
+    adam_[v] = std::move(a);
   }
 }
 

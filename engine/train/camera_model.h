@@ -33,7 +33,8 @@ class CameraModel {
   // view's parameters; one Adam step on them at training step `step`. No-op for Fixed. With
   // edi_keep_mid, a blur step after the EDI warm-up steps only the motion: the gradient's part
   // that would move the mid-exposure pose is removed before Adam (without_mid_move), and all knots
-  // are shifted alike after it so that T(0.5) is exactly the pose before the step (keep_mid).
+  // are shifted alike after it so that T(0.5) is exactly the pose before the step (keep_mid); with
+  // edi_mid_lr > 0, the pose before the step moved by its own Adam on the removed part.
   void backward_and_step(uint32_t view, const std::vector<lie::Vec6>& frame_pose_grads, uint32_t step);
   // EDI warm-up (Trajectory only): frame u = 0.5's pose gradient applied to every knot alike, so
   // the trajectory shifts as a whole and keeps its shape (one frame says nothing about the
@@ -60,7 +61,8 @@ class CameraModel {
 
  private:
   void adam_step(uint32_t view, double lr);
-  static void without_mid_move(double* knot_grad);
+  static lie::Vec6 without_mid_move(double* knot_grad);
+  lie::SE3 moved_mid(uint32_t view, const lie::Vec6& mid_grad, uint32_t step);
   void keep_mid(uint32_t view, const lie::SE3& mid);
   double rate(uint32_t step) const;
   double* params(uint32_t view);
@@ -71,6 +73,7 @@ class CameraModel {
   uint32_t iterations_;
   uint32_t warmup_steps_;
   bool keep_mid_;        // edi_keep_mid: blur steps after the warm-up keep T(0.5)
+  double mid_lr_;        // edi_mid_lr: or move it by its own Adam, from this rate on the knots' decay
   uint32_t knots_from_;  // the knots' schedule starts here, where the motion is first learned
   double lr_init_ = 0, lr_final_ = 0;
   double lr_pose_init_, lr_pose_final_;  // the warm-up's shifts

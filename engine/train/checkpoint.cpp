@@ -10,7 +10,9 @@
 
 namespace evflow {
 
-// Version 5 is version 4's layout followed by the CRC-32 of everything before it.
+// Version 5 is version 4's layout followed by the CRC-32 of everything before it; version 6 is
+// version 5 with each camera state followed by its mid-exposure pose's Adam (edi_mid_lr).
+static constexpr char kMagic6[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '6'};
 static constexpr char kMagic5[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '5'};
 static constexpr char kMagic4[8] = {'E', 'V', 'F', 'C', 'K', 'P', 'T', '4'};
 
@@ -70,12 +72,15 @@ void check_writable(const std::filesystem::path& path, const Checkpoint& c) {
     if ((k != 54 && k != 6) || t.exp_avg.size() != k || t.exp_avg_sq.size() != k)
       throw std::invalid_argument("checkpoint " + path.string() +
                                   ": a camera state needs 54 (trajectory) or 6 (pose) values and moments");
+    const size_t m = t.mid_exp_avg.size();
+    if ((m != 0 && m != 6) || t.mid_exp_avg_sq.size() != m)
+      throw std::invalid_argument("checkpoint " + path.string() + ": a mid-exposure pose's moments need 0 or 6 values");
   }
 }
 
 std::string serialize(const Checkpoint& c) {
   Writer w;
-  w.bytes.append(kMagic5, 8);
+  w.bytes.append(kMagic6, 8);
   w.put(c.step);
   w.put(int32_t(c.cloud.sh_degree));
   w.put(uint64_t(c.cloud.size()));
@@ -95,6 +100,10 @@ std::string serialize(const Checkpoint& c) {
     w.put(t.step);
     w.put(uint32_t(t.knots.size()));
     for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) w.put_all(*v);
+    w.put(uint32_t(t.mid_exp_avg.size()));
+    if (t.mid_exp_avg.empty()) continue;
+    w.put(t.mid_step);
+    for (auto* v : {&t.mid_exp_avg, &t.mid_exp_avg_sq}) w.put_all(*v);
   }
   w.put(io::crc32(w.bytes.data(), w.bytes.size()));
   return std::move(w.bytes);
@@ -131,7 +140,25 @@ void read_optimizer(Reader& r, Checkpoint& c) {
   }
 }
 
-void read_trajectories(Reader& r, Checkpoint& c) {
+std::vector<double> finite_doubles(Reader& r, uint64_t n, uint32_t camera) {
+  std::vector<double> v = r.array<double>(n, "trajectory");
+  for (double x : v)
+    if (!std::isfinite(x))
+      throw std::runtime_error(r.name + ": trajectory " + std::to_string(camera) + " is not finite");
+  return v;
+}
+
+// Version 6: the camera state's mid-exposure pose's Adam, 0 or 6 moments each.
+void read_mid_moments(Reader& r, TrajectoryState& t, uint32_t camera) {
+  const uint32_t m = r.get<uint32_t>("mid pose moments size");
+  if (m != 0 && m != 6) r.corrupt("mid pose moments of " + std::to_string(m) + " values");
+  if (m == 0) return;
+  t.mid_step = r.get<uint64_t>("mid pose step");
+  t.mid_exp_avg = finite_doubles(r, m, camera);
+  t.mid_exp_avg_sq = finite_doubles(r, m, camera);
+}
+
+void read_trajectories(Reader& r, Checkpoint& c, bool mid_moments) {
   const uint32_t trajectories = r.get<uint32_t>("trajectory count");
   if (trajectories > (1u << 20)) r.corrupt("trajectory count");
   for (uint32_t i = 0; i < trajectories; ++i) {
@@ -139,12 +166,8 @@ void read_trajectories(Reader& r, Checkpoint& c) {
     t.step = r.get<uint64_t>("trajectory step");
     const uint32_t k = r.get<uint32_t>("camera state size");
     if (k != 54 && k != 6) r.corrupt("camera state of " + std::to_string(k) + " values");
-    for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) {
-      *v = r.array<double>(k, "trajectory");
-      for (double x : *v)
-        if (!std::isfinite(x))
-          throw std::runtime_error(r.name + ": trajectory " + std::to_string(i) + " is not finite");
-    }
+    for (auto* v : {&t.knots, &t.exp_avg, &t.exp_avg_sq}) *v = finite_doubles(r, k, i);
+    if (mid_moments) read_mid_moments(r, t, i);
     c.trajectories.push_back(std::move(t));
   }
 }
@@ -165,10 +188,11 @@ Checkpoint parse_checkpoint(const std::string& name, const uint8_t* data, size_t
   Reader r{data, size, name};
   char magic[8];
   r.take(magic, 8, "magic");
+  const bool v6 = std::memcmp(magic, kMagic6, 8) == 0;
   const bool v5 = std::memcmp(magic, kMagic5, 8) == 0;
-  if (!v5 && std::memcmp(magic, kMagic4, 8) != 0)
-    throw std::runtime_error(name + ": not an EvFlow checkpoint (version 4 or 5)");
-  if (v5) {
+  if (!v6 && !v5 && std::memcmp(magic, kMagic4, 8) != 0)
+    throw std::runtime_error(name + ": not an EvFlow checkpoint (version 4, 5 or 6)");
+  if (v6 || v5) {
     r.need(4, "checksum");
     uint32_t stored;
     std::memcpy(&stored, data + size - 4, 4);
@@ -179,7 +203,7 @@ Checkpoint parse_checkpoint(const std::string& name, const uint8_t* data, size_t
   Checkpoint c;
   read_cloud(r, c);
   read_optimizer(r, c);
-  read_trajectories(r, c);
+  read_trajectories(r, c, v6);
   if (r.left) throw std::runtime_error(name + ": " + std::to_string(r.left) + " unexpected bytes after the checkpoint");
   c.cloud.validate("checkpoint " + name);
   return c;

@@ -1,7 +1,9 @@
 // Training checkpoints: the step, the Gaussians and the optimizer state (Adam moments and step
 // counts per parameter group), so that a resumed run continues bit-identically on the same
-// device. Written atomically (temporary file, then rename). Format version 5: version 4's layout
-// followed by a CRC-32 of all the bytes before it; version 4 files (no checksum) are still read.
+// device. Written atomically (temporary file, then rename). Format version 6: version 5's layout
+// with each camera state followed by its mid-exposure pose's Adam moments (0 or 6 each); version
+// 5 is version 4's layout followed by a CRC-32 of all the bytes before it. Versions 4 (no
+// checksum) and 5 are still read.
 #pragma once
 #include <cstdint>
 #include <filesystem>
@@ -25,6 +27,9 @@ struct OptimizerGroupState {
 struct TrajectoryState {
   uint64_t step = 0;
   std::vector<double> knots, exp_avg, exp_avg_sq;  // 54 or 6 each
+  // The mid-exposure pose's own Adam (edi_mid_lr): 6 moments each, or empty.
+  uint64_t mid_step = 0;
+  std::vector<double> mid_exp_avg, mid_exp_avg_sq;
 };
 
 struct Checkpoint {

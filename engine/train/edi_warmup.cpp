@@ -14,6 +14,10 @@ void check_edi_warmup(const TrainConfig& cfg, const io::Dataset& data) {
     throw std::invalid_argument("edi_warmup_motion > 0 is a share of the EDI warm-up: it needs edi_warmup > 0");
   if (cfg.edi_warmup == 0 && cfg.edi_keep_mid)
     throw std::invalid_argument("edi_keep_mid keeps the mid pose the EDI warm-up fitted: it needs edi_warmup > 0");
+  if (cfg.edi_mid_lr > 0 && !cfg.edi_keep_mid)
+    throw std::invalid_argument(
+        "edi_mid_lr > 0 is the rate of the mid pose that edi_keep_mid keeps: it needs edi_keep_mid=true (without "
+        "it the knots move the mid pose themselves)");
   if (cfg.edi_warmup == 0) return;
   if (cfg.mode != TrainMode::Blur)
     throw std::invalid_argument(

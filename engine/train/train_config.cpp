@@ -282,6 +282,10 @@ std::vector<Setting> blur_settings() {
             "all nine knots after the step restores T(0.5) exactly, so the blur phase learns the motion about "
             "the pose the mid frames fitted to EDI "
             "([training.md](training.md#edi-warm-up)); needs `edi_warmup` > 0"),
+      bounded("edi_mid_lr", &TrainConfig::edi_mid_lr, 0.0, 0.1,
+              "with `edi_keep_mid`, the rate at which each mid-exposure pose still moves: its own six-value Adam "
+              "on the gradient part the knots lose, starting at this rate and decaying as the knots' rate does, "
+              "so a view the warm-up left a pixel off can settle; 0: held exactly; in [0, 0.1]"),
       field("splats_from", &TrainConfig::splats_from,
             "fraction of the blur steps before which the Gaussians are frozen and only the knots learn: the blur "
             "loss fits the exposure's motion to the splats as they are instead of blurring them to match a "

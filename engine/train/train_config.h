@@ -54,6 +54,7 @@ struct TrainConfig {
   double edi_warmup_motion = 0.0;
   double splats_from = 0.0;
   bool edi_keep_mid = false;
+  double edi_mid_lr = 0.0;
   double lr_trajectory_init = 6e-3, lr_trajectory_final = 6e-4;
   double trajectory_init_sigma = ExposureTrajectory::kDefaultInitSigma;
   double event_weight = 0.0;

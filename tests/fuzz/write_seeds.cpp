@@ -102,6 +102,9 @@ void write_dataset_and_checkpoint(const fs::path& out, const fs::path& tmp) {
   c.cloud = cloud(3, 1);
   c.optimizer.push_back({"means", 7, std::vector<float>(9, 0.5f), std::vector<float>(9, 0.25f)});
   c.trajectories.push_back({7, std::vector<double>(6, 0.01), std::vector<double>(6, 0), std::vector<double>(6, 1)});
+  c.trajectories.push_back(c.trajectories[0]);  // and one whose mid-exposure pose has its own Adam
+  c.trajectories[1].mid_step = 3;
+  c.trajectories[1].mid_exp_avg = c.trajectories[1].mid_exp_avg_sq = std::vector<double>(6, 0.5);
   write_checkpoint(tmp / "c.ckpt", c);
   seed(out / "checkpoint", "blur_pose.ckpt", tmp / "c.ckpt");
 }
