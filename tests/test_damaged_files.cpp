@@ -73,7 +73,8 @@ TEST_CASE("checkpoints: a flipped bit in any byte, a cut and a grown file are re
   fs::remove_all(dir);
 }
 
-TEST_CASE("checkpoints: the mid-exposure pose's moments round-trip; versions 4 and 5 are still read", "[checkpoint]") {
+TEST_CASE("checkpoints: the mid-exposure pose's moments round-trip, and versions 4 and 5 are still read",
+          "[checkpoint]") {
   const fs::path dir = fresh_dir("evf_ckpt_v4");
   Checkpoint c = small_checkpoint();
   TrajectoryState moving = c.trajectories[0];
