@@ -38,8 +38,7 @@ CameraModel::CameraModel(const io::Dataset& data, const TrainConfig& cfg)
   }
   const size_t dof = kind_ == Kind::Trajectory ? ExposureTrajectory::kSize : 6;
   if (kind_ != Kind::Fixed) adam_.assign(nv, {0, {}, std::vector<double>(dof, 0.0), std::vector<double>(dof, 0.0)});
-  if (mid_lr_ > 0)
-    for (TrajectoryState& a : adam_) a.mid_exp_avg = a.mid_exp_avg_sq = std::vector<double>(6, 0.0);
+  for (TrajectoryState& a : adam_) fresh_mid_moments(a);
 }
 
 Camera CameraModel::frame_camera(uint32_t view, uint32_t frame) const {
@@ -168,6 +167,13 @@ lie::SE3 CameraModel::moved_mid(uint32_t view, const lie::Vec6& mid_grad, uint32
   return mid * lie::se3_exp(move);
 }
 
+// The mid pose's Adam state before its first step: six zero moments each with edi_mid_lr, none
+// without.
+void CameraModel::fresh_mid_moments(TrajectoryState& a) const {
+  a.mid_step = 0;
+  a.mid_exp_avg = a.mid_exp_avg_sq = std::vector<double>(mid_lr_ > 0 ? 6 : 0, 0.0);
+}
+
 // Adds one se(3) vector c to every knot so that T(0.5) is `mid` again. Adding c to each knot moves
 // T(0.5) by about Exp(c) on the right (the Bernstein weights sum to one; exact for commuting
 // knots), so c is refined by the remaining right-hand error: each pass shrinks the error by about
@@ -222,10 +228,7 @@ void CameraModel::load(const std::vector<TrajectoryState>& saved, const TrainCon
   for (uint32_t v = 0; v < want; ++v) {
     std::copy(saved[v].knots.begin(), saved[v].knots.end(), params(v));
     TrajectoryState a = saved[v];
-    if (mid_lr_ <= 0 || a.mid_exp_avg.size() != 6) {
-      a.mid_step = 0;
-      a.mid_exp_avg = a.mid_exp_avg_sq = std::vector<double>(mid_lr_ > 0 ? 6 : 0, 0.0);
-    }
+    if (mid_lr_ <= 0 || a.mid_exp_avg.size() != 6) fresh_mid_moments(a);
     adam_[v] = std::move(a);
   }
 }

@@ -63,6 +63,7 @@ class CameraModel {
   void adam_step(uint32_t view, double lr);
   static lie::Vec6 without_mid_move(double* knot_grad);
   lie::SE3 moved_mid(uint32_t view, const lie::Vec6& mid_grad, uint32_t step);
+  void fresh_mid_moments(TrajectoryState& a) const;
   void keep_mid(uint32_t view, const lie::SE3& mid);
   double rate(uint32_t step) const;
   double* params(uint32_t view);
