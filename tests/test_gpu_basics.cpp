@@ -273,3 +273,32 @@ TEST_CASE("gpu: the kernel overrides in the environment are checked, naming the 
                   {"0", "8", "-5", "1e6", "abc", "64k", "", "99999999999999999999999"},
                   [](const gpu::ContextOptions& o) { return o.binding_limit; });
 }
+
+TEST_CASE(
+    "gpu: under GPU-assisted validation the context makes every shader's module first, and each kernel takes its own",
+    "[gpu]") {
+  // The layer numbers the modules it instruments in the order they are made and builds the number
+  // into each; made in one order in every process, a kernel's instrumented code (and the driver's
+  // cached compile of it) is the same in every test process.
+  gpu::ContextOptions o = gpu::ContextOptions::from_env();
+  o.validation = true;
+  o.gpu_validation = true;
+  {
+    gpu::Context ctx(o);
+    ctx.kernel("scan/scan_add");  // takes its module
+    REQUIRE(ctx.take_module("scan/scan_add") == VK_NULL_HANDLE);
+    for (const char* name : {"splat/project", "nn/relu", "sort/radix_count_wide"}) {
+      INFO(name);
+      VkShaderModule m = ctx.take_module(name);
+      REQUIRE(m != VK_NULL_HANDLE);
+      REQUIRE(ctx.take_module(name) == VK_NULL_HANDLE);  // handed over once
+      vkDestroyShaderModule(ctx.device(), m, nullptr);
+    }
+    REQUIRE(ctx.take_module("no/such_kernel") == VK_NULL_HANDLE);
+    REQUIRE(ctx.take_validation_messages().empty());
+  }
+  // Without it, kernels make their modules when they are first used.
+  o.gpu_validation = false;
+  gpu::Context plain(o);
+  REQUIRE(plain.take_module("splat/project") == VK_NULL_HANDLE);
+}

@@ -173,6 +173,7 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   create_instance();
   query_caps(choose_device());
   create_device();
+  if (opts_.validation && opts_.gpu_validation) modules_ = create_embedded_modules(device_);
   if (opts_.verbose)
     std::fprintf(stderr, "evflow: device %s, subgroup %u, storage range %llu MiB, shared float atomics %s\n",
                  caps_.name.c_str(), caps_.subgroup_size,
@@ -351,6 +352,7 @@ void Context::create_device() {
 Context::~Context() {
   if (device_) vkDeviceWaitIdle(device_);
   kernels_.clear();
+  for (auto& [name, m] : modules_) vkDestroyShaderModule(device_, m, nullptr);
   staging_.reset();
   if (pool_) vkDestroyCommandPool(device_, pool_, nullptr);
   if (device_) vkDestroyDevice(device_, nullptr);
@@ -429,6 +431,14 @@ const Kernel& Context::kernel(const std::string& name) {
   auto& ref = *k;
   kernels_[name] = std::move(k);
   return ref;
+}
+
+VkShaderModule Context::take_module(const std::string& name) {
+  auto it = modules_.find(name);
+  if (it == modules_.end()) return VK_NULL_HANDLE;
+  VkShaderModule m = it->second;
+  modules_.erase(it);
+  return m;
 }
 
 void Context::report_validation(const std::string& msg) {

@@ -121,6 +121,9 @@ class Context {
 
   // Kernels are created once per context and cached by embedded name ("splat/project").
   const Kernel& kernel(const std::string& name);
+  // The module made for `name` when the context was created (GPU-assisted validation only:
+  // create_embedded_modules), handed over to its kernel; VK_NULL_HANDLE where there is none.
+  VkShaderModule take_module(const std::string& name);
 
   // Validation messages (warnings and errors) seen since the last call.
   std::vector<std::string> take_validation_messages();
@@ -177,6 +180,7 @@ class Context {
   PFN_vkCmdPushDescriptorSetKHR push_descriptor_set_ = nullptr;
   VkPhysicalDeviceMemoryProperties mem_props_{};
   std::map<std::string, std::unique_ptr<Kernel>> kernels_;
+  std::map<std::string, VkShaderModule> modules_;  // not yet taken by a kernel
   mutable std::mutex msg_mutex_;
   std::vector<std::string> messages_;
   size_t message_total_ = 0;

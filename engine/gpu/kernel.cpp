@@ -75,14 +75,27 @@ static std::vector<Kernel::Binding> reflect_bindings(const uint32_t* w, size_t n
   return out;
 }
 
+static VkShaderModule create_module(VkDevice device, const EmbeddedShader& s) {
+  VkShaderModuleCreateInfo smci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  smci.codeSize = s.bytes;
+  smci.pCode = s.words;
+  VkShaderModule m = VK_NULL_HANDLE;
+  EVF_VK(vkCreateShaderModule(device, &smci, nullptr, &m));
+  return m;
+}
+
+std::map<std::string, VkShaderModule> create_embedded_modules(VkDevice device) {
+  std::map<std::string, VkShaderModule> modules;
+  for (const EmbeddedShader* s = kEmbeddedShaders; s->name; ++s) modules[s->name] = create_module(device, *s);
+  return modules;
+}
+
 Kernel::Kernel(Context& ctx, const std::string& name) : ctx_(ctx), name_(name) {
   const EmbeddedShader* s = find_shader(name);
   if (!s) throw Error("no embedded shader named '" + name + "'");
   bindings_ = reflect_bindings(s->words, s->bytes / 4);
-  VkShaderModuleCreateInfo smci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-  smci.codeSize = s->bytes;
-  smci.pCode = s->words;
-  EVF_VK(vkCreateShaderModule(ctx.device(), &smci, nullptr, &module_));
+  module_ = ctx.take_module(name);
+  if (!module_) module_ = create_module(ctx.device(), *s);
 
   std::vector<VkDescriptorSetLayoutBinding> binds(bindings_.size());
   for (size_t i = 0; i < bindings_.size(); ++i) {

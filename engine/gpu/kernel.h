@@ -5,6 +5,7 @@
 // a uniform texel buffer named by the variable, viewed as RGBA32F / R32UI / R32I texels. Every
 // kernel has a 128-byte push-constant range (the Vulkan minimum).
 #pragma once
+#include <map>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,13 @@
 namespace evflow::gpu {
 
 constexpr uint32_t kPushConstantBytes = 128;
+
+// Every embedded shader's module, created in the registry's order: with GPU-assisted validation
+// the layer numbers each module it instruments in the order of creation and builds the number
+// into the module, so a kernel's instrumented code, and the driver's cached compile of it, are
+// the same in every process only when every process creates the modules in one order
+// (Context::Context does so under GPU-assisted validation; docs/robustness.md).
+std::map<std::string, VkShaderModule> create_embedded_modules(VkDevice device);
 
 class Kernel {
  public:
