@@ -173,7 +173,7 @@ Context::Context(const ContextOptions& opts) : opts_(opts) {
   create_instance();
   query_caps(choose_device());
   create_device();
-  if (opts_.validation && opts_.gpu_validation) modules_ = create_embedded_modules(device_);
+  if (gpu_assisted_validation()) modules_ = create_embedded_modules(device_);
   if (opts_.verbose)
     std::fprintf(stderr, "evflow: device %s, subgroup %u, storage range %llu MiB, shared float atomics %s\n",
                  caps_.name.c_str(), caps_.subgroup_size,

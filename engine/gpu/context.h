@@ -107,9 +107,11 @@ class Context {
   VkCommandPool command_pool() const { return pool_; }
   // vkCmdPushDescriptorSetKHR of this context's device (loaded when the device is created).
   PFN_vkCmdPushDescriptorSetKHR push_descriptor_set() const { return push_descriptor_set_; }
+  // Whether the validation layer instruments every shader (GPU-assisted validation).
+  bool gpu_assisted_validation() const { return opts_.validation && opts_.gpu_validation; }
   // Whether kernels bind allocated descriptor sets (GPU-assisted validation) instead of push
   // descriptors.
-  bool bound_descriptor_sets() const { return opts_.validation && opts_.gpu_validation; }
+  bool bound_descriptor_sets() const { return gpu_assisted_validation(); }
 
   // Whether the compute queue family can present to `surface` (presentation contexts only);
   // require_present throws a clear error naming the device when it cannot.
