@@ -277,9 +277,7 @@ TEST_CASE("gpu: the kernel overrides in the environment are checked, naming the 
 TEST_CASE(
     "gpu: under GPU-assisted validation the context makes every shader's module first, and each kernel takes its own",
     "[gpu]") {
-  // The layer numbers the modules it instruments in the order they are made and builds the number
-  // into each; made in one order in every process, a kernel's instrumented code (and the driver's
-  // cached compile of it) is the same in every test process.
+  // Why: create_embedded_modules (gpu/kernel.h).
   gpu::ContextOptions o = gpu::ContextOptions::from_env();
   o.validation = true;
   o.gpu_validation = true;
