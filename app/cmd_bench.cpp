@@ -9,6 +9,7 @@
 #include <sys/resource.h>
 
 #include "bench_conv.h"
+#include "bench_kernels.h"
 #include "bench_stats.h"
 #include "cli.h"
 #include "flow/flow_estimator.h"
@@ -91,6 +92,7 @@ static int bench_raster(ArgParser& p) {
   const bool json = p.flag("--json");
   const bool aa = p.flag("--antialiased");
   gpu::ContextOptions o = context_options(p);
+  o.kernel_times = p.flag("--kernels");
   p.reject_unknown();
   gpu::Context ctx(o);
   GaussianBuffers params(ctx, N, degree, "p_"), grads(ctx, N, degree, "v_");
@@ -107,12 +109,16 @@ static int bench_raster(ArgParser& p) {
   Rasterizer r(ctx);
   RenderState rs(ctx);
   StageSamples samples;
+  KernelSamples kernels;
   for (int it = 0; it < warmup + repeats; ++it) {
     auto t0 = std::chrono::steady_clock::now();
     r.forward(params, cam, s, rs);
     r.backward(rs, params, v_rgb, v_alpha, grads);
     double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    if (it >= warmup) samples.add(r.stage_ms(), wall);
+    std::vector<std::pair<std::string, double>> kernel_times = ctx.take_kernel_times();
+    if (it < warmup) continue;
+    samples.add(r.stage_ms(), wall);
+    if (o.kernel_times) kernels.add_run(kernel_times);
   }
   auto& [stages, order, totals, walls] = samples;
   if (json) {
@@ -126,14 +132,20 @@ static int bench_raster(ArgParser& p) {
     for (size_t i = 0; i < order.size(); ++i)
       std::printf("%s\"%s\": %.3f", i ? ", " : "", order[i].c_str(),
                   *std::min_element(stages[order[i]].begin(), stages[order[i]].end()));
-    std::printf("}, \"gpu_total_ms\": %.3f, \"gpu_total_min_ms\": %.3f, \"wall_ms\": %.3f}\n", median(totals),
+    std::printf("}, \"gpu_total_ms\": %.3f, \"gpu_total_min_ms\": %.3f, \"wall_ms\": %.3f", median(totals),
                 *std::min_element(totals.begin(), totals.end()), median(walls));
+    if (o.kernel_times) {
+      std::printf(", ");
+      kernels.print_json();
+    }
+    std::printf("}\n");
   } else {
     std::printf("raster bench on %s: %ux%u, %zu Gaussians (SH %d), %u intersections, median of %d\n",
                 ctx.caps().name.c_str(), W, H, N, degree, rs.num_intersections(), repeats);
     for (auto& name : order) std::printf("  %-20s %9.2f ms\n", name.c_str(), median(stages[name]));
     std::printf("  %-20s %9.2f ms\n  %-20s %9.2f ms\n", "total (GPU)", median(totals), "wall (with host)",
                 median(walls));
+    if (o.kernel_times) kernels.print_text();
   }
   return 0;
 }
@@ -190,6 +202,7 @@ static int bench_train(ArgParser& p) {
   std::string method = p.value("--method");
   if (method.empty()) method = "plain";
   gpu::ContextOptions o = context_options(p);
+  o.kernel_times = p.flag("--kernels");
   p.reject_unknown();
   std::vector<std::pair<std::string, std::string>> overrides;  // training keys, as for evflow train
   for (auto& kv : p.positional()) {
@@ -218,6 +231,8 @@ static int bench_train(ArgParser& p) {
   // Untimed: pipelines compiled, buffers sized; as many steps as views visit each view once, so
   // that the timed steps find every view's event counts kept (the steady state of a run).
   for (int i = 0; i < warmup; ++i) t.step();
+  ctx.take_kernel_times();  // the warm-up's
+  KernelSamples kernels;
   std::vector<double> total, fwd, loss, bwd, opt, ldi;
   std::map<std::string, std::vector<double>> stages, loss_stages, ldi_stages;  // rasterizer, loss terms, LDI
   std::vector<std::string> order, loss_order, ldi_order;
@@ -234,6 +249,7 @@ static int bench_train(ArgParser& p) {
   const uint64_t submits0 = ctx.submits(), transfers0 = ctx.transfers(), counts0 = event_count_passes(t);
   for (int i = 0; i < steps; ++i) {
     StepStats st = t.step();
+    if (o.kernel_times) kernels.add_run(ctx.take_kernel_times());
     for (auto& [name, ms] : t.rasterizer().stage_ms()) {
       if (!stages.count(name)) order.push_back(name);
       stages[name].push_back(ms);
@@ -269,7 +285,12 @@ static int bench_train(ArgParser& p) {
     print_stages_json(loss_order, loss_stages);
     std::printf("}, \"ldi_stages_ms\": {");
     print_stages_json(ldi_order, ldi_stages);
-    std::printf("}}\n");
+    std::printf("}");
+    if (o.kernel_times) {
+      std::printf(", ");
+      kernels.print_json();
+    }
+    std::printf("}\n");
   } else {
     std::printf("train bench (%s) on %s: %ux%u, %u Gaussians, one view per step, median of %d steps after %d untimed\n",
                 method.c_str(), ctx.caps().name.c_str(), W, H, count, steps, warmup);
@@ -284,6 +305,7 @@ static int bench_train(ArgParser& p) {
                 device_mib);
     std::printf("  round trips per step: %.1f submits, %.1f host-device copies; %.2f event counting passes\n", submits,
                 transfers, counts);
+    if (o.kernel_times) kernels.print_text();
   }
   return 0;
 }
@@ -384,13 +406,14 @@ static int run_bench(const Args& a) {
     std::printf(
         "usage: evflow bench raster [--width 346] [--height 260] [--gaussians 100000] [--sh-degree 3]\n"
         "                           [--camera cams.json] [--splats RUN|F.ply|F.glb]\n"
-        "                           [--repeats 10] [--warmup 2] [--antialiased] [--json] [--device N|name]\n"
+        "                           [--repeats 10] [--warmup 2] [--antialiased] [--kernels] [--json]\n"
+        "                           [--device N|name]\n"
         "  Times forward + backward of the splat rasterizer per stage (GPU timestamps, medians), on\n"
         "  synthetic Gaussians in front of a 60-degree camera, or from the first camera of a camera file\n"
         "  (as evflow render --camera reads; its size replaces --width/--height), of the given splats;\n"
         "  a run's splats without --camera: from its first training view at mid-exposure.\n"
         "       evflow bench train [--width 346] [--height 260] [--gaussians 100000] [--steps 20] [--warmup 1]\n"
-        "                          [--views 8] [--json]\n"
+        "                          [--views 8] [--kernels] [--json]\n"
         "                          [--data DIR --method plain|edi|blur-only|blur+events|blur+events+warp|\n"
         "                          blur+events+flow] [--splats RUN|F.ply|F.glb] [key=value ...]\n"
         "  Training steps (render, loss terms, backward, Adam): it/s and the split per part. With --data,\n"
@@ -398,6 +421,8 @@ static int run_bench(const Args& a) {
         "  starts from those splats (a run's: its learned exposures too) instead of --gaussians new ones.\n"
         "  --warmup: untimed steps first; with --data, one per training view times a run's steady state\n"
         "  (every view's event counts kept).\n"
+        "  --kernels (raster, train): also each kernel's GPU time per repeat or step (a timestamp after\n"
+        "  every dispatch; medians, slowest first) and its dispatches.\n"
         "       evflow bench flow --data DIR [--views N] [--json]\n"
         "  Optical flow from events of the first N (default all) training views: seconds in all and\n"
         "  the GPU stages summed over every evaluation of the contrast.\n"

@@ -37,6 +37,37 @@ TEST_CASE("bench train: JSON with it/s, the split of a step and the peak host an
   if (b["device"].get<std::string>().find("llvmpipe") != std::string::npos) CHECK(host > device);
 }
 
+// --kernels: each kernel's GPU time per step, slowest first, and its dispatches per step.
+TEST_CASE("bench train: --kernels lists every kernel of a step with its time and dispatches", "[cli]") {
+  const fs::path dir = fresh_dir("evflow_bench_kernels");
+  std::string out;
+  REQUIRE(run_evflow(dir, "bench train --width 64 --height 48 --gaussians 2000 --steps 2 --views 2 --kernels --json",
+                     out) == 0);
+  const nlohmann::ordered_json b = nlohmann::ordered_json::parse(out.substr(out.find('{')));  // in printed order
+  const nlohmann::ordered_json& ms = b.at("kernels_ms");
+  const nlohmann::ordered_json& n = b.at("kernel_dispatches");
+  REQUIRE(ms.size() == n.size());
+  // A plain step: one render and its backward, the image terms and Adam.
+  for (const char* k : {"splat/project", "splat/tile_ranges", "splat/pose_reduce", "optim/adam"}) {
+    INFO(k);
+    REQUIRE(ms.contains(k));
+    CHECK(ms[k].get<double>() >= 0.0);
+    CHECK(n[k].get<double>() >= 1.0);
+  }
+  CHECK(n["splat/project"].get<double>() == 1.0);  // one render a step
+  double previous = 1e300, sum = 0;
+  for (auto it = ms.begin(); it != ms.end(); ++it) {  // printed slowest first
+    CHECK(it.value().get<double>() <= previous);
+    previous = it.value().get<double>();
+    sum += previous;
+  }
+  // The kernels ran inside the step's wall time (medians of each, so only roughly).
+  CHECK(sum <= 2.0 * b["ms"]["step"].get<double>());
+  // Without the flag, none.
+  REQUIRE(run_evflow(dir, "bench train --width 64 --height 48 --gaussians 2000 --steps 2 --views 2 --json", out) == 0);
+  CHECK_FALSE(nlohmann::json::parse(out.substr(out.find('{'))).contains("kernels_ms"));
+}
+
 // The host's round trips per step, as a GPU pays them (EVF_STAGED=1: every copy staged): the
 // batch's intersection counts come back in one download, every loss term's value in another.
 TEST_CASE("bench train: a blur+events step's round trips do not grow with its frames or terms", "[cli]") {

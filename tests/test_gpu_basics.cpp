@@ -300,3 +300,57 @@ TEST_CASE(
   gpu::Context plain(o);
   REQUIRE(plain.take_module("splat/project") == VK_NULL_HANDLE);
 }
+
+// With kernel times on, every dispatch writes a timestamp: the context collects each dispatch's
+// time under its kernel's name, and the stages still span what they did.
+TEST_CASE("gpu: kernel times name each dispatch by its kernel and lie within its stage", "[gpu]") {
+  gpu::ContextOptions o = gpu::ContextOptions::from_env();
+  o.validation = true;
+  o.kernel_times = true;
+  gpu::Context ctx(o);
+  if (!ctx.caps().timestamps) {
+    WARN("the device has no timestamps: nothing to time");
+    return;
+  }
+  const uint32_t n = 1u << 20;
+  gpu::Buffer b(ctx, uint64_t(n) * 4, "iota");
+  gpu::Commands cmd(ctx);
+  struct {
+    uint32_t n, offset;
+  } pc{n, 0};
+  const gpu::Groups g = cmd.linear_groups(n / shaderio::kIotaGroupSize);
+  cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, b}}, pc, g);
+  cmd.fill(b, 0u);
+  cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, b}}, pc, g);
+  cmd.mark("two");
+  cmd.dispatch("scan/scan_add", {}, pc, gpu::Groups{0, 1, 1});  // no workgroups: not recorded, no time
+  cmd.dispatch("common/iota", {{shaderio::kIotaBindValues, b}}, pc, g);
+  cmd.mark("one");
+  cmd.submit();
+  const auto kernels = ctx.take_kernel_times();
+  REQUIRE(kernels.size() == 3);
+  for (const auto& [name, ms] : kernels) {
+    CHECK(name == "common/iota");
+    CHECK(ms >= 0.0);
+  }
+  REQUIRE(cmd.stage_ms().size() == 2);
+  CHECK(cmd.stage_ms()[0].first == "two");
+  CHECK(cmd.stage_ms()[1].first == "one");
+  // A stage spans its dispatches (and, in the first, the fill between them).
+  CHECK(cmd.stage_ms()[0].second >= kernels[0].second + kernels[1].second - 1e-9);
+  CHECK(cmd.stage_ms()[1].second >= kernels[2].second - 1e-9);
+  CHECK(ctx.take_kernel_times().empty());  // taken
+  // Off: the same stages, no kernel times.
+  o.kernel_times = false;
+  gpu::Context plain(o);
+  gpu::Buffer c(plain, uint64_t(n) * 4, "iota");
+  gpu::Commands pcmd(plain);
+  pcmd.dispatch("common/iota", {{shaderio::kIotaBindValues, c}}, pc, g);
+  pcmd.mark("one");
+  pcmd.submit();
+  CHECK(plain.take_kernel_times().empty());
+  REQUIRE(pcmd.stage_ms().size() == 1);
+  CHECK(pcmd.stage_ms()[0].first == "one");
+  CHECK(ctx.take_validation_messages().empty());
+  CHECK(plain.take_validation_messages().empty());
+}

@@ -5,6 +5,7 @@
 namespace evflow::gpu {
 
 Commands::Commands(Context& ctx) : ctx_(ctx), cb_(ctx.allocate_command_buffer()), fence_(ctx.create_fence()) {
+  if (ctx.options().kernel_times) query_capacity_ = 4096;  // a step's loss terms: a few hundred dispatches
   if (ctx.caps().timestamps) {
     VkQueryPoolCreateInfo qci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     qci.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -135,6 +136,7 @@ void Commands::dispatch(const std::string& name, std::span<const Bind> bindings,
   vkCmdDispatch(cb_, g.x, g.y, g.z);
   barrier();
   empty_ = false;
+  if (ctx_.options().kernel_times) write_timestamp(name, true);
 }
 
 // A view of [offset, offset + range) as texels of `format`, kept until the recording's submit has
@@ -224,11 +226,33 @@ void Commands::copy(const Buffer& src, const Buffer& dst, uint64_t bytes, uint64
   empty_ = false;
 }
 
-void Commands::mark(const std::string& name) {
+void Commands::mark(const std::string& name) { write_timestamp(name, false); }
+
+void Commands::write_timestamp(std::string name, bool kernel) {
   if (!queries_) return;
   if (marks_.size() + 1 >= query_capacity_) return;
-  marks_.push_back(name);
+  marks_.push_back({std::move(name), kernel});
   vkCmdWriteTimestamp(cb_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries_, static_cast<uint32_t>(marks_.size()));
+}
+
+// A stage runs from the previous stage mark (or the start) to its own; a kernel from the
+// timestamp before its own (the previous dispatch's, a stage mark's or the start).
+void Commands::read_timestamps() {
+  std::vector<uint64_t> ts(marks_.size() + 1);
+  EVF_VK(vkGetQueryPoolResults(ctx_.device(), queries_, 0, static_cast<uint32_t>(ts.size()), ts.size() * 8, ts.data(),
+                               8, VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+  const double ms_per_tick = ctx_.caps().timestamp_period_ns * 1e-6;
+  std::vector<std::pair<std::string, double>> kernels;
+  size_t stage_start = 0;
+  for (size_t i = 0; i < marks_.size(); ++i) {
+    if (marks_[i].kernel) {
+      kernels.emplace_back(marks_[i].name, double(ts[i + 1] - ts[i]) * ms_per_tick);
+    } else {
+      stage_ms_.emplace_back(marks_[i].name, double(ts[i + 1] - ts[stage_start]) * ms_per_tick);
+      stage_start = i + 1;
+    }
+  }
+  if (!kernels.empty()) ctx_.add_kernel_times(kernels);
 }
 
 void Commands::used(const Buffer& b) { used_.emplace_back(b.serial(), b.name()); }
@@ -259,13 +283,7 @@ void Commands::submit() {
   recording_ = false;
   ctx_.submit_and_wait(cb_, fence_);
   stage_ms_.clear();
-  if (queries_ && !marks_.empty()) {
-    std::vector<uint64_t> ts(marks_.size() + 1);
-    EVF_VK(vkGetQueryPoolResults(ctx_.device(), queries_, 0, static_cast<uint32_t>(ts.size()), ts.size() * 8, ts.data(),
-                                 8, VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
-    for (size_t i = 0; i < marks_.size(); ++i)
-      stage_ms_.emplace_back(marks_[i], double(ts[i + 1] - ts[i]) * ctx_.caps().timestamp_period_ns * 1e-6);
-  }
+  if (queries_ && !marks_.empty()) read_timestamps();
   if (logging_) stage_log_.insert(stage_log_.end(), stage_ms_.begin(), stage_ms_.end());
   EVF_VK(vkResetCommandBuffer(cb_, 0));
   begin();

@@ -90,7 +90,15 @@ class Commands {
   VkFence fence_ = VK_NULL_HANDLE;
   VkQueryPool queries_ = VK_NULL_HANDLE;
   uint32_t query_capacity_ = 256;
-  std::vector<std::string> marks_;
+  // Timestamps in recording order after the start's: stage marks, and (ContextOptions::
+  // kernel_times) one after each dispatch, named by its kernel.
+  struct Mark {
+    std::string name;
+    bool kernel = false;
+  };
+  std::vector<Mark> marks_;
+  void write_timestamp(std::string name, bool kernel);
+  void read_timestamps();
   std::vector<std::pair<std::string, double>> stage_ms_;
   std::vector<std::pair<std::string, double>> stage_log_;
   bool logging_ = false;

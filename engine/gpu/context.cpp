@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <utility>
 
 #include "gpu/kernel.h"
 #include "sort/sort_layout.h"
@@ -488,5 +489,11 @@ void Context::check_binding_size(uint64_t bytes, const std::string& what) const 
                 "-byte storage binding, above this device's maxStorageBufferRange of " +
                 std::to_string(caps_.max_storage_buffer_range) + " bytes (" + caps_.name + ")");
 }
+
+void Context::add_kernel_times(const std::vector<std::pair<std::string, double>>& times) {
+  kernel_times_.insert(kernel_times_.end(), times.begin(), times.end());
+}
+
+std::vector<std::pair<std::string, double>> Context::take_kernel_times() { return std::exchange(kernel_times_, {}); }
 
 }  // namespace evflow::gpu

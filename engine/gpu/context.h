@@ -51,6 +51,9 @@ struct ContextOptions {
   // Treat the device as one without host-visible device memory (a discrete GPU): buffers are not
   // mapped and every upload and download goes through the staging copy, as there.
   bool staged_transfers = false;
+  // A GPU timestamp after every dispatch: each submit's time per kernel goes to
+  // Context::take_kernel_times (evflow bench --kernels). Stage times stay as they are.
+  bool kernel_times = false;
   // Presentation (opt-in, for a window): enables these instance extensions (the windowing
   // system's surface extensions, e.g. from glfwGetRequiredInstanceExtensions) plus
   // VK_KHR_surface, and VK_KHR_swapchain on the device; devices without it are skipped.
@@ -163,6 +166,11 @@ class Context {
   // Throws a clear error when a binding of `bytes` would exceed the device's storage range.
   void check_binding_size(uint64_t bytes, const std::string& what) const;
 
+  // With ContextOptions::kernel_times: every dispatch's GPU time (ms, by kernel name) that this
+  // context's command buffers ran since the last call, in submit and recording order.
+  void add_kernel_times(const std::vector<std::pair<std::string, double>>& times);
+  std::vector<std::pair<std::string, double>> take_kernel_times();
+
  private:
   // The steps of construction, in order.
   void create_instance();
@@ -172,6 +180,7 @@ class Context {
 
   ContextOptions opts_;
   DeviceCaps caps_;
+  std::vector<std::pair<std::string, double>> kernel_times_;
   VkInstance instance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
   VkPhysicalDevice physical_ = VK_NULL_HANDLE;
