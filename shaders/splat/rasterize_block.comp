@@ -76,18 +76,18 @@ void load_batch_word(uint w, uint start, uint n, vec2 tile_origin) {
 }
 
 struct Run {     // 4 horizontally adjacent pixels
-  vec4 T, Cr, Cg, Cb, D;
+  vec4 T;  // transmittance; negated once the pixel is done (one vec4 less through the walk)
+  vec4 Cr, Cg, Cb, D;
   uvec4 last;
-  bvec4 done;
 };
 
 Run run_init(ivec2 p0, uint first) {
   Run r;
-  r.T = vec4(1.0);
+  bvec4 outside = not(lessThan(ivec4(p0.x) + ivec4(0, 1, 2, 3), ivec4(pc.width)));
+  if (p0.y >= int(pc.height)) outside = bvec4(true);
+  r.T = mix(vec4(1.0), vec4(-1.0), outside);
   r.Cr = r.Cg = r.Cb = r.D = vec4(0.0);
   r.last = uvec4(first);
-  r.done = not(lessThan(ivec4(p0.x) + ivec4(0, 1, 2, 3), ivec4(pc.width)));
-  if (p0.y >= int(pc.height)) r.done = bvec4(true);
   return r;
 }
 
@@ -97,23 +97,23 @@ void blend(inout Run r, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity,
   vec4 dx = mean.x - cx;
   vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
   vec4 alpha = min(vec4(kAlphaMax), opacity * exp(power));
-  bvec4 use = not(r.done);
+  bvec4 use = greaterThan(r.T, vec4(0.0));
   use = bvec4(uvec4(use) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
   vec4 next_T = r.T * (1.0 - alpha);
   bvec4 stop = bvec4(uvec4(use) & uvec4(lessThan(next_T, vec4(kTransmittanceMin))));
-  r.done = bvec4(uvec4(r.done) | uvec4(stop));
   use = bvec4(uvec4(use) & ~uvec4(stop));
   vec4 w = alpha * r.T;
   r.Cr = mix(r.Cr, r.Cr + w * col.r, use);
   r.Cg = mix(r.Cg, r.Cg + w * col.g, use);
   r.Cb = mix(r.Cb, r.Cb + w * col.b, use);
   r.D = mix(r.D, r.D + w * depth, use);
-  r.T = mix(r.T, next_T, use);
+  r.T = mix(mix(r.T, next_T, use), -r.T, stop);
   r.last = mix(r.last, uvec4(idx + 1u), use);
 }
 
 // `q`: the run's vec4 in the tile-by-tile planes.
 void store_run(Run r, ivec2 p0, uint q) {
+  r.T = abs(r.T);
   final_T[q] = r.T;
   last_isect[q] = r.last;
   if (p0.y >= int(pc.height)) return;
@@ -130,7 +130,7 @@ void store_run(Run r, ivec2 p0, uint q) {
   }
 }
 
-bool run_done(Run r) { return all(r.done); }
+bool run_done(Run r) { return all(lessThan(r.T, vec4(0.0))); }
 
 void main() {
   ivec2 tile = tile_of_group(pc.tiles_x);
@@ -172,7 +172,7 @@ void main() {
     // busiest lane, and per batch that is fewer than the sum of the per-word maxima.
     // Two Gaussians per iteration: the second may find the set empty, and then blends the first
     // entry with opacity 0, which changes nothing (alpha 0 is below 1/255). Why: each iteration
-    // carries the four runs' state (28 vec4s) through the loop, which lavapipe writes under the
+    // carries the four runs' state (24 vec4s) through the loop, which lavapipe writes under the
     // loop's execution mask once per iteration; two blends per iteration measured 8 % faster
     // (bench train, blur-only), three the same as two, four slower.
     uint nwords = (n + 31u) / 32u, w = 0u, bits = block_bits[lid][0];
