@@ -146,6 +146,7 @@ void main() {
 #define EVF_DONE(i) && run_done(r##i)
 #define EVF_BLEND(i) blend(r##i, cx, cy + float(i), a.xy, conic, opacity, col, b.z, start + j);
 // Blends the next entry of the bit set into every run; with `found` false, entry 0 with opacity 0.
+// `found` is read once, into `live`, before the entry is taken from `bits` (it may test `bits`).
 #define EVF_VISIT(found)                                          \
   {                                                               \
     bool live = found;                                            \
