@@ -85,6 +85,9 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record_passes(gpu::
   const uint32_t digit_bits = wide_ ? 8u : 4u;
   const std::string count_kernel = wide_ ? "sort/radix_count_wide" : "sort/radix_count";
   const std::string scatter_kernel = wide_ ? "sort/radix_scatter_wide" : "sort/radix_scatter";
+  // Few blocks: the scatter scans the raw counts itself, one dispatch fewer per pass.
+  const bool fused = wide_ && blocks <= kSortFusedBlocksMax;
+  const std::string fused_suffix = fused ? "_fused" : "";
   reserve(n);
   const gpu::Buffer* kin = &keys;
   const gpu::Buffer* vin = &values;
@@ -96,16 +99,16 @@ std::pair<const gpu::Buffer*, const gpu::Buffer*> RadixSort::record_passes(gpu::
     SortPC pc{n, shift, blocks, items, (1u << width) - 1u};
     cmd.dispatch(count_kernel, {{kRadixCountBindKeys, *kin}, {kRadixCountBindCounts, counts_}}, pc,
                  cmd.linear_groups(blocks));
-    scan_.record(cmd, counts_, counts_, n_counts, n_counts);
+    if (!fused) scan_.record(cmd, counts_, counts_, n_counts, n_counts);
     if (order && shift == 0)
-      cmd.dispatch(scatter_kernel + "_order",
+      cmd.dispatch(scatter_kernel + "_order" + fused_suffix,
                    {{kRadixScatterBindKeysIn, *kin},
                     {kRadixScatterBindKeysOut, *kout},
                     {kRadixScatterBindValuesOut, *vout},
                     {kRadixScatterBindOffsets, counts_}},
                    pc, cmd.linear_groups(blocks));
     else
-      cmd.dispatch(scatter_kernel,
+      cmd.dispatch(scatter_kernel + fused_suffix,
                    {{kRadixScatterBindKeysIn, *kin},
                     {kRadixScatterBindValuesIn, *vin},
                     {kRadixScatterBindKeysOut, *kout},

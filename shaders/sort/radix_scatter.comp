@@ -5,6 +5,10 @@
 // invocation, for each digit, how many earlier pairs of the block share that digit. The
 // invocation then writes its pairs in order, so equal digits keep their input order (stable).
 // Uses shared memory only: correct for any subgroup size.
+// EVF_SORT_FUSED_SCAN (the "_fused" builds, CPU drivers with few blocks): the counts are the count
+// pass's raw histograms, and each workgroup sums what it needs of them itself (every digit's
+// total, and its own digit's counts in the blocks before it), so that no scan runs between the
+// two passes (on lavapipe a dispatch of its own, which costs more than this).
 #extension GL_GOOGLE_include_directive : require
 #include "sort/sort_layout.h"
 #include "sort/sort_build.glsl"
@@ -24,11 +28,18 @@ uint value_in(uint i) { return values_in[i >> 2u][i & 3u]; }
 #endif
 layout(std430, binding = kRadixScatterBindKeysOut) writeonly buffer KeysOut { uint keys_out[]; };
 layout(std430, binding = kRadixScatterBindValuesOut) writeonly buffer ValuesOut { uint values_out[]; };
-layout(std430, binding = kRadixScatterBindOffsets) readonly buffer Offsets { uint global_offset[]; };  // scanned counts
+// Scanned counts, or with EVF_SORT_FUSED_SCAN the raw ones (both digit-major: [digit][block]).
+layout(std430, binding = kRadixScatterBindOffsets) readonly buffer Offsets { uint global_offset[]; };
 layout(push_constant) uniform PC { SortPC pc; };
 
 shared uint table[EVF_SORT_BINS * EVF_SORT_GROUP];   // [digit][invocation], then its exclusive scan
-shared uint partial[2][EVF_SORT_GROUP];
+// Per invocation, the sum of its row of the table (x) and, fused, of its digits' totals (y).
+shared uvec2 partial[2][EVF_SORT_GROUP];
+#ifdef EVF_SORT_FUSED_SCAN
+shared uint digit_base[EVF_SORT_BINS];  // where this block's keys of each digit start
+// The digits of one row of the table (the wide build: 256 digits, 16 invocations).
+const uint kDigitsPerRow = EVF_SORT_BINS / EVF_SORT_GROUP;
+#endif
 
 void main() {
   uint block = evf_linear_group();
@@ -49,30 +60,56 @@ void main() {
   for (uint i = end4; i < end; ++i) local[(keys_in[i >> 2u][i & 3u] >> pc.shift) & pc.digit_mask] += 1;
   for (uint d = 0; d < EVF_SORT_BINS; ++d) table[d * EVF_SORT_GROUP + lid] = local[d];
   barrier();
-  // Scan of the table: invocation lid sums entries [lid * BINS, lid * BINS + BINS).
-  uint sum = 0;
-  for (uint k = 0; k < EVF_SORT_BINS; ++k) sum += table[lid * EVF_SORT_BINS + k];
+  // Scan of the table: invocation lid sums entries [lid * BINS, lid * BINS + BINS) (with 256
+  // digits in 16 invocations, the rows of digits [16 lid, 16 lid + 16)).
+  uvec2 sum = uvec2(0u);
+  for (uint k = 0; k < EVF_SORT_BINS; ++k) sum.x += table[lid * EVF_SORT_BINS + k];
+#ifdef EVF_SORT_FUSED_SCAN
+  // The same digits' totals over all blocks, and their counts in the blocks before this one.
+  uint before[kDigitsPerRow], total[kDigitsPerRow];
+  for (uint k = 0; k < kDigitsPerRow; ++k) {
+    uint row = (lid * kDigitsPerRow + k) * pc.num_blocks;
+    before[k] = total[k] = 0u;
+    for (uint b = 0u; b < pc.num_blocks; ++b) {
+      uint c = global_offset[row + b];
+      before[k] += b < block ? c : 0u;
+      total[k] += c;
+    }
+    sum.y += total[k];
+  }
+#endif
   partial[0][lid] = sum;
   barrier();
   uint src = 0;
   for (uint off = 1; off < EVF_SORT_GROUP; off <<= 1) {
-    uint x = partial[src][lid];
+    uvec2 x = partial[src][lid];
     if (lid >= off) x += partial[src][lid - off];
     partial[1 - src][lid] = x;
     src = 1 - src;
     barrier();
   }
-  uint run = partial[src][lid] - sum;
+  uvec2 first = partial[src][lid] - sum;  // exclusive prefixes
+  uint run = first.x;
   for (uint k = 0; k < EVF_SORT_BINS; ++k) {
     uint v = table[lid * EVF_SORT_BINS + k];
     table[lid * EVF_SORT_BINS + k] = run;
     run += v;
   }
+#ifdef EVF_SORT_FUSED_SCAN
+  uint below = first.y;  // keys of all digits below this invocation's first
+  for (uint k = 0; k < kDigitsPerRow; ++k) {
+    digit_base[lid * kDigitsPerRow + k] = below + before[k];
+    below += total[k];
+  }
+#define EVF_BLOCK_DIGIT_BASE(d) digit_base[d]
+#else
+#define EVF_BLOCK_DIGIT_BASE(d) global_offset[(d) * pc.num_blocks + block]
+#endif
   barrier();
   // Position of pair: offset of (digit, block) + rank among the block's pairs of that digit.
   uint dest[EVF_SORT_BINS];
   for (uint d = 0; d < EVF_SORT_BINS; ++d)
-    dest[d] = global_offset[d * pc.num_blocks + block] + table[d * EVF_SORT_GROUP + lid] - table[d * EVF_SORT_GROUP];
+    dest[d] = EVF_BLOCK_DIGIT_BASE(d) + table[d * EVF_SORT_GROUP + lid] - table[d * EVF_SORT_GROUP];
   for (uint i = base; i < end4; i += 4u) {
     uvec4 key = keys_in[i >> 2u], value = value4_in(i);
     for (uint c = 0u; c < 4u; ++c) {

@@ -16,6 +16,10 @@ EVF_CONST(uint, kSortBinsWide, 256u)  // 8-bit digits
 EVF_CONST(uint, kSortItemsGpu, 16u)
 EVF_CONST(uint, kSortItemsCpu, 4096u)
 EVF_CONST(uint, kSortItemsMax, 4096u)
+// Up to this many blocks the wide scatter scans the count pass's histograms itself ("_fused"
+// builds: every workgroup reads all of them, 16 x blocks per invocation); beyond, a scan runs
+// between the two passes.
+EVF_CONST(uint, kSortFusedBlocksMax, 64u)
 struct SortPC {
   uint n;           // number of pairs
   uint shift;       // bit offset of this pass's digit
