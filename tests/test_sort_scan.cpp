@@ -15,24 +15,33 @@ TEST_CASE("scan: exclusive prefix sum with total, across block levels", "[gpu][s
   auto& ctx = test::gpu_context();
   PrefixSum scan(ctx);
   std::mt19937 rng(3);
-  for (uint32_t n : {1u, 5u, 1023u, 1024u, 1025u, 300000u, 1100000u}) {
-    std::vector<uint32_t> in(n);
-    for (auto& v : in) v = rng() % 7;
-    gpu::Buffer bin(ctx, n * 4ull, "in"), bout(ctx, (n + 1) * 4ull, "out");
-    bin.write(in);
-    gpu::Commands cmd(ctx);
-    scan.record(cmd, bin, bout, n, n + 1);
-    cmd.submit();
-    auto out = bout.read<uint32_t>(n + 1);
-    uint32_t run = 0;
-    bool ok = true;
-    for (uint32_t i = 0; i <= n; ++i) {
-      ok = ok && out[i] == run;
-      if (i < n) run += in[i];
-    }
-    INFO("n = " << n);
-    REQUIRE(ok);
-  }
+  // Both workgroup shapes whatever the device (16 x 256 elements on CPU drivers, 256 x 16 on
+  // GPUs), lengths that end inside a group of four and across block levels, into another buffer
+  // with the total and in place.
+  for (bool wide : {false, true})
+    for (uint32_t n : {1u, 5u, 1023u, 1024u, 1025u, 4095u, 4097u, 4099u, 300000u, 1100000u})
+      for (bool in_place : {false, true}) {
+        scan.set_wide(wide);
+        std::vector<uint32_t> in(n);
+        for (auto& v : in) v = rng() % 7;
+        gpu::Buffer bin(ctx, n * 4ull, "in"), bout(ctx, (n + 1) * 4ull, "out");
+        bin.write(in);
+        // The word past n_out keeps what it held.
+        if (!in_place) bout.write(std::vector<uint32_t>(n + 1, 0xDEADBEEFu));
+        gpu::Commands cmd(ctx);
+        const uint32_t n_out = in_place ? n : n + 1;
+        scan.record(cmd, bin, in_place ? bin : bout, n, n_out);
+        cmd.submit();
+        auto out = (in_place ? bin : bout).read<uint32_t>(n_out);
+        uint32_t run = 0;
+        bool ok = true;
+        for (uint32_t i = 0; i < n_out; ++i) {
+          ok = ok && out[i] == run;
+          if (i < n) run += in[i];
+        }
+        INFO("n = " << n << (wide ? ", wide" : "") << (in_place ? ", in place" : ""));
+        REQUIRE(ok);
+      }
   test::require_no_validation_messages();
 }
 

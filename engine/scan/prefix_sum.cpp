@@ -1,5 +1,7 @@
 #include "scan/prefix_sum.h"
 
+#include <string>
+
 #include "scan/scan_layout.h"
 
 namespace evflow {
@@ -26,13 +28,15 @@ void PrefixSum::record_level(gpu::Commands& cmd, const gpu::Buffer& in, const gp
   const uint32_t blocks = gpu::Commands::div_up(n_out, kScanBlock);
   const gpu::Buffer& sums = sums_[level];  // sized by reserve()
   shaderio::ScanPC pc{n_out, n_in, 0, 0};
+  const char* suffix = wide_ ? "_wide" : "";
   cmd.dispatch(
-      "scan/scan_block",
+      std::string("scan/scan_block") + suffix,
       {{shaderio::kScanBlockBindIn, in}, {shaderio::kScanBlockBindOut, out}, {shaderio::kScanBlockBindSums, sums}}, pc,
       cmd.linear_groups(blocks));
   if (blocks > 1) {
     record_level(cmd, sums, sums, blocks, blocks, level + 1);
-    cmd.dispatch("scan/scan_add", {{shaderio::kScanAddBindValues, out}, {shaderio::kScanAddBindOffsets, sums}}, pc,
+    cmd.dispatch(std::string("scan/scan_add") + suffix,
+                 {{shaderio::kScanAddBindValues, out}, {shaderio::kScanAddBindOffsets, sums}}, pc,
                  cmd.linear_groups(blocks));
   }
 }

@@ -1,4 +1,4 @@
-// Exclusive prefix sum of a uint buffer on the GPU (multi-level: blocks of 1024, then the block
+// Exclusive prefix sum of a uint buffer on the GPU (multi-level: blocks of 4096, then the block
 // sums, recursively). Correct for any subgroup size: it uses shared memory only.
 #pragma once
 #include <deque>
@@ -9,7 +9,10 @@ namespace evflow {
 
 class PrefixSum {
  public:
-  explicit PrefixSum(gpu::Context& ctx) : ctx_(ctx) {}
+  explicit PrefixSum(gpu::Context& ctx) : ctx_(ctx), wide_(ctx.caps().cpu_driver) {}
+  // Workgroups of 16 invocations of 256 elements (the "_wide" kernels: CPU drivers, the default
+  // there) or of 256 invocations of 16 (GPUs), for every record from now on.
+  void set_wide(bool wide) { wide_ = wide; }
   // out[i] = in[0] + ... + in[i-1] for i < n_out, reading in[i] for i < n_in (zero beyond), so
   // n_out = n_in + 1 leaves the total in out[n_in]. `in` and `out` may be the same buffer.
   void record(gpu::Commands& cmd, const gpu::Buffer& in, const gpu::Buffer& out, uint32_t n_in, uint32_t n_out);
@@ -22,6 +25,7 @@ class PrefixSum {
                     size_t level);
   gpu::Context& ctx_;
   std::deque<gpu::Buffer> sums_;  // deque: references stay valid while deeper levels are added
+  bool wide_;
 };
 
 }  // namespace evflow
