@@ -282,9 +282,12 @@ void Rasterizer::record_raster(RenderState& st) {
       sort_.record_order(cmd_, st.keys_, st.slot_from_isect_, st.keys_alt_, st.slots_alt_, m, st.sort_bits_);
   st.sorted_in_alt_ = sorted_slots == &st.slots_alt_;
   cmd_.mark("sort");
-  cmd_.fill(st.tile_range_, 0);
-  cmd_.dispatch("splat/tile_ranges", {{kTileRangesBindKeys, *sorted_keys}, {kTileRangesBindRanges, st.tile_range_}},
-                st.raster_pc_, cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
+  // The block forward finds each tile's range itself, in the sorted keys.
+  if (block_suffix_.empty()) {
+    cmd_.fill(st.tile_range_, 0);
+    cmd_.dispatch("splat/tile_ranges", {{kTileRangesBindKeys, *sorted_keys}, {kTileRangesBindRanges, st.tile_range_}},
+                  st.raster_pc_, cmd_.linear_groups(gpu::Commands::div_up(m, kIsectGroupSize)));
+  }
   std::vector<gpu::Bind> bindings = {
       {kRasterBindRanges, st.tile_range_},         {kRasterBindSlots, st.sorted_slots()},
       {kRasterBindGid, st.gaussian_id_from_slot_}, {kRasterBindProjA, st.proj_mean_conic_},
@@ -295,6 +298,7 @@ void Rasterizer::record_raster(RenderState& st) {
   if (!block_suffix_.empty()) {
     st.isect_blocks_.ensure(uint64_t(m) * 4);
     bindings.push_back({kRasterizeBindOutBlocks, st.isect_blocks_});
+    bindings.push_back({kRasterizeBindSortedKeys, *sorted_keys});
   }
   cmd_.dispatch("splat/rasterize" + block_suffix_, bindings, st.raster_pc_,
                 cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));

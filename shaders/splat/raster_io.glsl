@@ -1,7 +1,11 @@
 // Buffers shared by rasterize and rasterize_bwd (bindings 0..5), and the batch of Gaussians a
 // tile's workgroup holds in shared memory (per-pixel kernels) or the blocks it splits into
 // (block kernels).
+#ifdef EVF_RANGES_OUT
+layout(std430, binding = kRasterBindRanges) writeonly buffer Ranges { uvec2 tile_range[]; };
+#else
 layout(std430, binding = kRasterBindRanges) readonly buffer Ranges { uvec2 tile_range[]; };
+#endif
 #ifdef EVF_BLOCK_BATCH
 // The block kernels (CPU drivers) read the sorted slots, the Gaussian ids and the projected
 // Gaussians as texel buffers, at every visit: on lavapipe a texel fetch at a different index in

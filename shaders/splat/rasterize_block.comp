@@ -38,6 +38,7 @@ layout(local_size_x = EVF_THREADS) in;
 #ifndef EVF_BATCH
 #define EVF_BATCH 256
 #endif
+#define EVF_RANGES_OUT 1
 #include "splat/raster_io.glsl"
 layout(std430, binding = kRasterizeBindOutRgb) writeonly buffer OutRgb { float out_rgb[]; };        // [3][H][W]
 layout(std430, binding = kRasterizeBindOutAlpha) writeonly buffer OutAlpha { float out_alpha[]; };  // [H][W]
@@ -46,8 +47,31 @@ layout(std430, binding = kRasterizeBindOutDepth) writeonly buffer OutDepth { flo
 layout(std430, binding = kRasterizeBindOutT) writeonly buffer OutT { vec4 final_T[]; };
 layout(std430, binding = kRasterizeBindOutLast) writeonly buffer OutLast { uvec4 last_isect[]; };
 layout(std430, binding = kRasterizeBindOutBlocks) writeonly buffer OutBlocks { uint isect_blocks[]; };
+layout(binding = kRasterizeBindSortedKeys) uniform usamplerBuffer SortedKeys;
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint done_count;
+
+// The first sorted position whose key is at least `key` (pc.num_isects if none). The same index in
+// every lane: each step is one texel fetch.
+uint first_key_at_least(uint key) {
+  uint lo = 0u, hi = pc.num_isects;
+  while (lo < hi) {
+    uint mid = (lo + hi) >> 1u;
+    if (texelFetch(SortedKeys, int(mid)).x < key)
+      lo = mid + 1u;
+    else
+      hi = mid;
+  }
+  return lo;
+}
+
+// The tile's run of the sorted list (keys tile << depth_bits | depth; tile + 1 < 2^tile_bits, so
+// the bound does not overflow), kept for the backward. An empty tile gets an empty range.
+uvec2 find_tile_range(uint tile, uint lid) {
+  uvec2 range = uvec2(first_key_at_least(tile << pc.depth_bits), first_key_at_least((tile + 1u) << pc.depth_bits));
+  if (lid == 0u) tile_range[tile] = range;
+  return range;
+}
 shared uint block_bits[EVF_BLOCKS][EVF_BATCH / 32];
 #if EVF_BATCH > 32 * EVF_THREADS
 #error a batch is loaded one 32-entry word per invocation
@@ -140,7 +164,7 @@ void main() {
   vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
   float cy = float(p0.y) + 0.5;
   vec2 tile_origin = vec2(tile * int(kTileSize));
-  uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
+  uvec2 range = find_tile_range(uint(tile.y) * pc.tiles_x + uint(tile.x), lid);
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x);
   EVF_RUNS(EVF_INIT)
 #define EVF_DONE(i) && run_done(r##i)

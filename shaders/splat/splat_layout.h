@@ -91,6 +91,7 @@ EVF_BIND(kProjectBwdBindPosePartial, 28u, PosePartial)
 EVF_BIND(kProjectBwdBindProjC, 29u, ProjC)
 EVF_BIND(kProjectBwdBindDColor, 30u, DColor)
 // splat/rasterize, splat/rasterize_block, splat/rasterize_bwd, splat/rasterize_bwd_block
+// (written by splat/tile_ranges, or by splat/rasterize_block itself)
 EVF_BIND(kRasterBindRanges, 0u, Ranges)
 EVF_BIND(kRasterBindSlots, 1u, Slots)
 EVF_BIND(kRasterBindGid, 2u, Gid)
@@ -110,6 +111,9 @@ EVF_BIND(kRasterizeBindOutLast, 10u, OutLast)
 // (support_blocks, one uint by sorted position), written by the forward, read by the backward,
 // which loads only intersections the forward loaded (those before its tile's last blended one).
 EVF_BIND(kRasterizeBindOutBlocks, 11u, OutBlocks)
+// Block forward only: the sorted keys, in which each tile's workgroup finds its own range (a
+// binary search) and writes it to Ranges for the backward, in place of splat/tile_ranges.
+EVF_BIND(kRasterizeBindSortedKeys, 12u, SortedKeys)
 // splat/rasterize_bwd, splat/rasterize_bwd_block
 EVF_BIND(kRasterizeBwdBindInT, 6u, InT)
 EVF_BIND(kRasterizeBwdBindInLast, 7u, InLast)
