@@ -363,6 +363,15 @@ void Rasterizer::ensure_backward_buffers(size_t n, uint64_t isects) {
   pose_partial_.ensure(uint64_t(std::max<uint32_t>(gpu::Commands::div_up(n, kProjectGroupSize), 1)) * 24);
 }
 
+// The block backward's build: with subgroup barriers where its workgroup is one subgroup (16
+// invocations in subgroups of 16 lanes or more; blocks of 4 x 8 pixels, 8 invocations, in
+// subgroups of 8), else with workgroup barriers (rasterize_bwd_block.comp says why).
+std::string Rasterizer::block_bwd_suffix() const {
+  if (block_suffix_.empty()) return "";
+  const uint32_t lanes = ctx_.caps().subgroup_size;
+  return lanes >= 16 ? "_sg" : lanes == 8 ? "_sg8" : "";
+}
+
 // The compositing's backward and the projection's, for one render.
 void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
                                  const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate) {
@@ -372,7 +381,7 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
   // compare-and-swap build where the device lacks shared float atomics.
   const std::string raster_bwd = block_suffix_.empty() && !ctx_.caps().shared_float_atomic_add
                                      ? "splat/rasterize_bwd_cas"
-                                     : "splat/rasterize_bwd" + block_suffix_;
+                                     : "splat/rasterize_bwd" + block_suffix_ + block_bwd_suffix();
   // The compositing backward writes only the slots it visits (Gaussians in front of its tile's
   // last blended one); the others keep these zeros. A fill is a sequential write: far cheaper
   // than the kernel's scattered zero stores (lavapipe, bench raster 100k: backward -6 ms).

@@ -8,7 +8,20 @@
 // Why: see rasterize_block.comp; in addition, one set of partial sums per block instead of per
 // pixel, and plain stores instead of shared float atomics: lavapipe runs each atomic as a loop of
 // locked compare-and-swaps over the lanes, and the nine per visit were a third of this kernel.
+// EVF_SUBGROUP_BARRIERS (the "_sg" builds, chosen when the workgroup is one subgroup): the
+// workgroup's barriers are subgroup barriers. lavapipe suspends the kernel's coroutine at every
+// workgroup barrier (two per batch here), a subgroup barrier it does not: about a tenth of this
+// kernel. The "_sg8" build takes blocks of 4 x 8 pixels, a tile in 8 invocations, for 8-lane
+// subgroups; the forward's blocks of 4 x 4 are then merged two by two (blocks_of_isect).
 #extension GL_GOOGLE_include_directive : require
+#ifdef EVF_SUBGROUP_BARRIERS
+#extension GL_KHR_shader_subgroup_basic : require
+#define EVF_GROUP_BARRIER() \
+  subgroupMemoryBarrierShared(); \
+  subgroupBarrier()
+#else
+#define EVF_GROUP_BARRIER() barrier()
+#endif
 #include "splat/splat_layout.h"
 #include "common/dispatch.glsl"
 #include "splat/splat_math.glsl"
@@ -51,7 +64,17 @@ layout(std430, binding = kRasterizeBwdBindG1) writeonly buffer G1 { vec4 slot_gr
 layout(std430, binding = kRasterizeBwdBindG2) writeonly buffer G2 { float slot_grad_c[]; };
 // Each intersection's blocks, as the forward found them (splat_layout.h).
 layout(binding = kRasterizeBwdBindInBlocks) uniform usamplerBuffer InBlocks;  // texels: see raster_io.glsl
+#if EVF_ROWS == 4
 uint blocks_of_isect(uint isect) { return texelFetch(InBlocks, int(isect)).x; }
+#elif EVF_ROWS == 8
+// Block (R, c) of 4 x 8 pixels holds the forward's blocks (2R, c) and (2R + 1, c) of 4 x 4.
+uint blocks_of_isect(uint isect) {
+  uint m = texelFetch(InBlocks, int(isect)).x, rows = m | (m >> 4u);
+  return (rows & 0xFu) | ((rows >> 4u) & 0xF0u);
+}
+#else
+#error the forward's blocks are 4 x 4: the backward's are 4 x 4 or 4 x 8
+#endif
 layout(push_constant) uniform PC { RasterPC pc; };
 
 // A batch's partial sums, one row per block: entry e's nine sums in part_a[b][e] = (mean.xy,
@@ -144,7 +167,7 @@ void main() {
   // past the largest (visit_end) blended into no pixel: neither loaded nor visited, their slots
   // keep the zeros the host filled the gradient planes with.
   block_last[lid] = last;
-  barrier();
+  EVF_GROUP_BARRIER();
   uint lasts[EVF_BLOCKS], visit_end = range.x;
   for (uint b = 0u; b < EVF_BLOCKS; ++b) {
     lasts[b] = block_last[b];
@@ -156,7 +179,7 @@ void main() {
     // Entries at or past visit_end are neither loaded nor visited nor written.
     uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
     uint n_visit = start < last ? min(n, last - start) : 0u;  // n_visit <= n_load
-    barrier();  // the previous batch's read-out is done with the partial sums
+    EVF_GROUP_BARRIER();  // the previous batch's read-out is done with the partial sums
     // This block's entries below its last blended one. Every entry below visit_end was loaded by
     // the forward, which kept its blocks.
     uint bits = 0u;
@@ -179,7 +202,7 @@ void main() {
       part_b[lid][j] = vec4(g.conic.z, g.opac, g.rgb.rg);
       part_c[lid][j] = g.rgb.b;
     }
-    barrier();
+    EVF_GROUP_BARRIER();
     for (uint k = lid; k < n_load; k += EVF_THREADS) {
       uint visited = 0u;  // the blocks that visited entry k
       for (uint b = 0u; b < EVF_BLOCKS; ++b) visited |= uint(start + k < lasts[b]) << b;
