@@ -360,7 +360,15 @@ void Rasterizer::ensure_backward_buffers(size_t n, uint64_t isects) {
                      ctx_.caps().name + " (" + std::to_string(max_range / 16) + " at most)");
   for (size_t k = 0; k < isect_grad_.size(); ++k) isect_grad_[k].ensure(isect_grad_bytes(k, isects));
   grad2d_norm_.ensure(n * 4);
-  pose_partial_.ensure(uint64_t(std::max<uint32_t>(gpu::Commands::div_up(n, kProjectGroupSize), 1)) * 24);
+  pose_partial_.ensure(uint64_t(std::max<uint32_t>(pose_partials(n), 1)) * 24);
+}
+
+// project_bwd's pose partials for n Gaussians: one per workgroup, or in the "_block" builds one
+// per subgroup (project_bwd.comp).
+uint32_t Rasterizer::pose_partials(size_t n) const {
+  const uint32_t groups = gpu::Commands::div_up(n, kProjectGroupSize);
+  if (block_suffix_.empty()) return groups;
+  return groups * gpu::Commands::div_up(kProjectGroupSize, std::max(ctx_.caps().subgroup_size, 1u));
 }
 
 // The block backward's build: with subgroup barriers where its workgroup is one subgroup (16
@@ -426,7 +434,7 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
                  {kProjectBwdBindProjC, st.proj_color_},
                  {kProjectBwdBindDColor, st.proj_dcolor_}},
                 pp, cmd_.linear_groups(groups));
-  ReducePC rp{groups, 0, 0, 0};
+  ReducePC rp{pose_partials(params.count), 0, 0, 0};
   cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, pose_}}, rp,
                 gpu::Groups{1, 1, 1});
   cmd_.mark("project backward");

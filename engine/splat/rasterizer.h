@@ -130,11 +130,12 @@ class Rasterizer {
   // GPU-assisted validation checks accesses against whole buffers.
   std::vector<gpu::Buffer> isect_grad_;
   gpu::Buffer grad2d_norm_, pose_partial_, pose_;
-  gpu::Buffer poses_;                    // a batched backward's pose gradients, one per render
-  gpu::Buffer counts_;                   // a batch's intersection counts, one per render: one download
-  bool subgroup_reduce_ = false;         // backward: subgroupAdd before the shared add
-  std::string block_suffix_;             // "" (one pixel per invocation) or "_block" (RasterKernels::block)
-  std::string block_bwd_suffix() const;  // the block backward's build for this device's subgroups
+  gpu::Buffer poses_;                      // a batched backward's pose gradients, one per render
+  gpu::Buffer counts_;                     // a batch's intersection counts, one per render: one download
+  bool subgroup_reduce_ = false;           // backward: subgroupAdd before the shared add
+  std::string block_suffix_;               // "" (one pixel per invocation) or "_block" (RasterKernels::block)
+  std::string block_bwd_suffix() const;    // the block backward's build for this device's subgroups
+  uint32_t pose_partials(size_t n) const;  // project_bwd's pose partials for n Gaussians
   std::vector<std::pair<std::string, double>> stage_ms_;
 };
 

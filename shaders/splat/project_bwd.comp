@@ -54,7 +54,12 @@ layout(std430, binding = kProjectBwdBindProjC) readonly buffer ProjC { vec4 proj
 layout(std430, binding = kProjectBwdBindDColor) readonly buffer DColor { vec4 proj_dcolor[]; };  // [N][3] (.xyz)
 layout(push_constant) uniform PC { ProjectPC pc; };
 
+#ifdef EVF_POSE_PER_SUBGROUP
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#else
 shared float red[6][kProjectGroupSize];
+#endif
 
 // EVF_ACCUMULATE (the "_acc" build, kFlagAccumulate): add to the gradient buffers (several
 // renders of one step, e.g. the virtual frames of an exposure) instead of overwriting them. A
@@ -190,6 +195,23 @@ void main() {
     EVF_PUT(v_opacity_logits, g, v_logit);
     EVF_PUT(grad2d_norm, g, length(v_mean2d));
   }
+#ifdef EVF_POSE_PER_SUBGROUP
+  // One partial per subgroup ([group][subgroup][6]: the host sizes them by the device's subgroup
+  // size), summed with subgroupAdd (a fixed order on a given device) and no barrier: on lavapipe
+  // a workgroup barrier suspends every SIMD vector's coroutine, and the barrier and the sum
+  // below were about 40 % of this kernel.
+  float total[6];
+  for (uint k = 0; k < 6; ++k) total[k] = subgroupAdd(pose[k]);
+  if (subgroupElect()) {
+    // The subgroup's index from the invocation index: subgroups of consecutive invocations, as
+    // on lavapipe, where the "_block" builds run. (gl_SubgroupID and gl_NumSubgroups in its place
+    // gave wrong pose gradients here on lavapipe, Mesa 22.3, though a probe kernel read them right:
+    // not understood, so not relied on.)
+    uint per_group = (kProjectGroupSize + gl_SubgroupSize - 1u) / gl_SubgroupSize;
+    uint base = (evf_linear_group() * per_group + lid / gl_SubgroupSize) * 6u;
+    for (uint k = 0; k < 6; ++k) pose_partial[base + k] = total[k];
+  }
+#else
   // Workgroup reduction of the pose contributions, in a fixed order (deterministic): invocations
   // 0..5 each sum one component over the workgroup. Not a tree: on CPU drivers every step of a
   // tree costs every SIMD vector its masked shared accesses (over half of this kernel's time);
@@ -200,4 +222,5 @@ void main() {
   float sum = 0.0;
   for (uint i = 0; i < len; ++i) sum += red[lid][i];
   if (lid < 6) pose_partial[evf_linear_group() * 6 + lid] = sum;
+#endif
 }
