@@ -25,12 +25,13 @@ shared uint partial[2][EVF_SCAN_GROUP];
 uvec4 load4(uint i) {
 #ifdef EVF_SCAN_WIDE
   uvec4 v = i < pc.n_in ? values_in4[i >> 2u] : uvec4(0u);
+  return mix(uvec4(0u), v, lessThan(uvec4(i) + uvec4(0u, 1u, 2u, 3u), uvec4(pc.n_in)));
 #else
   uvec4 v = uvec4(0u);
   for (uint c = 0u; c < 4u; ++c)
     if (i + c < pc.n_in) v[c] = values_in[i + c];
+  return v;
 #endif
-  return mix(uvec4(0u), v, lessThan(uvec4(i) + uvec4(0u, 1u, 2u, 3u), uvec4(pc.n_in)));
 }
 
 // out[i .. i + 4) = v, only below n_out.

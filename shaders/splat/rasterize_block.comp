@@ -50,6 +50,10 @@ layout(std430, binding = kRasterizeBindOutBlocks) writeonly buffer OutBlocks { u
 layout(binding = kRasterizeBindSortedKeys) uniform usamplerBuffer SortedKeys;
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint done_count;
+shared uint block_bits[EVF_BLOCKS][EVF_BATCH / 32];
+#if EVF_BATCH > 32 * EVF_THREADS
+#error a batch is loaded one 32-entry word per invocation
+#endif
 
 // The first sorted position whose key is at least `key` (pc.num_isects if none). The same index in
 // every lane: each step is one texel fetch.
@@ -72,10 +76,6 @@ uvec2 find_tile_range(uint tile, uint lid) {
   if (lid == 0u) tile_range[tile] = range;
   return range;
 }
-shared uint block_bits[EVF_BLOCKS][EVF_BATCH / 32];
-#if EVF_BATCH > 32 * EVF_THREADS
-#error a batch is loaded one 32-entry word per invocation
-#endif
 
 // Finds the blocks of the batch's entries [32 w, min(32 w + 32, n)), the tile's Gaussians from
 // `start` on, keeps them for the backward (isect_blocks) and writes word w of every block's bit
