@@ -116,21 +116,20 @@ Run run_init(ivec2 p0, uint first) {
 }
 
 // Blends Gaussian `idx` (already read) into the run whose pixel centres are (cx, cy).
-void blend(inout Run r, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity, vec3 col, float depth, uint idx) {
-  float dy = mean.y - cy;
-  vec4 dx = mean.x - cx;
-  vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
+// `rp`: the Gaussian's exponent pieces over the block's columns, `dy` = mean.y - cy.
+void blend(inout Run r, RowPower rp, float dy, float opacity, vec3 col, float depth, uint idx) {
+  vec4 power = row_power(rp, dy);
   vec4 alpha = min(vec4(kAlphaMax), opacity * exp(power));
   bvec4 use = greaterThan(r.T, vec4(0.0));
   use = bvec4(uvec4(use) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
   vec4 next_T = r.T * (1.0 - alpha);
   bvec4 stop = bvec4(uvec4(use) & uvec4(lessThan(next_T, vec4(kTransmittanceMin))));
   use = bvec4(uvec4(use) & ~uvec4(stop));
-  vec4 w = alpha * r.T;
-  r.Cr = mix(r.Cr, r.Cr + w * col.r, use);
-  r.Cg = mix(r.Cg, r.Cg + w * col.g, use);
-  r.Cb = mix(r.Cb, r.Cb + w * col.b, use);
-  r.D = mix(r.D, r.D + w * depth, use);
+  vec4 w = mix(vec4(0.0), alpha * r.T, use);  // adding 0 w leaves a sum as it is
+  r.Cr += w * col.r;
+  r.Cg += w * col.g;
+  r.Cb += w * col.b;
+  r.D += w * depth;
   r.T = mix(mix(r.T, next_T, use), -r.T, stop);
   r.last = mix(r.last, uvec4(idx + 1u), use);
 }
@@ -168,7 +167,7 @@ void main() {
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x);
   EVF_RUNS(EVF_INIT)
 #define EVF_DONE(i) && run_done(r##i)
-#define EVF_BLEND(i) blend(r##i, cx, cy + float(i), a.xy, conic, opacity, col, b.z, start + j);
+#define EVF_BLEND(i) blend(r##i, rp, a.y - (cy + float(i)), opacity, col, b.z, start + j);
 // Blends the next entry of the bit set into every run; with `found` false, entry 0 with opacity 0.
 // `found` is read once, into `live`, before the entry is taken from `bits` (it may test `bits`).
 #define EVF_VISIT(found)                                          \
@@ -180,6 +179,7 @@ void main() {
     vec4 a = proj_a(g), b = proj_b(g);                            \
     vec3 conic = vec3(a.zw, b.x), col = proj_c(g).rgb;            \
     float opacity = live ? b.y : 0.0;                             \
+    RowPower rp = row_power_of(conic, a.x - cx);                  \
     EVF_RUNS(EVF_BLEND)                                           \
   }
   for (uint start = range.x; start < range.y; start += EVF_BATCH) {

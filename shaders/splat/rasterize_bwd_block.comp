@@ -2,9 +2,9 @@
 // Backward rasterization for CPU drivers: one workgroup per 16x16 tile, each invocation owns a
 // block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s), as rasterize_block.comp, and visits
 // back to front only the Gaussians whose support reaches its block (support_blocks). Per Gaussian
-// it sums its block's 9 gradient terms in registers (fixed order) and stores them in its own row
-// of the batch's partial sums; once every block is done, each entry's partial sums are added in
-// block order and written to its slot. Same maths as rasterize_bwd.comp.
+// it sums its block's gradient terms in registers (fixed order; Grad) and stores the 9 sums in
+// its own row of the batch's partial sums; once every block is done, each entry's partial sums
+// are added in block order and written to its slot. Same maths as rasterize_bwd.comp.
 // Why: see rasterize_block.comp; in addition, one set of partial sums per block instead of per
 // pixel, and plain stores instead of shared float atomics: lavapipe runs each atomic as a loop of
 // locked compare-and-swaps over the lanes, and the nine per visit were a third of this kernel.
@@ -92,12 +92,32 @@ struct Run {     // 4 horizontally adjacent pixels
   uvec4 last;              // one past the last blended Gaussian (0 blends nothing)
 };
 
-struct Grad {    // one Gaussian's gradient summed over a block
-  vec2 mean;
-  vec3 conic;
-  float opac;
-  vec3 rgb;
+// One Gaussian's gradient terms over a block, summed down its 4 columns of pixels: the rows differ
+// only in dy, so the mean and conic gradients need only the sums of v_power times 1, dy and dy^2
+// (grad_of then weighs them with dx and the conic once a visit, not once a row).
+struct Grad {
+  vec4 p, py, pyy;  // v_power, dy v_power, dy^2 v_power
+  vec4 r, g, b;     // w v_rgb
+  vec4 opac;        // G v_alpha
 };
+
+Grad grad_zero() {
+  Grad g;
+  g.p = g.py = g.pyy = g.r = g.g = g.b = g.opac = vec4(0.0);
+  return g;
+}
+
+float sum4(vec4 v) { return (v.x + v.y) + (v.z + v.w); }
+
+// The block's nine sums in the per-slot layout: (mean.xy, conic.xy), (conic.z, opacity, rgb.rg),
+// rgb.b. power = -(conic.x dx^2 + conic.z dy^2) / 2 - conic.y dx dy, with dx, dy mean - centre.
+void grad_of(Grad g, vec4 dx, vec3 conic, out vec4 ga, out vec4 gb, out float gc) {
+  float s = sum4(g.p), sx = dot(g.p, dx), sxx = dot(g.p, dx * dx);
+  float sy = sum4(g.py), sxy = dot(g.py, dx), syy = sum4(g.pyy);
+  ga = vec4(-(conic.x * sx + conic.y * sy), -(conic.y * sx + conic.z * sy), -0.5 * sxx, -sxy);
+  gb = vec4(-0.5 * syy, sum4(g.opac), sum4(g.r), sum4(g.g));
+  gc = sum4(g.b);
+}
 
 // `q`: the run's vec4 in the tile-by-tile planes.
 Run run_init(ivec2 p0, uint q, uint first) {
@@ -123,14 +143,11 @@ Run run_init(ivec2 p0, uint q, uint first) {
 
 uint run_last(Run r) { return max(max(r.last.x, r.last.y), max(r.last.z, r.last.w)); }
 
-// Gaussian `idx` (already read) against the run whose pixel centres are (cx, cy): updates the
-// run's state and adds the run's gradient terms to g (zeros where no pixel contributed).
-void accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec2 mean, vec3 conic, float opacity, vec3 col,
-                uint idx) {
-  float dy = mean.y - cy;
+// Gaussian `idx` (already read) against the run at dy = mean.y - its centres' y (rp: row_power_of):
+// updates the run's state and adds the run's gradient terms to g (zeros where no pixel contributed).
+void accumulate(inout Run r, inout Grad g, float dy, RowPower rp, float opacity, vec3 col, uint idx) {
   bvec4 live = lessThan(uvec4(idx), r.last);
-  vec4 dx = mean.x - cx;
-  vec4 power = -0.5 * (conic.x * dx * dx + conic.z * dy * dy) - conic.y * dx * dy;
+  vec4 power = row_power(rp, dy);
   vec4 G = exp(power);
   vec4 raw = opacity * G;
   vec4 alpha = min(vec4(kAlphaMax), raw);
@@ -138,16 +155,19 @@ void accumulate(inout Run r, inout Grad g, vec4 cx, float cy, vec2 mean, vec3 co
   vec4 inv_one_minus = 1.0 / (1.0 - alpha);  // alpha <= 0.99
   vec4 T_before = r.T * inv_one_minus;
   vec4 w = mix(vec4(0.0), alpha * T_before, c);
-  g.rgb += vec3(dot(w, r.vr), dot(w, r.vg), dot(w, r.vb));
+  g.r += w * r.vr;
+  g.g += w * r.vg;
+  g.b += w * r.vb;
   vec4 col_dot_v = col.r * r.vr + col.g * r.vg + col.b * r.vb;
   vec4 v_alpha_j = T_before * col_dot_v + (r.vAT - r.Sv) * inv_one_minus;
   r.Sv += w * col_dot_v;  // only S . v_rgb is ever needed
   r.T = mix(r.T, T_before, c);
   bvec4 smooth_part = bvec4(uvec4(c) & uvec4(lessThan(raw, vec4(kAlphaMax))));
   vec4 v_power = mix(vec4(0.0), alpha * v_alpha_j, smooth_part);
-  g.mean -= vec2(dot(v_power, conic.x * dx + conic.y * dy), dot(v_power, conic.y * dx + conic.z * dy));
-  g.conic += vec3(-0.5 * dot(v_power, dx * dx), -dy * dot(v_power, dx), -0.5 * dy * dy * dot(v_power, vec4(1.0)));
-  g.opac += dot(mix(vec4(0.0), G * v_alpha_j, smooth_part), vec4(1.0));
+  g.p += v_power;
+  g.py += dy * v_power;
+  g.pyy += (dy * dy) * v_power;
+  g.opac += mix(vec4(0.0), G * v_alpha_j, smooth_part);
 }
 
 void main() {
@@ -161,7 +181,7 @@ void main() {
   uint q0 = block_run_vec4(tile, pc.tiles_x, lid);
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), q0 + 4u * i, range.x); last = max(last, run_last(r##i));
   EVF_RUNS(EVF_INIT)
-#define EVF_ACC(i) accumulate(r##i, g, cx, cy + float(i), a.xy, conic, b.y, col, start + j);
+#define EVF_ACC(i) accumulate(r##i, g, a.y - (cy + float(i)), rp, b.y, col, start + j);
   uint count = range.y - range.x;
   // Every invocation keeps every block's `last` in registers, for the read-out. Gaussians at or
   // past the largest (visit_end) blended into no pixel: neither loaded nor visited, their slots
@@ -192,15 +212,16 @@ void main() {
       uint gid = gaussian_of_isect(start + j);
       vec4 a = proj_a(gid), b = proj_b(gid);
       vec3 conic = vec3(a.zw, b.x), col = proj_c(gid).rgb;
-      Grad g;
-      g.mean = vec2(0.0);
-      g.conic = vec3(0.0);
-      g.opac = 0.0;
-      g.rgb = vec3(0.0);
+      vec4 dx = a.x - cx;
+      RowPower rp = row_power_of(conic, dx);
+      Grad g = grad_zero();
       EVF_RUNS(EVF_ACC)
-      part_a[lid][j] = vec4(g.mean, g.conic.xy);
-      part_b[lid][j] = vec4(g.conic.z, g.opac, g.rgb.rg);
-      part_c[lid][j] = g.rgb.b;
+      vec4 ga, gb;
+      float gc;
+      grad_of(g, dx, conic, ga, gb, gc);
+      part_a[lid][j] = ga;
+      part_b[lid][j] = gb;
+      part_c[lid][j] = gc;
     }
     EVF_GROUP_BARRIER();
     for (uint k = lid; k < n_load; k += EVF_THREADS) {

@@ -201,3 +201,20 @@ bool ellipse_meets_rect(vec2 mean, vec3 conic, float q_max, vec2 lo, vec2 hi) {
 float splat_power(vec3 conic, vec2 d) {
   return -0.5 * (conic.x * d.x * d.x + conic.z * d.y * d.y) - conic.y * d.x * d.y;
 }
+
+// The same exponent over a run of 4 horizontally adjacent pixels, in the pieces the rows of a
+// block share (the block kernels): with dx = mean.x - centre.x (the run's 4 columns) and
+// dy = mean.y - centre.y (the run's row), power = (A + C dy^2) + B dy, A = -conic.x dx^2 / 2,
+// B = -conic.y dx, C = -conic.z / 2. A and B are worked out once a visit, for every row.
+struct RowPower {
+  vec4 A, B;
+  float C;
+};
+RowPower row_power_of(vec3 conic, vec4 dx) {
+  RowPower p;
+  p.A = -0.5 * conic.x * dx * dx;
+  p.B = -conic.y * dx;
+  p.C = -0.5 * conic.z;
+  return p;
+}
+vec4 row_power(RowPower p, float dy) { return (p.A + p.C * dy * dy) + p.B * dy; }
