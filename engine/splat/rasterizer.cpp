@@ -412,28 +412,39 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
   cmd_.mark("rasterize backward");
   ProjectPC pp = st.project_pc_;
   pp.flags = accumulate ? (pp.flags | kFlagAccumulate) : (pp.flags & ~kFlagAccumulate);
-  cmd_.dispatch((accumulate ? "splat/project_bwd_acc" : "splat/project_bwd") + block_suffix_,
-                {{kParamBindMeans, params.means},
-                 {kParamBindLogScales, params.log_scales},
-                 {kParamBindQuats, params.quats},
-                 {kParamBindOpacities, params.opacity_logits},
-                 {kProjectBwdBindOffsets, st.isect_offset_},
-                 {kProjectBwdBindG0, plane(0)},
-                 {kProjectBwdBindG1, plane(1)},
-                 {kProjectBwdBindG2, plane(2)},
-                 {kProjectBwdBindVMeans, grads.means},
-                 {kProjectBwdBindVLogScales, grads.log_scales},
-                 {kProjectBwdBindVQuats, grads.quats},
-                 {kProjectBwdBindVOpacities, grads.opacity_logits},
-                 {kProjectBwdBindVSh0, sh_band(grads, 0)},
-                 {kProjectBwdBindVSh1, sh_band(grads, 1)},
-                 {kProjectBwdBindVSh2, sh_band(grads, 2)},
-                 {kProjectBwdBindVSh3, sh_band(grads, 3)},
-                 {kProjectBwdBindGrad2d, grad2d_norm_},
-                 {kProjectBwdBindPosePartial, pose_partial_},
-                 {kProjectBwdBindProjC, st.proj_color_},
-                 {kProjectBwdBindDColor, st.proj_dcolor_}},
-                pp, cmd_.linear_groups(groups));
+  // project_bwd writes the active SH bands only; an overwrite gets zeros in the bands above.
+  if (!accumulate)
+    for (int l = int(pp.sh_degree) + 1; l <= grads.sh_degree; ++l) cmd_.fill(grads.sh[l], 0u);
+  std::vector<gpu::Bind> binds = {{kParamBindMeans, params.means},
+                                  {kParamBindLogScales, params.log_scales},
+                                  {kParamBindQuats, params.quats},
+                                  {kParamBindOpacities, params.opacity_logits},
+                                  {kProjectBwdBindOffsets, st.isect_offset_},
+                                  {kProjectBwdBindG0, plane(0)},
+                                  {kProjectBwdBindG1, plane(1)},
+                                  {kProjectBwdBindG2, plane(2)},
+                                  {kProjectBwdBindVMeans, grads.means},
+                                  {kProjectBwdBindVLogScales, grads.log_scales},
+                                  {kProjectBwdBindVQuats, grads.quats},
+                                  {kProjectBwdBindVOpacities, grads.opacity_logits},
+                                  {kProjectBwdBindVSh0, sh_band(grads, 0)},
+                                  {kProjectBwdBindVSh1, sh_band(grads, 1)},
+                                  {kProjectBwdBindVSh2, sh_band(grads, 2)},
+                                  {kProjectBwdBindVSh3, sh_band(grads, 3)},
+                                  {kProjectBwdBindGrad2d, grad2d_norm_},
+                                  {kProjectBwdBindPosePartial, pose_partial_},
+                                  {kProjectBwdBindProjC, st.proj_color_},
+                                  {kProjectBwdBindDColor, st.proj_dcolor_}};
+  // The accumulating "_block" build reads what it adds to through texel views of the same buffers.
+  if (accumulate && !block_suffix_.empty())
+    binds.insert(binds.end(), {{kProjectBwdBindVMeansIn, grads.means},
+                               {kProjectBwdBindVLogScalesIn, grads.log_scales},
+                               {kProjectBwdBindVQuatsIn, grads.quats},
+                               {kProjectBwdBindVOpacitiesIn, grads.opacity_logits},
+                               {kProjectBwdBindVSh0In, grads.sh[0]},
+                               {kProjectBwdBindGrad2dIn, grad2d_norm_}});
+  cmd_.dispatch((accumulate ? "splat/project_bwd_acc" : "splat/project_bwd") + block_suffix_, binds, pp,
+                cmd_.linear_groups(groups));
   ReducePC rp{pose_partials(params.count), 0, 0, 0};
   cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, pose_}}, rp,
                 gpu::Groups{1, 1, 1});

@@ -50,8 +50,17 @@ layout(std430, binding = kProjectBwdBindGrad2d) buffer Grad2d { float grad2d_nor
 layout(std430, binding = kProjectBwdBindPosePartial) writeonly buffer PosePartial { float pose_partial[]; };  // [groups][6]
 // From the forward (project.comp): the clamped colour max(raw, 0) (raw > 0 exactly where it is
 // > 0) and d(raw)/d(direction), so that no SH coefficient is read here.
+#ifdef EVF_SLOT_TEXELS
+layout(binding = kProjectBwdBindProjC) uniform samplerBuffer ProjC;
+layout(binding = kProjectBwdBindDColor) uniform samplerBuffer DColor;  // [N][3] (.xyz)
+vec3 clamped_color(uint g) { return texelFetch(ProjC, int(g)).rgb; }
+vec3 dcolor(uint i) { return texelFetch(DColor, int(i)).xyz; }
+#else
 layout(std430, binding = kProjectBwdBindProjC) readonly buffer ProjC { vec4 proj_color[]; };
 layout(std430, binding = kProjectBwdBindDColor) readonly buffer DColor { vec4 proj_dcolor[]; };  // [N][3] (.xyz)
+vec3 clamped_color(uint g) { return proj_color[g].rgb; }
+vec3 dcolor(uint i) { return proj_dcolor[i].xyz; }
+#endif
 layout(push_constant) uniform PC { ProjectPC pc; };
 
 #ifdef EVF_POSE_PER_SUBGROUP
@@ -64,21 +73,47 @@ shared float red[6][kProjectGroupSize];
 // EVF_ACCUMULATE (the "_acc" build, kFlagAccumulate): add to the gradient buffers (several
 // renders of one step, e.g. the virtual frames of an exposure) instead of overwriting them. A
 // build of its own rather than a branch: CPU drivers would run the reads of a branch anyway.
-#ifdef EVF_ACCUMULATE
-#define EVF_PUT(buf, i, value) buf[i] += (value)
+// EVF_PUT1/3/4(buffer, texels, index, value) write a float, a packed triple or a vec4. The
+// "_acc_block" build reads the values it adds to through texel views of the same buffers (`texels`:
+// each element is read and then written by its own invocation alone), a gather on lavapipe where
+// `+=` on a storage buffer is a loop over the lanes to load and another to store.
+#if defined(EVF_ACCUMULATE) && defined(EVF_SLOT_TEXELS)
+layout(binding = kProjectBwdBindVMeansIn) uniform samplerBuffer VMeansIn;
+layout(binding = kProjectBwdBindVLogScalesIn) uniform samplerBuffer VLogScalesIn;
+layout(binding = kProjectBwdBindVQuatsIn) uniform samplerBuffer VQuatsIn;
+layout(binding = kProjectBwdBindVOpacitiesIn) uniform samplerBuffer VOpacitiesIn;
+layout(binding = kProjectBwdBindVSh0In) uniform samplerBuffer VSh0In;
+layout(binding = kProjectBwdBindGrad2dIn) uniform samplerBuffer Grad2dIn;
+#define EVF_PUT1(buf, tex, i, value) buf[i] = evf_texel_float(tex, i) + (value)
+#define EVF_PUT3(buf, tex, i, value) buf[i] = param_vec3(tex, i) + (value)
+#define EVF_PUT4(buf, tex, i, value) buf[i] = texelFetch(tex, int(i)) + (value)
+#elif defined(EVF_ACCUMULATE)
+#define EVF_PUT1(buf, tex, i, value) buf[i] += (value)
+#define EVF_PUT3(buf, tex, i, value) buf[i] += (value)
+#define EVF_PUT4(buf, tex, i, value) buf[i] += (value)
 #else
-#define EVF_PUT(buf, i, value) buf[i] = (value)
+#define EVF_PUT1(buf, tex, i, value) buf[i] = (value)
+#define EVF_PUT3(buf, tex, i, value) buf[i] = (value)
+#define EVF_PUT4(buf, tex, i, value) buf[i] = (value)
+#endif
+// The bands above 0 are added to in place in every build: they are written only at SH degree
+// >= 1, which training reaches late (the texel reads cover the buffers written every step).
+#ifdef EVF_ACCUMULATE
+#define EVF_PUT_BAND(buf, i, value) buf[i] += (value)
+#else
+#define EVF_PUT_BAND(buf, i, value) buf[i] = (value)
 #endif
 
-// SH gradients of every band the buffers hold (constant indices after unrolling, see params.glsl).
+// SH gradients of bands 0..degree (constant indices after unrolling, see params.glsl). Bands
+// above the active degree have zero gradient: the host fills them (Rasterizer::record_backward).
 void store_sh_all(uint g, uint degree, vec3 v[16]) {
-  EVF_PUT(v_sh0, g, v[0]);
+  EVF_PUT3(v_sh0, VSh0In, g, v[0]);
   if (degree >= 1)
-    for (uint k = 0u; k < 3u; ++k) EVF_PUT(v_sh1, 3u * g + k, v[1u + k]);
+    for (uint k = 0u; k < 3u; ++k) EVF_PUT_BAND(v_sh1, 3u * g + k, v[1u + k]);
   if (degree >= 2)
-    for (uint k = 0u; k < 5u; ++k) EVF_PUT(v_sh2, 5u * g + k, v[4u + k]);
+    for (uint k = 0u; k < 5u; ++k) EVF_PUT_BAND(v_sh2, 5u * g + k, v[4u + k]);
   if (degree >= 3)
-    for (uint k = 0u; k < 7u; ++k) EVF_PUT(v_sh3, 7u * g + k, v[9u + k]);
+    for (uint k = 0u; k < 7u; ++k) EVF_PUT_BAND(v_sh3, 7u * g + k, v[9u + k]);
 }
 
 void main() {
@@ -126,7 +161,7 @@ void main() {
     vec3 dir = dvec / dlen;
     float Y[16];
     sh_basis(dir, pc.sh_degree, Y);
-    vec3 clamped = proj_color[g].rgb;
+    vec3 clamped = clamped_color(g);
     vec3 v_raw = listed ? v_color * vec3(greaterThan(clamped, vec3(0.0))) : vec3(0.0);
     // Coefficients above the active degree have Y_k = 0: zero gradient, as the contract says.
     vec3 v_sh[16];
@@ -134,18 +169,14 @@ void main() {
     EVF_SH_GRAD(0) EVF_SH_GRAD(1) EVF_SH_GRAD(2) EVF_SH_GRAD(3) EVF_SH_GRAD(4) EVF_SH_GRAD(5) EVF_SH_GRAD(6)
     EVF_SH_GRAD(7) EVF_SH_GRAD(8) EVF_SH_GRAD(9) EVF_SH_GRAD(10) EVF_SH_GRAD(11) EVF_SH_GRAD(12)
     EVF_SH_GRAD(13) EVF_SH_GRAD(14) EVF_SH_GRAD(15)
-#ifdef EVF_ACCUMULATE
-    // Above the active degree the gradient is zero, and adding zero changes nothing: the
-    // accumulating build touches only the active bands (at degree 0, 1 of the 16 triples).
+    // Only the active bands (at degree 0, 1 of the 16 triples): above it the gradient is zero,
+    // which adding leaves as it is and which the host fills in for an overwrite.
     store_sh_all(g, min(buffer_degree, pc.sh_degree), v_sh);
-#else
-    store_sh_all(g, buffer_degree, v_sh);
-#endif
     // v_dir = sum_c v_raw_c d(raw_c)/d(dir) (zero at degree 0).
     vec3 v_dir = vec3(0.0);
     if (pc.sh_degree >= 1) {
       uint i = 3 * g;
-      v_dir = v_raw.r * proj_dcolor[i].xyz + v_raw.g * proj_dcolor[i + 1].xyz + v_raw.b * proj_dcolor[i + 2].xyz;
+      v_dir = v_raw.r * dcolor(i) + v_raw.g * dcolor(i + 1u) + v_raw.b * dcolor(i + 2u);
     }
     vec3 v_dvec = (v_dir - dir * dot(dir, v_dir)) / dlen;
     vec3 v_mean = v_dvec;
@@ -189,11 +220,11 @@ void main() {
     v_ls = listed ? v_ls : vec3(0.0);
     v_q = listed ? v_q : vec4(0.0);
     v_logit = listed ? v_logit : 0.0;
-    EVF_PUT(v_means, g, v_mean);
-    EVF_PUT(v_log_scales, g, v_ls);
-    EVF_PUT(v_quats, g, v_q);
-    EVF_PUT(v_opacity_logits, g, v_logit);
-    EVF_PUT(grad2d_norm, g, length(v_mean2d));
+    EVF_PUT3(v_means, VMeansIn, g, v_mean);
+    EVF_PUT3(v_log_scales, VLogScalesIn, g, v_ls);
+    EVF_PUT4(v_quats, VQuatsIn, g, v_q);
+    EVF_PUT1(v_opacity_logits, VOpacitiesIn, g, v_logit);
+    EVF_PUT1(grad2d_norm, Grad2dIn, g, length(v_mean2d));
   }
 #ifdef EVF_POSE_PER_SUBGROUP
   // One partial per subgroup ([group][subgroup][6]: the host sizes them by the device's subgroup

@@ -90,6 +90,14 @@ EVF_BIND(kProjectBwdBindGrad2d, 27u, Grad2d)
 EVF_BIND(kProjectBwdBindPosePartial, 28u, PosePartial)
 EVF_BIND(kProjectBwdBindProjC, 29u, ProjC)
 EVF_BIND(kProjectBwdBindDColor, 30u, DColor)
+// splat/project_bwd_acc_block only: texel views of the gradient buffers it adds to (VMeans ...
+// Grad2d, the same buffers), read before each element is written.
+EVF_BIND(kProjectBwdBindVMeansIn, 31u, VMeansIn)
+EVF_BIND(kProjectBwdBindVLogScalesIn, 32u, VLogScalesIn)
+EVF_BIND(kProjectBwdBindVQuatsIn, 33u, VQuatsIn)
+EVF_BIND(kProjectBwdBindVOpacitiesIn, 34u, VOpacitiesIn)
+EVF_BIND(kProjectBwdBindVSh0In, 35u, VSh0In)
+EVF_BIND(kProjectBwdBindGrad2dIn, 36u, Grad2dIn)
 // splat/rasterize, splat/rasterize_block, splat/rasterize_bwd, splat/rasterize_bwd_block
 // (written by splat/tile_ranges, or by splat/rasterize_block itself)
 EVF_BIND(kRasterBindRanges, 0u, Ranges)
