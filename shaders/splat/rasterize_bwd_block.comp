@@ -53,11 +53,14 @@ layout(local_size_x = EVF_THREADS) in;
 #error the partial sums of more than 16 blocks do not fit in 32 KiB of shared memory
 #endif
 #include "splat/raster_io.glsl"
-// Tile by tile (splat_layout.h): a run is one vec4.
-layout(std430, binding = kRasterizeBwdBindInT) readonly buffer InT { vec4 final_T[]; };
-layout(std430, binding = kRasterizeBwdBindInLast) readonly buffer InLast { uvec4 last_isect[]; };
-layout(std430, binding = kRasterizeBwdBindVRgb) readonly buffer VRgb { float v_rgb[]; };        // [3][H][W]
-layout(std430, binding = kRasterizeBwdBindVAlpha) readonly buffer VAlpha { float v_alpha[]; };  // [H][W]
+#include "common/texel.glsl"
+// Read as texels, like the Gaussians (raster_io.glsl): each block's start reads 4 x EVF_ROWS
+// pixels' state and image gradients, 18 storage accesses a row of 4 that were each a loop over the
+// lanes. Tile by tile (splat_layout.h): a run is one texel of InT, four of InLast.
+layout(binding = kRasterizeBwdBindInT) uniform samplerBuffer InT;
+layout(binding = kRasterizeBwdBindInLast) uniform usamplerBuffer InLast;  // R32UI
+layout(binding = kRasterizeBwdBindVRgb) uniform samplerBuffer VRgb;       // [3][H][W] floats
+layout(binding = kRasterizeBwdBindVAlpha) uniform samplerBuffer VAlpha;   // [H][W] floats
 // Per-slot gradients (splat_layout.h): (v_mean2d.xy, v_conic.xy), (v_conic.z, v_opacity, v_rgb.rg), v_rgb.b.
 layout(std430, binding = kRasterizeBwdBindG0) writeonly buffer G0 { vec4 slot_grad_a[]; };
 layout(std430, binding = kRasterizeBwdBindG1) writeonly buffer G1 { vec4 slot_grad_b[]; };
@@ -123,8 +126,8 @@ void grad_of(Grad g, vec4 dx, vec3 conic, out vec4 ga, out vec4 gb, out float gc
 Run run_init(ivec2 p0, uint q, uint first) {
   Run r;
   uint hw = pc.width * pc.height;
-  vec4 T4 = final_T[q];
-  uvec4 last4 = last_isect[q];
+  vec4 T4 = texelFetch(InT, int(q));
+  uvec4 last4 = evf_texel_uvec4(InLast, q);
   for (int k = 0; k < 4; ++k) {
     ivec2 p = p0 + ivec2(k, 0);
     bool inside = p.x < int(pc.width) && p.y < int(pc.height);
@@ -132,10 +135,10 @@ Run run_init(ivec2 p0, uint q, uint first) {
     float T = inside ? T4[k] : 1.0;
     r.T[k] = T;
     r.last[k] = inside ? last4[k] : first;
-    r.vr[k] = inside ? v_rgb[i] : 0.0;
-    r.vg[k] = inside ? v_rgb[hw + i] : 0.0;
-    r.vb[k] = inside ? v_rgb[2 * hw + i] : 0.0;
-    r.vAT[k] = inside ? v_alpha[i] * T : 0.0;
+    r.vr[k] = inside ? evf_texel_float(VRgb, i) : 0.0;
+    r.vg[k] = inside ? evf_texel_float(VRgb, hw + i) : 0.0;
+    r.vb[k] = inside ? evf_texel_float(VRgb, 2u * hw + i) : 0.0;
+    r.vAT[k] = inside ? evf_texel_float(VAlpha, i) * T : 0.0;
   }
   r.Sv = (pc.background.r * r.vr + pc.background.g * r.vg + pc.background.b * r.vb) * r.T;
   return r;
