@@ -173,17 +173,18 @@ void EventLoss::record_pair_tail(gpu::Commands& cmd, const ExposureFrames& f, co
                  {{shaderio::kEventPairValueBindSums, sums_r_}, {shaderio::kEventPairValueBindValues, *reversed_out_}},
                  r, gpu::Groups{1, 1, 1});
   }
-  if (gradients)
-    cmd.dispatch(quads ? "loss/event_pair_quads_bwd" : "loss/event_pair_bwd",
-                 {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},
-                  {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
-                  {shaderio::kEventPairBwdBindScratch, scratch_},
-                  {shaderio::kEventPairBwdBindSums, sums_},
-                  {shaderio::kEventPairBwdBindGradS, *f.grad[s]},
-                  {shaderio::kEventPairBwdBindGradJ, *f.grad[j]},
-                  {shaderio::kEventPairBwdBindValues, value_buffer()}},
-                 pc, g);
-  else
+  if (gradients) {
+    std::vector<gpu::Bind> binds = {
+        {shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},     {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
+        {shaderio::kEventPairBwdBindScratch, scratch_},     {shaderio::kEventPairBwdBindSums, sums_},
+        {shaderio::kEventPairBwdBindGradS, *f.grad[s]},     {shaderio::kEventPairBwdBindGradJ, *f.grad[j]},
+        {shaderio::kEventPairBwdBindValues, value_buffer()}};
+    // The quads build reads what it adds to through texel views of the same buffers.
+    if (quads)
+      binds.insert(binds.end(), {{shaderio::kEventPairBwdBindGradSIn, *f.grad[s]},
+                                 {shaderio::kEventPairBwdBindGradJIn, *f.grad[j]}});
+    cmd.dispatch(quads ? "loss/event_pair_quads_bwd" : "loss/event_pair_bwd", binds, pc, g);
+  } else
     cmd.dispatch("loss/event_pair_value",
                  {{shaderio::kEventPairValueBindSums, sums_}, {shaderio::kEventPairValueBindValues, value_buffer()}},
                  pc, gpu::Groups{1, 1, 1});

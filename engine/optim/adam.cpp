@@ -99,7 +99,10 @@ void Adam::step_group(gpu::Commands& cmd, size_t i) {
                {{shaderio::kAdamBindParam, *g.param},
                 {shaderio::kAdamBindGrad, *g.grad},
                 {shaderio::kAdamBindM, *s.m},
-                {shaderio::kAdamBindV, *s.v}},
+                {shaderio::kAdamBindV, *s.v},
+                {shaderio::kAdamBindParamIn, *g.param},
+                {shaderio::kAdamBindMIn, *s.m},
+                {shaderio::kAdamBindVIn, *s.v}},
                pc, cmd.linear_groups(gpu::Commands::div_up(gpu::Commands::div_up(g.count, 4), kOptimGroupSize)));
 }
 

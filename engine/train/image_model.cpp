@@ -69,8 +69,11 @@ void record_decode_mean(gpu::Commands& cmd, uint64_t n, float scale, bool add, c
                         const gpu::Buffer& y, const gpu::Buffer& mean) {
   shaderio::ColourPC pc{uint32_t(n), scale, add ? 1u : 0u, 0};
   cmd.dispatch("train/colour_decode_mean",
-               {{shaderio::kColourBindX, x}, {shaderio::kColourBindY, y}, {shaderio::kColourBindMean, mean}}, pc,
-               quad_groups(cmd, n, shaderio::kColourGroupSize));
+               {{shaderio::kColourBindX, x},
+                {shaderio::kColourBindY, y},
+                {shaderio::kColourBindMean, mean},
+                {shaderio::kColourBindMeanIn, mean}},
+               pc, quad_groups(cmd, n, shaderio::kColourGroupSize));
 }
 
 void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& renders, const gpu::Buffer* flow) {

@@ -11,8 +11,12 @@ layout(binding = kEventPairBwdBindFrameS) uniform samplerBuffer FrameS;
 layout(binding = kEventPairBwdBindFrameJ) uniform samplerBuffer FrameJ;
 layout(binding = kEventPairBwdBindScratch) uniform samplerBuffer Scratch;
 layout(std430, binding = kEventPairBwdBindSums) readonly buffer Sums { float sums[]; };
-layout(std430, binding = kEventPairBwdBindGradS) buffer GradS { vec4 grad_s[]; };
-layout(std430, binding = kEventPairBwdBindGradJ) buffer GradJ { vec4 grad_j[]; };
+// What it adds to is read through texel views of the same buffers (each element read, then
+// written, by its own invocation alone): a `+=` on a storage buffer is two loops over the lanes.
+layout(std430, binding = kEventPairBwdBindGradS) writeonly buffer GradS { vec4 grad_s[]; };
+layout(std430, binding = kEventPairBwdBindGradJ) writeonly buffer GradJ { vec4 grad_j[]; };
+layout(binding = kEventPairBwdBindGradSIn) uniform samplerBuffer GradSIn;
+layout(binding = kEventPairBwdBindGradJIn) uniform samplerBuffer GradJIn;
 layout(std430, binding = kEventPairBwdBindValues) buffer Values { float values[]; };
 layout(push_constant) uniform PC { EventPairPC pc; };
 #include "loss/event_math.glsl"
@@ -30,10 +34,10 @@ void main() {
   uint r = q, gr = quads + q, b = 2u * quads + q;
   vec4 yj = event_luma(texelFetch(FrameJ, int(r)), texelFetch(FrameJ, int(gr)), texelFetch(FrameJ, int(b)));
   vec4 ys = event_luma(texelFetch(FrameS, int(r)), texelFetch(FrameS, int(gr)), texelFetch(FrameS, int(b)));
-  grad_j[r] += g * event_log_luma_grad(yj, kEventLuma.r, pc.eps);
-  grad_j[gr] += g * event_log_luma_grad(yj, kEventLuma.g, pc.eps);
-  grad_j[b] += g * event_log_luma_grad(yj, kEventLuma.b, pc.eps);
-  grad_s[r] -= g * event_log_luma_grad(ys, kEventLuma.r, pc.eps);
-  grad_s[gr] -= g * event_log_luma_grad(ys, kEventLuma.g, pc.eps);
-  grad_s[b] -= g * event_log_luma_grad(ys, kEventLuma.b, pc.eps);
+  grad_j[r] = texelFetch(GradJIn, int(r)) + g * event_log_luma_grad(yj, kEventLuma.r, pc.eps);
+  grad_j[gr] = texelFetch(GradJIn, int(gr)) + g * event_log_luma_grad(yj, kEventLuma.g, pc.eps);
+  grad_j[b] = texelFetch(GradJIn, int(b)) + g * event_log_luma_grad(yj, kEventLuma.b, pc.eps);
+  grad_s[r] = texelFetch(GradSIn, int(r)) - g * event_log_luma_grad(ys, kEventLuma.r, pc.eps);
+  grad_s[gr] = texelFetch(GradSIn, int(gr)) - g * event_log_luma_grad(ys, kEventLuma.g, pc.eps);
+  grad_s[b] = texelFetch(GradSIn, int(b)) - g * event_log_luma_grad(ys, kEventLuma.b, pc.eps);
 }

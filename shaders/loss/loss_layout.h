@@ -166,6 +166,10 @@ EVF_BIND(kEventPairBwdBindSums, 3u, Sums)
 EVF_BIND(kEventPairBwdBindGradS, 4u, GradS)
 EVF_BIND(kEventPairBwdBindGradJ, 5u, GradJ)
 EVF_BIND(kEventPairBwdBindValues, 6u, Values)
+// loss/event_pair_quads_bwd only: texel views of GradS and GradJ (the same buffers), for the
+// values it adds to.
+EVF_BIND(kEventPairBwdBindGradSIn, 7u, GradSIn)
+EVF_BIND(kEventPairBwdBindGradJIn, 8u, GradJIn)
 // loss/event_pair_value
 EVF_BIND(kEventPairValueBindSums, 0u, Sums)
 EVF_BIND(kEventPairValueBindValues, 1u, Values)

@@ -40,6 +40,10 @@ EVF_BIND(kAdamBindParam, 0u, Param)
 EVF_BIND(kAdamBindGrad, 1u, Grad)
 EVF_BIND(kAdamBindM, 2u, M)
 EVF_BIND(kAdamBindV, 3u, V)
+// Texel views of Param, M and V (the same buffers) for the values each element's update reads.
+EVF_BIND(kAdamBindParamIn, 4u, ParamIn)
+EVF_BIND(kAdamBindMIn, 5u, MIn)
+EVF_BIND(kAdamBindVIn, 6u, VIn)
 // optim/gather
 EVF_BIND(kOptimGatherBindSrc, 0u, Src)
 EVF_BIND(kOptimGatherBindDst, 1u, Dst)

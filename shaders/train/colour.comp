@@ -23,7 +23,10 @@ layout(binding = kColourBindX) uniform samplerBuffer X;
 layout(binding = kColourBindG) uniform samplerBuffer G;
 layout(std430, binding = kColourBindY) writeonly buffer Y { vec4 y[]; };
 #ifdef EVF_COLOUR_MEAN
-layout(std430, binding = kColourBindMean) buffer Mean { vec4 mean[]; };
+// What the mean adds to is read through a texel view of the same buffer (each element read, then
+// written, by its own invocation alone): a `+=` on a storage buffer is two loops over the lanes.
+layout(std430, binding = kColourBindMean) writeonly buffer Mean { vec4 mean[]; };
+layout(binding = kColourBindMeanIn) uniform samplerBuffer MeanIn;
 #endif
 layout(push_constant) uniform PC { ColourPC pc; };
 
@@ -55,7 +58,7 @@ void main() {
     vec4 r = vec4(convert(v.x, gr.x), convert(v.y, gr.y), convert(v.z, gr.z), convert(v.w, gr.w));
     y[i] = r;
 #ifdef EVF_COLOUR_MEAN
-    mean[i] = (pc.accumulate != 0u ? mean[i] : vec4(0.0)) + pc.scale * r;
+    mean[i] = (pc.accumulate != 0u ? texelFetch(MeanIn, int(i)) : vec4(0.0)) + pc.scale * r;
 #endif
     return;
   }
@@ -63,7 +66,7 @@ void main() {
     float r = convert(texelFetch(X, int(i))[c], EVF_GRAD(i, c));
     y[i][c] = r;
 #ifdef EVF_COLOUR_MEAN
-    mean[i][c] = (pc.accumulate != 0u ? mean[i][c] : 0.0) + pc.scale * r;
+    mean[i][c] = (pc.accumulate != 0u ? texelFetch(MeanIn, int(i))[c] : 0.0) + pc.scale * r;
 #endif
   }
 }

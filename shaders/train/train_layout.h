@@ -17,6 +17,7 @@ EVF_BIND(kColourBindX, 0u, X)
 EVF_BIND(kColourBindG, 1u, G)
 EVF_BIND(kColourBindY, 2u, Y)
 EVF_BIND(kColourBindMean, 3u, Mean)  // train/colour_decode_mean: the frames' mean, added to
+EVF_BIND(kColourBindMeanIn, 4u, MeanIn)  // train/colour_decode_mean: a texel view of Mean, read
 EVF_CONST(uint, kColourDecode, 0u)
 EVF_CONST(uint, kColourEncode, 1u)
 EVF_CONST(uint, kColourDecodeBwd, 2u)
