@@ -9,7 +9,18 @@
 #include "sort/sort_build.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = EVF_SORT_GROUP) in;
+#ifdef EVF_SORT_WIDE
+// The wide build (CPU drivers) reads the keys as R32UI texels: straight-line code on lavapipe,
+// where a storage access is a loop over the lanes.
+#include "common/texel.glsl"
+layout(binding = kRadixCountBindKeys) uniform usamplerBuffer Keys;
+uvec4 key4(uint i) { return evf_texel_uvec4(Keys, i >> 2u); }
+uint key1(uint i) { return texelFetch(Keys, int(i)).x; }
+#else
 layout(std430, binding = kRadixCountBindKeys) readonly buffer Keys { uvec4 keys[]; };  // 4 keys per access
+uvec4 key4(uint i) { return keys[i >> 2u]; }
+uint key1(uint i) { return keys[i >> 2u][i & 3u]; }
+#endif
 layout(std430, binding = kRadixCountBindCounts) writeonly buffer Counts { uint counts[]; };
 layout(push_constant) uniform PC { SortPC pc; };
 shared uint hist[EVF_SORT_BINS];
@@ -25,13 +36,13 @@ void main() {
   uint end = min(base + pc.items, pc.n), i = base;
   if ((pc.items & 3u) == 0u)  // base is a multiple of 4: whole uvec4s while 4 keys remain
     for (; i + 4u <= end; i += 4u) {
-      uvec4 d = (keys[i >> 2u] >> pc.shift) & pc.digit_mask;
+      uvec4 d = (key4(i) >> pc.shift) & pc.digit_mask;
       local[d.x] += 1;
       local[d.y] += 1;
       local[d.z] += 1;
       local[d.w] += 1;
     }
-  for (; i < end; ++i) local[(keys[i >> 2u][i & 3u] >> pc.shift) & pc.digit_mask] += 1;
+  for (; i < end; ++i) local[(key1(i) >> pc.shift) & pc.digit_mask] += 1;
   for (uint d = 0; d < EVF_SORT_BINS; ++d)
     if (local[d] != 0) atomicAdd(hist[d], local[d]);
   barrier();

@@ -14,13 +14,28 @@
 #include "sort/sort_build.glsl"
 #include "common/dispatch.glsl"
 layout(local_size_x = EVF_SORT_GROUP) in;
-// Read four pairs per access where it can (CPU drivers loop over the lanes for every access).
+// Read four pairs per access where it can (CPU drivers loop over the lanes for every storage
+// access). The wide builds (CPU drivers) read keys, values and counts as R32UI texels instead:
+// on lavapipe straight-line code, not a loop over the lanes.
+#ifdef EVF_SORT_WIDE
+#include "common/texel.glsl"
+layout(binding = kRadixScatterBindKeysIn) uniform usamplerBuffer KeysIn;
+uvec4 key4_in(uint i) { return evf_texel_uvec4(KeysIn, i >> 2u); }
+uint key_in(uint i) { return texelFetch(KeysIn, int(i)).x; }
+#else
 layout(std430, binding = kRadixScatterBindKeysIn) readonly buffer KeysIn { uvec4 keys_in[]; };
+uvec4 key4_in(uint i) { return keys_in[i >> 2u]; }
+uint key_in(uint i) { return keys_in[i >> 2u][i & 3u]; }
+#endif
 #ifdef EVF_SORT_ORDER
 // The "_order" builds (a first pass that makes the sort's permutation): each pair's value is its
 // key's index, computed instead of read, so that nobody writes or reads an identity array.
 uvec4 value4_in(uint i) { return uvec4(i) + uvec4(0u, 1u, 2u, 3u); }
 uint value_in(uint i) { return i; }
+#elif defined(EVF_SORT_WIDE)
+layout(binding = kRadixScatterBindValuesIn) uniform usamplerBuffer ValuesIn;
+uvec4 value4_in(uint i) { return evf_texel_uvec4(ValuesIn, i >> 2u); }
+uint value_in(uint i) { return texelFetch(ValuesIn, int(i)).x; }
 #else
 layout(std430, binding = kRadixScatterBindValuesIn) readonly buffer ValuesIn { uvec4 values_in[]; };
 uvec4 value4_in(uint i) { return values_in[i >> 2u]; }
@@ -29,7 +44,13 @@ uint value_in(uint i) { return values_in[i >> 2u][i & 3u]; }
 layout(std430, binding = kRadixScatterBindKeysOut) writeonly buffer KeysOut { uint keys_out[]; };
 layout(std430, binding = kRadixScatterBindValuesOut) writeonly buffer ValuesOut { uint values_out[]; };
 // Scanned counts, or with EVF_SORT_FUSED_SCAN the raw ones (both digit-major: [digit][block]).
+#ifdef EVF_SORT_WIDE
+layout(binding = kRadixScatterBindOffsets) uniform usamplerBuffer Offsets;
+uint offset_at(uint i) { return texelFetch(Offsets, int(i)).x; }
+#else
 layout(std430, binding = kRadixScatterBindOffsets) readonly buffer Offsets { uint global_offset[]; };
+uint offset_at(uint i) { return global_offset[i]; }
+#endif
 layout(push_constant) uniform PC { SortPC pc; };
 
 shared uint table[EVF_SORT_BINS * EVF_SORT_GROUP];   // [digit][invocation], then its exclusive scan
@@ -51,13 +72,13 @@ void main() {
   uint local[EVF_SORT_BINS];
   for (uint d = 0; d < EVF_SORT_BINS; ++d) local[d] = 0;
   for (uint i = base; i < end4; i += 4u) {
-    uvec4 d = (keys_in[i >> 2u] >> pc.shift) & pc.digit_mask;
+    uvec4 d = (key4_in(i) >> pc.shift) & pc.digit_mask;
     local[d.x] += 1;
     local[d.y] += 1;
     local[d.z] += 1;
     local[d.w] += 1;
   }
-  for (uint i = end4; i < end; ++i) local[(keys_in[i >> 2u][i & 3u] >> pc.shift) & pc.digit_mask] += 1;
+  for (uint i = end4; i < end; ++i) local[(key_in(i) >> pc.shift) & pc.digit_mask] += 1;
   for (uint d = 0; d < EVF_SORT_BINS; ++d) table[d * EVF_SORT_GROUP + lid] = local[d];
   barrier();
   // Scan of the table: invocation lid sums entries [lid * BINS, lid * BINS + BINS) (with 256
@@ -71,7 +92,7 @@ void main() {
     uint row = (lid * kDigitsPerRow + k) * pc.num_blocks;
     before[k] = total[k] = 0u;
     for (uint b = 0u; b < pc.num_blocks; ++b) {
-      uint c = global_offset[row + b];
+      uint c = offset_at(row + b);
       before[k] += b < block ? c : 0u;
       total[k] += c;
     }
@@ -103,7 +124,7 @@ void main() {
   }
 #define EVF_BLOCK_DIGIT_BASE(d) digit_base[d]
 #else
-#define EVF_BLOCK_DIGIT_BASE(d) global_offset[(d) * pc.num_blocks + block]
+#define EVF_BLOCK_DIGIT_BASE(d) offset_at((d) * pc.num_blocks + block)
 #endif
   barrier();
   // Position of pair: offset of (digit, block) + rank among the block's pairs of that digit.
@@ -111,7 +132,7 @@ void main() {
   for (uint d = 0; d < EVF_SORT_BINS; ++d)
     dest[d] = EVF_BLOCK_DIGIT_BASE(d) + table[d * EVF_SORT_GROUP + lid] - table[d * EVF_SORT_GROUP];
   for (uint i = base; i < end4; i += 4u) {
-    uvec4 key = keys_in[i >> 2u], value = value4_in(i);
+    uvec4 key = key4_in(i), value = value4_in(i);
     for (uint c = 0u; c < 4u; ++c) {
       uint d = (key[c] >> pc.shift) & pc.digit_mask;
       uint o = dest[d];
@@ -121,7 +142,7 @@ void main() {
     }
   }
   for (uint i = end4; i < end; ++i) {
-    uint key = keys_in[i >> 2u][i & 3u];
+    uint key = key_in(i);
     uint d = (key >> pc.shift) & pc.digit_mask;
     uint o = dest[d];
     dest[d] = o + 1;
