@@ -115,7 +115,7 @@ float sum4(vec4 v) { return (v.x + v.y) + (v.z + v.w); }
 // The block's nine sums in the per-slot layout: (mean.xy, conic.xy), (conic.z, opacity, rgb.rg),
 // rgb.b. power = -(conic.x dx^2 + conic.z dy^2) / 2 - conic.y dx dy, with dx, dy mean - centre.
 void grad_of(Grad g, vec4 dx, vec3 conic, out vec4 ga, out vec4 gb, out float gc) {
-  float s = sum4(g.p), sx = dot(g.p, dx), sxx = dot(g.p, dx * dx);
+  float sx = dot(g.p, dx), sxx = dot(g.p, dx * dx);
   float sy = sum4(g.py), sxy = dot(g.py, dx), syy = sum4(g.pyy);
   ga = vec4(-(conic.x * sx + conic.y * sy), -(conic.y * sx + conic.z * sy), -0.5 * sxx, -sxy);
   gb = vec4(-0.5 * syy, sum4(g.opac), sum4(g.r), sum4(g.g));
