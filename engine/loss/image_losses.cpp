@@ -93,7 +93,8 @@ void SsimPipeline::record(gpu::Commands& cmd, const ImageShape& shape, const gpu
                  {{shaderio::kSsimBwdVBindA, a},
                   {shaderio::kSsimBwdVBindB, b},
                   {shaderio::kSsimBwdVBindH, h_},
-                  {shaderio::kSsimBwdVBindGrad, *grad}},
+                  {shaderio::kSsimBwdVBindGrad, *grad},
+                  {shaderio::kSsimBwdVBindGradIn, *grad}},
                  pc, gv);
   }
 }

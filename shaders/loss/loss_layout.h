@@ -201,6 +201,7 @@ EVF_BIND(kSsimBwdVBindA, 0u, A)
 EVF_BIND(kSsimBwdVBindB, 1u, B)
 EVF_BIND(kSsimBwdVBindH, 2u, H)
 EVF_BIND(kSsimBwdVBindGrad, 3u, Grad)
+EVF_BIND(kSsimBwdVBindGradIn, 4u, GradIn)  // a texel view of Grad: what an accumulating pass adds to
 // loss/ssim_h
 EVF_BIND(kSsimHBindA, 0u, A)
 EVF_BIND(kSsimHBindB, 1u, B)

@@ -13,7 +13,10 @@ layout(local_size_x = kLossGroupSize) in;
 layout(binding = kSsimBwdVBindA) uniform samplerBuffer A;
 layout(binding = kSsimBwdVBindB) uniform samplerBuffer B;
 layout(binding = kSsimBwdVBindH) uniform samplerBuffer H;  // see loss_layout.h
-layout(std430, binding = kSsimBwdVBindGrad) buffer Grad { float grad[]; };
+// What an accumulating pass adds to is read through a texel view of the same buffer (each element
+// read, then written, by its own invocation alone; docs/gpu.md).
+layout(std430, binding = kSsimBwdVBindGrad) writeonly buffer Grad { float grad[]; };
+layout(binding = kSsimBwdVBindGradIn) uniform samplerBuffer GradIn;
 layout(push_constant) uniform PC { SsimPC pc; };
 
 const int kRows = int(kSsimStrip);
@@ -49,7 +52,7 @@ void main() {
     float diff = a - b;
     float d_pix = (pc.flags & kLossPixelL2) != 0u ? 2.0 * diff : sign(diff);
     float g = pc.ssim_grad_scale * d_ssim + pc.pixel_grad_scale * d_pix;
-    if ((pc.flags & kLossAccumulate) != 0u) g += grad[i];
+    if ((pc.flags & kLossAccumulate) != 0u) g += evf_texel_float(GradIn, i);
     grad[i] = g;
   }
 }
