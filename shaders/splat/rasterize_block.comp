@@ -115,8 +115,8 @@ Run run_init(ivec2 p0, uint first) {
   return r;
 }
 
-// Blends Gaussian `idx` (already read) into the run whose pixel centres are (cx, cy).
-// `rp`: the Gaussian's exponent pieces over the block's columns, `dy` = mean.y - cy.
+// Blends Gaussian `idx` (already read) into the run at dy = mean.y - its centres' y; `rp`: the
+// Gaussian's exponent pieces over the block's columns (row_power_of).
 void blend(inout Run r, RowPower rp, float dy, float opacity, vec3 col, float depth, uint idx) {
   vec4 power = row_power(rp, dy);
   vec4 alpha = min(vec4(kAlphaMax), opacity * exp(power));
