@@ -216,7 +216,8 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
   auto same = [](const Result& a, const Result& b) {
     for (size_t i = 0; i < a.rgb.size(); ++i) REQUIRE(a.rgb[i] == Approx(b.rgb[i]).margin(1e-6));
     for (size_t i = 0; i < a.alpha.size(); ++i) REQUIRE(a.alpha[i] == Approx(b.alpha[i]).margin(1e-6));
-    // Each gradient a sum over pixels, added in another order by each path: within 1e-4 of
+    // Each gradient a sum over pixels, added in another order by each path, the block kernels'
+    // exp(power) from a recurrence over four rows (rows_exp: a few ulps off exp): within 5e-4 of
     // itself, or on GPUs (whose adds come in any order) of its array's largest magnitude.
     auto near = [](const std::vector<float>& x, const std::vector<float>& y) {
       REQUIRE(x.size() == y.size());
@@ -224,7 +225,7 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
         REQUIRE(test::same_values(x, y));
         return;
       }
-      for (size_t i = 0; i < x.size(); ++i) REQUIRE(x[i] == Approx(y[i]).margin(1e-6).epsilon(1e-4));
+      for (size_t i = 0; i < x.size(); ++i) REQUIRE(x[i] == Approx(y[i]).margin(1e-6).epsilon(5e-4));
     };
     near(a.grads.means, b.grads.means);
     near(a.grads.quats, b.grads.quats);

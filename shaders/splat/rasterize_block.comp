@@ -16,17 +16,16 @@
 #define EVF_ROWS 4
 #endif
 // 4 rows measured best on lavapipe (bench raster 100k: 2 and 8 rows slower or equal).
-// EVF_RUNS(X) expands X(i) for each row i of the block.
-#if EVF_ROWS == 1
-#define EVF_RUNS(X) X(0)
-#elif EVF_ROWS == 2
-#define EVF_RUNS(X) X(0) X(1)
-#elif EVF_ROWS == 4
+// EVF_RUNS(X) expands X(i) for each row i of the block; EVF_QUADS(X) X(k) for each group of four
+// rows (rows_exp).
+#if EVF_ROWS == 4
 #define EVF_RUNS(X) X(0) X(1) X(2) X(3)
+#define EVF_QUADS(X) X(0)
 #elif EVF_ROWS == 8
 #define EVF_RUNS(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7)
+#define EVF_QUADS(X) X(0) X(1)
 #else
-#error EVF_ROWS must be 1, 2, 4 or 8
+#error EVF_ROWS must be 4 or 8
 #endif
 #define EVF_THREADS (64 / EVF_ROWS)
 #define EVF_BLOCKS EVF_THREADS
@@ -115,11 +114,10 @@ Run run_init(ivec2 p0, uint first) {
   return r;
 }
 
-// Blends Gaussian `idx` (already read) into the run at dy = mean.y - its centres' y; `rp`: the
-// Gaussian's exponent pieces over the block's columns (row_power_of).
-void blend(inout Run r, RowPower rp, float dy, float opacity, vec3 col, float depth, uint idx) {
-  vec4 power = row_power(rp, dy);
-  vec4 alpha = min(vec4(kAlphaMax), opacity * exp(power));
+// Blends Gaussian `idx` (already read) into the run; `G`: its exp(power) at the run's pixels
+// (rows_exp).
+void blend(inout Run r, vec4 G, float opacity, vec3 col, float depth, uint idx) {
+  vec4 alpha = min(vec4(kAlphaMax), opacity * G);
   bvec4 use = greaterThan(r.T, vec4(0.0));
   use = bvec4(uvec4(use) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
   vec4 next_T = r.T * (1.0 - alpha);
@@ -167,7 +165,8 @@ void main() {
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x);
   EVF_RUNS(EVF_INIT)
 #define EVF_DONE(i) && run_done(r##i)
-#define EVF_BLEND(i) blend(r##i, rp, a.y - (cy + float(i)), opacity, col, b.z, start + j);
+#define EVF_EXP(k) rows_exp(rp, a.y - (cy + (4.0 * k + 1.5)), G[4 * k], G[4 * k + 1], G[4 * k + 2], G[4 * k + 3]);
+#define EVF_BLEND(i) blend(r##i, G[i], opacity, col, b.z, start + j);
 // Blends the next entry of the bit set into every run; with `found` false, entry 0 with opacity 0.
 // `found` is read once, into `live`, before the entry is taken from `bits` (it may test `bits`).
 #define EVF_VISIT(found)                                          \
@@ -180,6 +179,8 @@ void main() {
     vec3 conic = vec3(a.zw, b.x), col = proj_c(g).rgb;            \
     float opacity = live ? b.y : 0.0;                             \
     RowPower rp = row_power_of(conic, a.x - cx);                  \
+    vec4 G[EVF_ROWS];                                             \
+    EVF_QUADS(EVF_EXP)                                            \
     EVF_RUNS(EVF_BLEND)                                           \
   }
   for (uint start = range.x; start < range.y; start += EVF_BATCH) {

@@ -29,17 +29,16 @@
 #define EVF_ROWS 4
 #endif
 // 4 rows measured best on lavapipe (bench raster 100k: 2 and 8 rows slower or equal).
-// EVF_RUNS(X) expands X(i) for each row i of the block.
-#if EVF_ROWS == 1
-#define EVF_RUNS(X) X(0)
-#elif EVF_ROWS == 2
-#define EVF_RUNS(X) X(0) X(1)
-#elif EVF_ROWS == 4
+// EVF_RUNS(X) expands X(i) for each row i of the block; EVF_QUADS(X) X(k) for each group of four
+// rows (rows_exp: the forward's groups, so that both take the same exp(power)).
+#if EVF_ROWS == 4
 #define EVF_RUNS(X) X(0) X(1) X(2) X(3)
+#define EVF_QUADS(X) X(0)
 #elif EVF_ROWS == 8
 #define EVF_RUNS(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7)
+#define EVF_QUADS(X) X(0) X(1)
 #else
-#error EVF_ROWS must be 1, 2, 4 or 8
+#error EVF_ROWS must be 4 or 8
 #endif
 #define EVF_THREADS (64 / EVF_ROWS)
 #define EVF_BLOCKS EVF_THREADS
@@ -146,12 +145,11 @@ Run run_init(ivec2 p0, uint q, uint first) {
 
 uint run_last(Run r) { return max(max(r.last.x, r.last.y), max(r.last.z, r.last.w)); }
 
-// Gaussian `idx` (already read) against the run at dy = mean.y - its centres' y (rp: row_power_of):
-// updates the run's state and adds the run's gradient terms to g (zeros where no pixel contributed).
-void accumulate(inout Run r, inout Grad g, float dy, RowPower rp, float opacity, vec3 col, uint idx) {
+// Gaussian `idx` (already read) against the run at dy = mean.y - its centres' y, with G its
+// exp(power) there (rows_exp): updates the run's state and adds the run's gradient terms to g
+// (zeros where no pixel contributed).
+void accumulate(inout Run r, inout Grad g, float dy, vec4 G, float opacity, vec3 col, uint idx) {
   bvec4 live = lessThan(uvec4(idx), r.last);
-  vec4 power = row_power(rp, dy);
-  vec4 G = exp(power);
   vec4 raw = opacity * G;
   vec4 alpha = min(vec4(kAlphaMax), raw);
   bvec4 c = bvec4(uvec4(live) & uvec4(greaterThanEqual(alpha, vec4(kAlphaMin))));
@@ -184,7 +182,8 @@ void main() {
   uint q0 = block_run_vec4(tile, pc.tiles_x, lid);
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), q0 + 4u * i, range.x); last = max(last, run_last(r##i));
   EVF_RUNS(EVF_INIT)
-#define EVF_ACC(i) accumulate(r##i, g, a.y - (cy + float(i)), rp, b.y, col, start + j);
+#define EVF_EXP(k) rows_exp(rp, a.y - (cy + (4.0 * k + 1.5)), G[4 * k], G[4 * k + 1], G[4 * k + 2], G[4 * k + 3]);
+#define EVF_ACC(i) accumulate(r##i, g, a.y - (cy + float(i)), G[i], b.y, col, start + j);
   uint count = range.y - range.x;
   // Every invocation keeps every block's `last` in registers, for the read-out. Gaussians at or
   // past the largest (visit_end) blended into no pixel: neither loaded nor visited, their slots
@@ -217,6 +216,8 @@ void main() {
       vec3 conic = vec3(a.zw, b.x), col = proj_c(gid).rgb;
       vec4 dx = a.x - cx;
       RowPower rp = row_power_of(conic, dx);
+      vec4 G[EVF_ROWS];
+      EVF_QUADS(EVF_EXP)
       Grad g = grad_zero();
       EVF_RUNS(EVF_ACC)
       vec4 ga, gb;
