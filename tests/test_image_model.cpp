@@ -31,6 +31,8 @@ TEST_CASE(
     for (auto& r : renders)
       for (auto& v : r) v = u(rng);
     renders[1][n - 1] = 0.01f;  // the last element on the linear segment of the decode
+    renders[2][0] = -0.2f;      // renders can leave [0, 1]: below 0 the linear segment continues,
+    renders[3][n - 1] = 1.3f;   // above 1 the power segment
     ImageModel model(ctx, F, W, H, LossSpace::Linear, 1);
     std::vector<gpu::Buffer> rb;
     std::vector<const gpu::Buffer*> rp;
