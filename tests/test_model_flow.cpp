@@ -95,7 +95,10 @@ TEST_CASE("model flow: a rendered plane of splats moved past by a known translat
   b.t = {-cb[0], -cb[1], -cb[2]};
   Rasterizer raster(ctx);
   ModelFlow model(ctx);
-  const std::vector<std::vector<float>> flows = model.intervals(raster, params, {a, b}, RenderSettings{});
+  // Settings without depth, as training passes them: the flow asks for the depth it reads.
+  RenderSettings settings;
+  settings.depth = false;
+  const std::vector<std::vector<float>> flows = model.intervals(raster, params, {a, b}, settings);
   REQUIRE(flows.size() == 1);
   const std::vector<float>& d = flows[0];
   // The plane's point at pixel (x, y) of a: X = ((x + 0.5 - cx) / f * Z, (y + 0.5 - cy) / f * Z, Z).

@@ -262,6 +262,57 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
   test::require_no_validation_messages();
 }
 
+TEST_CASE("splat render without depth: the same image, state and gradients, the depth plane untouched",
+          "[gpu][splat]") {
+  Scene s = make_scene(37, 600, 1, 96, 80, false);
+  const size_t hw = 96 * 80;
+  auto& ctx = test::gpu_context();
+  struct Result {
+    std::vector<float> rgb, alpha, depth, depth_before;
+    GaussianCloud grads;
+  };
+  // Each compositing kernel; the block forward has a build of its own without depth.
+  for (bool block : {false, true}) {
+    INFO((block ? "block" : "pixel"));
+    RasterKernels k = RasterKernels::for_context(ctx);
+    k.block = block;
+    auto run = [&](bool depth) {
+      GaussianBuffers params(ctx, s.cloud.size(), 1, "p_"), grads(ctx, s.cloud.size(), 1, "v_");
+      params.upload(s.cloud);
+      gpu::Buffer vr(ctx, hw * 12, "v_rgb"), va(ctx, hw * 4, "v_alpha");
+      vr.write(reference::random_weights(3, 3 * hw));
+      va.write(reference::random_weights(4, hw));
+      Rasterizer r(ctx, k);
+      RenderState rs(ctx);
+      RenderSettings settings = s.settings;
+      settings.depth = depth;
+      // The state's depth plane first holds the depth of the camera 0.3 further back.
+      RenderSettings first = s.settings;
+      first.depth = true;
+      r.forward(params, s.cam.perturbed({0, 0, -0.3, 0, 0, 0}), first, rs);
+      const std::vector<float> before = rs.outputs().depth.read<float>(hw);
+      r.forward(params, s.cam, settings, rs);
+      r.backward(rs, params, vr, va, grads);
+      return Result{rs.outputs().rgb.read<float>(3 * hw), rs.outputs().alpha.read<float>(hw),
+                    rs.outputs().depth.read<float>(hw), before, grads.download()};
+    };
+    const Result with = run(true), without = run(false);
+    REQUIRE(with.rgb == without.rgb);
+    REQUIRE(with.alpha == without.alpha);
+    REQUIRE(with.grads.means == without.grads.means);
+    REQUIRE(with.grads.quats == without.grads.quats);
+    REQUIRE(with.grads.opacity_logits == without.grads.opacity_logits);
+    REQUIRE(with.grads.sh == without.grads.sh);
+    size_t covered = 0;
+    for (size_t i = 0; i < hw; ++i) covered += with.alpha[i] > 0.1f && with.depth[i] != with.depth_before[i];
+    CHECK(covered > hw / 4);  // the two cameras' depths differ
+    // The block forward's build without depth leaves the plane as it was; the per-pixel kernel
+    // writes it anyway.
+    CHECK(without.depth == (block ? without.depth_before : with.depth));
+  }
+  test::require_no_validation_messages();
+}
+
 TEST_CASE("splat backward with accumulate adds to the gradient buffers", "[gpu][splat]") {
   auto& ctx = test::gpu_context();
   BackwardSetup setup(ctx, 41);

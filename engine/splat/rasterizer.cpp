@@ -152,6 +152,7 @@ void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const 
   if (cam.width == 0 || cam.height == 0) throw gpu::Error("render: camera has zero size");
   st.width_ = cam.width;
   st.height_ = cam.height;
+  st.depth_ = s.depth;
   const uint32_t tiles_x = (st.width_ + kTileSize - 1) / kTileSize, tiles_y = (st.height_ + kTileSize - 1) / kTileSize;
   const uint32_t tile_bits = bit_width(tiles_x * tiles_y);  // 2^tile_bits > number of tiles
   if (tile_bits > 24)
@@ -293,14 +294,16 @@ void Rasterizer::record_raster(RenderState& st) {
       {kRasterBindGid, st.gaussian_id_from_slot_}, {kRasterBindProjA, st.proj_mean_conic_},
       {kRasterBindProjB, st.proj_misc_},           {kRasterBindProjC, st.proj_color_},
       {kRasterizeBindOutRgb, st.out_.rgb},         {kRasterizeBindOutAlpha, st.out_.alpha},
-      {kRasterizeBindOutDepth, st.out_.depth},     {kRasterizeBindOutT, st.final_T_},
-      {kRasterizeBindOutLast, st.last_isect_}};
+      {kRasterizeBindOutT, st.final_T_},           {kRasterizeBindOutLast, st.last_isect_}};
+  // The block forward's "_nodepth" build has no depth plane.
+  const bool depth_free = !st.depth_ && !block_suffix_.empty();
+  if (!depth_free) bindings.push_back({kRasterizeBindOutDepth, st.out_.depth});
   if (!block_suffix_.empty()) {
     st.isect_blocks_.ensure(uint64_t(m) * 4);
     bindings.push_back({kRasterizeBindOutBlocks, st.isect_blocks_});
     bindings.push_back({kRasterizeBindSortedKeys, *sorted_keys});
   }
-  cmd_.dispatch("splat/rasterize" + block_suffix_, bindings, st.raster_pc_,
+  cmd_.dispatch("splat/rasterize" + block_suffix_ + (depth_free ? "_nodepth" : ""), bindings, st.raster_pc_,
                 cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize");
 }

@@ -30,7 +30,7 @@ struct GaussianBuffers {
 };
 
 struct RasterOutputs {
-  gpu::Buffer rgb, alpha, depth;  // [3][H][W], [H][W], [H][W]
+  gpu::Buffer rgb, alpha, depth;  // [3][H][W], [H][W], [H][W] (depth: see RenderSettings::depth)
 };
 
 // What one render leaves for its backward pass: the projected Gaussians, the sorted tile
@@ -62,6 +62,7 @@ class RenderState {
   shaderio::RasterPC raster_pc_{};
   uint32_t width_ = 0, height_ = 0, num_isects_ = 0, sort_bits_ = 0;
   size_t count_ = 0;
+  bool depth_ = true;  // RenderSettings::depth of the last render
 };
 
 // The compositing kernels a Rasterizer runs.

@@ -35,8 +35,10 @@ std::vector<float> depth_flow(const std::vector<float>& depth, const std::vector
 std::vector<std::vector<float>> ModelFlow::intervals(Rasterizer& raster, const GaussianBuffers& params,
                                                      const std::vector<Camera>& cams, const RenderSettings& settings) {
   std::vector<std::vector<float>> out;
+  RenderSettings with_depth = settings;
+  with_depth.depth = true;
   for (size_t i = 0; i + 1 < cams.size(); ++i) {
-    raster.forward(params, cams[i], settings, state_);
+    raster.forward(params, cams[i], with_depth, state_);
     const size_t hw = size_t(cams[i].width) * cams[i].height;
     const std::vector<float> depth = state_.outputs().depth.read<float>(hw);
     const std::vector<float> alpha = state_.outputs().alpha.read<float>(hw);

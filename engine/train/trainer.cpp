@@ -268,6 +268,7 @@ RenderSettings Trainer::render_settings() const {
   s.antialiased = cfg_.antialiased;
   s.sh_degree = std::min<int>(params_->sh_degree,
                               cfg_.sh_increase_every ? int(step_ / cfg_.sh_increase_every) : params_->sh_degree);
+  s.depth = false;  // no training term reads the depth plane; ModelFlow asks for it itself
   return s;
 }
 

@@ -3,6 +3,8 @@
 // block of 4 x EVF_ROWS pixels (rows of 4 held as vec4s) and visits, front to back, only the
 // Gaussians whose support reaches a pixel centre of its block (support_blocks in raster_io.glsl).
 // Same result as rasterize.comp, pixel for pixel; see docs/rasterizer.md.
+// EVF_NO_DEPTH (the "_nodepth" build, for renders whose depth nothing reads: RenderSettings::depth)
+// keeps no depth sum and has no depth plane: one vec4 less of each run's state through the walk.
 // Why: lavapipe runs the invocations of a SIMD vector in lockstep with masks (an `if` skips
 // nothing; only loops end early) and turns every storage or shared-memory access into a loop
 // over the lanes. So each invocation walks its own list, fetching each Gaussian it visits as
@@ -41,7 +43,9 @@ layout(local_size_x = EVF_THREADS) in;
 #include "splat/raster_io.glsl"
 layout(std430, binding = kRasterizeBindOutRgb) writeonly buffer OutRgb { float out_rgb[]; };        // [3][H][W]
 layout(std430, binding = kRasterizeBindOutAlpha) writeonly buffer OutAlpha { float out_alpha[]; };  // [H][W]
+#ifndef EVF_NO_DEPTH
 layout(std430, binding = kRasterizeBindOutDepth) writeonly buffer OutDepth { float out_depth[]; };  // [H][W]
+#endif
 // Tile by tile (splat_layout.h): a run is one vec4.
 layout(std430, binding = kRasterizeBindOutT) writeonly buffer OutT { vec4 final_T[]; };
 layout(std430, binding = kRasterizeBindOutLast) writeonly buffer OutLast { uvec4 last_isect[]; };
@@ -100,7 +104,10 @@ void load_batch_word(uint w, uint start, uint n, vec2 tile_origin) {
 
 struct Run {     // 4 horizontally adjacent pixels
   vec4 T;  // transmittance; negated once the pixel is done (one vec4 less through the walk)
-  vec4 Cr, Cg, Cb, D;
+  vec4 Cr, Cg, Cb;
+#ifndef EVF_NO_DEPTH
+  vec4 D;
+#endif
   uvec4 last;
 };
 
@@ -109,7 +116,10 @@ Run run_init(ivec2 p0, uint first) {
   bvec4 outside = not(lessThan(ivec4(p0.x) + ivec4(0, 1, 2, 3), ivec4(pc.width)));
   if (p0.y >= int(pc.height)) outside = bvec4(true);
   r.T = mix(vec4(1.0), vec4(-1.0), outside);
-  r.Cr = r.Cg = r.Cb = r.D = vec4(0.0);
+  r.Cr = r.Cg = r.Cb = vec4(0.0);
+#ifndef EVF_NO_DEPTH
+  r.D = vec4(0.0);
+#endif
   r.last = uvec4(first);
   return r;
 }
@@ -127,7 +137,9 @@ void blend(inout Run r, vec4 G, float opacity, vec3 col, float depth, uint idx) 
   r.Cr += w * col.r;
   r.Cg += w * col.g;
   r.Cb += w * col.b;
+#ifndef EVF_NO_DEPTH
   r.D += w * depth;
+#endif
   r.T = mix(mix(r.T, next_T, use), -r.T, stop);
   r.last = mix(r.last, uvec4(idx + 1u), use);
 }
@@ -147,7 +159,9 @@ void store_run(Run r, ivec2 p0, uint q) {
     out_rgb[hw + i] = r.Cg[k] + T * pc.background.g;
     out_rgb[2 * hw + i] = r.Cb[k] + T * pc.background.b;
     out_alpha[i] = 1.0 - T;
+#ifndef EVF_NO_DEPTH
     out_depth[i] = (T < 1.0) ? r.D[k] / (1.0 - T) : 0.0;
+#endif
   }
 }
 
