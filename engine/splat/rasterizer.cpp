@@ -155,7 +155,8 @@ void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const 
   st.depth_ = s.depth;
   const uint32_t tiles_x = (st.width_ + kTileSize - 1) / kTileSize, tiles_y = (st.height_ + kTileSize - 1) / kTileSize;
   const uint32_t tile_bits = bit_width(tiles_x * tiles_y);  // 2^tile_bits > number of tiles
-  if (tile_bits > 24)
+  // 16 bits a tile coordinate (tile_rect_pack in splat_math.glsl).
+  if (tile_bits > 24 || tiles_x > 0xFFFF || tiles_y > 0xFFFF)
     throw gpu::Error("render: image of " + std::to_string(st.width_) + "x" + std::to_string(st.height_) +
                      " has too many tiles");
   const uint32_t depth_bits = std::min(23u, 32u - tile_bits);

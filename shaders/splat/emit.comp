@@ -1,7 +1,7 @@
 #version 450
 // Key emission: one invocation per Gaussian. Writes one key per tile its support meets, at slots
-// [offset[g], offset[g+1]) — the same exact test as project.comp counted — and the slot's
-// Gaussian. The sort makes the slots' order itself (RadixSort::record_order): no value is written.
+// [offset[g], offset[g+1]) — the tiles project.comp counted, from its mask or by the same exact
+// test — and the slot's Gaussian. The sort makes the slots' order itself (RadixSort::record_order): no value is written.
 // key = tile id << depth_bits | top bits of the depth remapped to [1, 2).
 #extension GL_GOOGLE_include_directive : require
 #include "splat/splat_layout.h"
@@ -34,6 +34,12 @@ layout(std430, binding = kEmitBindKeys) writeonly buffer Keys { uint keys[]; };
 layout(std430, binding = kEmitBindGid) writeonly buffer Gid { uint gaussian_id_from_slot[]; };
 layout(push_constant) uniform PC { ProjectPC pc; };
 
+// Slot `slot` holds Gaussian g's key for tile t.
+void put_key(uint slot, uint g, uvec2 t, uint depth_key) {
+  keys[slot] = ((t.y * pc.tiles_x + t.x) << pc.depth_bits) | depth_key;
+  gaussian_id_from_slot[slot] = g;
+}
+
 void main() {
   uint g = evf_linear_invocation(kProjectGroupSize);
   if (g >= pc.num_gaussians) return;
@@ -45,17 +51,27 @@ void main() {
   float q_max = b.w;
   float zr = (2.0 * b.z + 1.0) / (b.z + 1.0);  // monotonic map of depth into [1, 2)
   uint depth_key = (floatBitsToUint(zr) & 0x7FFFFFu) >> (23u - pc.depth_bits);
-  uvec4 r = rect_of(g);
+  uvec2 t0, t1;
+  uint mask;
+  tile_rect_unpack(rect_of(g), t0, t1, mask);
+  uint w = t1.x - t0.x, area = w * (t1.y - t0.y);
   uint slot = begin;
-  for (uint ty = r.y; ty < r.w; ++ty)
-    for (uint tx = r.x; tx < r.z; ++tx) {
-      vec2 lo = vec2(tx * kTileSize, ty * kTileSize) + 0.5, hi = lo + float(kTileSize - 1);
-      if (slot < end && ellipse_meets_rect(mean2d, conic, q_max, lo, hi)) {
-        keys[slot] = ((ty * pc.tiles_x + tx) << pc.depth_bits) | depth_key;
-        gaussian_id_from_slot[slot] = g;
-        slot++;
-      }
-    }
+  // Up to kTileMaskTiles tiles: the ones project.comp's test found, from its mask, in the same
+  // order. Two loops rather than one with a branch: on CPU drivers a loop ends early, an `if`
+  // runs both sides.
+  uint m = area <= kTileMaskTiles ? mask : 0u;
+  while (m != 0u && slot < end) {
+    uint k = uint(findLSB(m));
+    m &= m - 1u;
+    put_key(slot++, g, t0 + uvec2(k % w, k / w), depth_key);
+  }
+  // Larger rectangles: each tile tested again, as project.comp counted.
+  uint tested = area > kTileMaskTiles ? area : 0u;
+  for (uint k = 0u; k < tested; ++k) {
+    uint tx = t0.x + k % w, ty = t0.y + k / w;
+    vec2 lo = vec2(tx * kTileSize, ty * kTileSize) + 0.5, hi = lo + float(kTileSize - 1);
+    if (slot < end && ellipse_meets_rect(mean2d, conic, q_max, lo, hi)) put_key(slot++, g, uvec2(tx, ty), depth_key);
+  }
   for (; slot < end; ++slot) {  // only if the two passes disagreed: never read as a tile
     keys[slot] = pc.sentinel_key;
     gaussian_id_from_slot[slot] = 0xFFFFFFFFu;

@@ -12,7 +12,7 @@ layout(local_size_x = kProjectGroupSize) in;
 layout(std430, binding = kProjectBindProjA) writeonly buffer ProjA { vec4 proj_mean_conic[]; };  // mean.xy, conic.xy
 layout(std430, binding = kProjectBindProjB) writeonly buffer ProjB { vec4 proj_misc[]; };        // conic.z, opacity, depth, q_max
 layout(std430, binding = kProjectBindProjC) writeonly buffer ProjC { vec4 proj_color[]; };       // rgb, 0
-layout(std430, binding = kProjectBindRect) writeonly buffer Rect { uvec4 tile_rect[]; };         // tile x0, y0, x1, y1 (exclusive)
+layout(std430, binding = kProjectBindRect) writeonly buffer Rect { uvec4 tile_rect[]; };         // tile_rect_pack
 layout(std430, binding = kProjectBindCount) writeonly buffer Count { uint tiles_touched[]; };
 // d(raw colour channel c)/d(view direction), [N][3 channels][3], for project_bwd (SH degree >= 1;
 // a placeholder buffer at degree 0, never written). project_bwd then needs no SH coefficients.
@@ -48,11 +48,14 @@ void main() {
   keep = keep && !any(greaterThan(lo_px, hi_px));
   // (Values of culled Gaussians may be non-finite: nothing below uses them unselected.)
   uvec2 t0 = keep ? uvec2(lo_px) / kTileSize : uvec2(0), t1 = keep ? uvec2(hi_px) / kTileSize + 1u : uvec2(0);
-  uint count = 0;
+  uint count = 0, mask = 0u, k = 0u;  // k: the tile's index in the rectangle, row by row
   for (uint ty = t0.y; ty < t1.y; ++ty)
-    for (uint tx = t0.x; tx < t1.x; ++tx) {
+    for (uint tx = t0.x; tx < t1.x; ++tx, ++k) {
       vec2 lo = vec2(tx * kTileSize, ty * kTileSize) + 0.5, hi = lo + float(kTileSize - 1);
-      if (ellipse_meets_rect(mean2d, conic, q_max, lo, hi)) count++;
+      if (ellipse_meets_rect(mean2d, conic, q_max, lo, hi)) {
+        count++;
+        mask |= (1u << (k & 31u)) * uint(k < kTileMaskTiles);
+      }
     }
   // Colour from SH along the viewing direction.
   vec3 dir = normalize(mean - camera_center(cam));
@@ -74,7 +77,7 @@ void main() {
     proj_dcolor[3 * g + 2] = vec4(jb, 0.0);
   }
   tiles_touched[g] = count;  // 0 when culled
-  tile_rect[g] = uvec4(t0, t1);
+  tile_rect[g] = tile_rect_pack(t0, t1, mask);
   proj_mean_conic[g] = keep ? vec4(mean2d, conic.xy) : vec4(0.0);
   proj_misc[g] = keep ? vec4(conic.z, opacity, p.z, q_max) : vec4(0.0);
   proj_color[g] = keep ? vec4(max(rgb, vec3(0.0)), 0.0) : vec4(0.0);

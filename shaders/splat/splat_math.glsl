@@ -178,6 +178,17 @@ vec2 support_extent(vec3 cov2d, float q_max) {
   return sqrt(q_max * vec2(cov2d.x + kDilation, cov2d.z + kDilation)) * (1.0 + kBoxPad) + 1e-4;
 }
 
+// A Gaussian's tile rectangle [t0, t1) (16 bits a coordinate: the host checks the tile grid) and
+// which of its first 32 tiles, row by row, the support meets (project.comp tests each tile once;
+// emit.comp lists rectangles of up to kTileMaskTiles tiles from the mask without testing again).
+const uint kTileMaskTiles = 32u;
+uvec4 tile_rect_pack(uvec2 t0, uvec2 t1, uint mask) { return uvec4(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u), mask, 0u); }
+void tile_rect_unpack(uvec4 r, out uvec2 t0, out uvec2 t1, out uint mask) {
+  t0 = uvec2(r.x & 0xFFFFu, r.x >> 16u);
+  t1 = uvec2(r.y & 0xFFFFu, r.y >> 16u);
+  mask = r.z;
+}
+
 // Does the support ellipse meet the rectangle [lo, hi] (pixel centres)? Exact: minimum of the
 // quadratic form over the rectangle, found on its edges when the mean is outside.
 bool ellipse_meets_rect(vec2 mean, vec3 conic, float q_max, vec2 lo, vec2 hi) {
