@@ -1,7 +1,8 @@
 #version 450
 // Key emission: one invocation per Gaussian. Writes one key per tile its support meets, at slots
 // [offset[g], offset[g+1]) — the tiles project.comp counted, from its mask or by the same exact
-// test — and the slot's Gaussian. The sort makes the slots' order itself (RadixSort::record_order): no value is written.
+// test — and the slot's Gaussian. The sort makes the slots' order itself
+// (RadixSort::record_order): no value is written.
 // key = tile id << depth_bits | top bits of the depth remapped to [1, 2).
 #extension GL_GOOGLE_include_directive : require
 #include "splat/splat_layout.h"
