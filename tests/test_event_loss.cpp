@@ -195,11 +195,39 @@ TEST_CASE("event loss value and frame gradients match the double reference (fini
     check_against_reference(ev, random_frames(W, H, 7, 14, false), 20, 5);
   }
   SECTION("pooled over 2 x 2 cells") { check_against_reference(ev, random_frames(W, H, 5, 15, false), 21, 2); }
-  // 24 x 16 pixels take the four-pixel kernels at pool 1; 23 x 15 (not a multiple of 4) the per-cell ones.
+  // 24 x 16 pixels take every pair in one pass at pool 1 up to 9 frames; 23 x 15 (not a multiple
+  // of 4), 11 frames and pooled cells the per-pair kernels (the routing: the test below).
+  SECTION("nine frames (N = 4), the most one pass takes") {
+    check_against_reference(ev, random_frames(W, H, 9, 23, false), 24);
+  }
+  SECTION("eleven frames (N = 5), a pass per pair") {
+    check_against_reference(ev, random_frames(W, H, 11, 25, false), 26);
+  }
   SECTION("per pixel over a pixel count that is not a multiple of 4") {
     check_against_reference(random_events(23, 15, 4000, 4), random_frames(23, 15, 7, 16, false), 22);
   }
   test::require_no_validation_messages();
+}
+
+TEST_CASE("event loss: every pair in one pass per pixel up to 9 frames, a pass per pair otherwise", "[events][loss]") {
+  auto& ctx = test::gpu_context();
+  GpuEvents gev(ctx, random_events(24, 16, 100, 5), {EventWindow{0.0, 1.0}}, "test events");
+  auto takes = [&](uint32_t w, uint32_t h, uint32_t F, uint32_t pool) {
+    EventLossOptions opt;
+    opt.pool = pool;
+    EventLoss loss(ctx, gev, 1.0f, opt);
+    ExposureFrames f;
+    f.width = w, f.height = h;
+    f.u = ExposureTrajectory::virtual_times(int(F - 1) / 2);
+    if (F % 2 == 0) f.u.resize(F, 1.0);
+    return loss.takes_pairs_at_once(f);
+  };
+  CHECK(takes(24, 16, 7, 1));
+  CHECK(takes(24, 16, 2, 1));
+  CHECK(takes(24, 16, 9, 1));
+  CHECK_FALSE(takes(24, 16, 11, 1));
+  CHECK_FALSE(takes(23, 15, 7, 1));
+  CHECK_FALSE(takes(24, 16, 7, 2));
 }
 
 TEST_CASE("event loss sign: renders that follow the simulator's events score near 0, the opposite convention near 4",

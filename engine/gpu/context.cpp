@@ -261,7 +261,9 @@ VkPhysicalDeviceProperties Context::choose_device() {
 void Context::query_caps(const VkPhysicalDeviceProperties& props) {
   VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
   VkPhysicalDeviceMaintenance3Properties m3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+  VkPhysicalDevicePushDescriptorPropertiesKHR push{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PUSH_DESCRIPTOR_PROPERTIES_KHR};
   sub.pNext = &m3;
+  m3.pNext = &push;
   VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   p2.pNext = &sub;
   vkGetPhysicalDeviceProperties2(physical_, &p2);
@@ -288,6 +290,10 @@ void Context::query_caps(const VkPhysicalDeviceProperties& props) {
   caps_.timestamps = props.limits.timestampComputeAndGraphics;
   caps_.timestamp_period_ns = props.limits.timestampPeriod;
   caps_.max_allocation_size = m3.maxMemoryAllocationSize;
+  caps_.max_push_descriptors = push.maxPushDescriptors;
+  caps_.max_stage_storage_buffers = props.limits.maxPerStageDescriptorStorageBuffers;
+  caps_.max_stage_texel_buffers = props.limits.maxPerStageDescriptorSampledImages;
+  caps_.max_stage_resources = props.limits.maxPerStageResources;
   if (!caps_.subgroup_arithmetic)
     throw Error(caps_.name +
                 ": subgroup basic, vote and arithmetic operations in compute shaders are required and missing");

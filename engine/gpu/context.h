@@ -80,6 +80,17 @@ struct DeviceCaps {
   uint64_t min_storage_offset_alignment = 0;
   uint64_t max_texel_buffer_elements = 0;  // texels one uniform texel buffer view may span
   uint64_t min_texel_offset_alignment = 0;
+  // Bindings one kernel may have: in all (push descriptors), storage buffers, uniform texel
+  // buffers (counted as sampled images), and all resources of the stage.
+  uint32_t max_push_descriptors = 0;
+  uint32_t max_stage_storage_buffers = 0;
+  uint32_t max_stage_texel_buffers = 0;
+  uint32_t max_stage_resources = 0;
+  // Whether a kernel with that many storage buffers and uniform texel buffers can be bound.
+  bool fits_bindings(uint32_t storage, uint32_t texel) const {
+    return storage <= max_stage_storage_buffers && texel <= max_stage_texel_buffers &&
+           storage + texel <= max_stage_resources && storage + texel <= max_push_descriptors;
+  }
   bool shared_float_atomic_add = false;
   bool buffer_float_atomic_add = false;
   bool subgroup_arithmetic = false;

@@ -16,9 +16,7 @@ EventLoss::EventLoss(gpu::Context& ctx, const IntervalEvents& events, float weig
       options_(options),
       scratch_(ctx, 16, "event_scratch"),
       partials_(ctx, 16, "event_partials"),
-      sums_(ctx, 16, "event_sums"),
-      partials_r_(ctx, 16, "event_partials_reversed"),
-      sums_r_(ctx, 16, "event_sums_reversed") {
+      sums_(ctx, 16, "event_sums") {
   if (!(options.theta_pos > 0 && options.theta_neg > 0))
     throw std::invalid_argument("event loss: thresholds must be > 0");
   if (!(options.eps > 0)) throw std::invalid_argument("event loss: eps must be > 0");
@@ -55,27 +53,40 @@ void EventLoss::score_reversed_next(const gpu::Buffer& out, uint32_t index) {
   reversed_index_ = index;
 }
 
-bool EventLoss::quad_kernels(const ExposureFrames& f) const {
-  return options_.pool == 1 && (uint64_t(f.width) * f.height) % 4 == 0;
+bool EventLoss::takes_pairs_at_once(const ExposureFrames& f) const {
+  const uint32_t F = uint32_t(f.u.size());
+  // The backward binds F gradient images, the counts, the sums, every frame and a view of each gradient.
+  return options_.pool == 1 && (uint64_t(f.width) * f.height) % 4 == 0 && F >= 2 &&
+         F <= shaderio::kEventPairsMaxFrames && ctx_.caps().fits_bindings(F, 2 + 2 * F);
 }
 
 void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
-  reversed_fused_ = reversed_out_ && quad_kernels(f);
-  if (reversed_out_ && !reversed_fused_) {  // its own value record, before the forward order's overwrites the slot
-    ExposureFrames r = f;
-    std::reverse(r.rgb.begin(), r.rgb.end());
-    r.grad.clear();
-    record_pairs(cmd, r, 0.0f, false);
-    cmd.copy(value_buffer(), *reversed_out_, 4, uint64_t(value_offset()) * 4, uint64_t(reversed_index_) * 4);
+  if (takes_pairs_at_once(f))
+    record_fused(cmd, f, weight, true);
+  else {
+    if (reversed_out_) {  // its own value record, before the forward order's overwrites the slot
+      ExposureFrames r = f;
+      std::reverse(r.rgb.begin(), r.rgb.end());
+      r.grad.clear();
+      record_pairs(cmd, r, 0.0f, false);
+      cmd.copy(value_buffer(), *reversed_out_, 4, uint64_t(value_offset()) * 4, uint64_t(reversed_index_) * 4);
+    }
+    record_pairs(cmd, f, weight, true);
   }
-  record_pairs(cmd, f, weight, true);
   reversed_out_ = nullptr;
-  reversed_fused_ = false;
 }
 
-void EventLoss::record_value(gpu::Commands& cmd, const ExposureFrames& f) { record_pairs(cmd, f, 0.0f, false); }
+void EventLoss::record_value(gpu::Commands& cmd, const ExposureFrames& f) {
+  const gpu::Buffer* reversed = reversed_out_;
+  reversed_out_ = nullptr;  // the value alone; a pending request stays for the next record()
+  if (takes_pairs_at_once(f))
+    record_fused(cmd, f, 0.0f, false);
+  else
+    record_pairs(cmd, f, 0.0f, false);
+  reversed_out_ = reversed;
+}
 
-void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float weight, bool gradients) {
+const gpu::Buffer& EventLoss::counted_planes(gpu::Commands& cmd, const ExposureFrames& f, bool gradients) {
   const uint32_t F = uint32_t(f.u.size());
   if (F < 2) throw std::invalid_argument("event loss: needs at least 2 virtual frames, got " + std::to_string(F));
   if (f.rgb.size() != F || (gradients && f.grad.size() != F))
@@ -94,17 +105,6 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
       throw std::invalid_argument("event loss: frame " + std::to_string(i) +
                                   " buffers hold less than 3 x H x W floats");
   const uint32_t intervals = F - 1;
-  const bool quads = quad_kernels(f);
-  const uint32_t groups = gpu::Commands::div_up(quads ? hw / 4 : hw, shaderio::kLossGroupSize);
-  const uint64_t cells = event_pool_cells(f.width, f.height, options_.pool);
-  const uint32_t cell_groups = quads ? groups : gpu::Commands::div_up(cells, shaderio::kLossGroupSize);
-  scratch_.ensure(2 * cells * 4);
-  partials_.ensure(uint64_t(cell_groups) * 16);
-  sums_.ensure(uint64_t(intervals) * 16);
-  if (reversed_fused_) {
-    partials_r_.ensure(uint64_t(cell_groups) * 16);
-    sums_r_.ensure(uint64_t(intervals) * 16);
-  }
   const uint64_t count_bytes = uint64_t(intervals) * 2 * hw * 4;
   ctx_.check_binding_size(count_bytes, "event loss counts");
 
@@ -122,72 +122,124 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
     ++count_passes_;
   }
   last_counts_ = &counted.planes;
-
   pairs_ = sample_pairs(F, f.seed);
+  return counted.planes;
+}
+
+shaderio::EventPairPC EventLoss::pair_constants(const ExposureFrames& f, float weight, uint32_t q) const {
+  const auto [s, j] = pairs_[q];
+  shaderio::EventPairPC pc{};
+  pc.width = f.width;
+  pc.height = f.height;
+  pc.plane_first = s;
+  pc.plane_last = j - 1;
+  pc.theta_pos = options_.theta_pos;
+  pc.theta_neg = options_.theta_neg;
+  pc.eps = options_.eps;
+  pc.norm_floor2 = norm_floor2(f);
+  pc.grad_scale = weight / float(pairs_.size());
+  pc.value_scale = 1.0f / float(pairs_.size());
+  pc.value_accumulate = q > 0 ? 1u : 0u;
+  pc.value_index = value_offset();
+  pc.pair = q;
+  pc.counts_float = events_.float_planes() ? 1u : 0u;
+  pc.pool = options_.pool;
+  return pc;
+}
+
+float EventLoss::norm_floor2(const ExposureFrames& f) const {
+  return float(double(options_.norm_floor_rms) * options_.norm_floor_rms * double(uint64_t(f.width) * f.height));
+}
+
+void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float weight, bool gradients) {
+  const gpu::Buffer& counts = counted_planes(cmd, f, gradients);
+  const uint64_t hw = uint64_t(f.width) * f.height;
+  const uint32_t groups = gpu::Commands::div_up(hw, shaderio::kLossGroupSize);
+  const uint64_t cells = event_pool_cells(f.width, f.height, options_.pool);
+  const uint32_t cell_groups = gpu::Commands::div_up(cells, shaderio::kLossGroupSize);
+  scratch_.ensure(2 * cells * 4);
+  partials_.ensure(uint64_t(cell_groups) * 16);
+  sums_.ensure(uint64_t(pairs_.size()) * 16);
   const gpu::Groups g = cmd.linear_groups(groups), gc = cmd.linear_groups(cell_groups);
   for (uint32_t q = 0; q < pairs_.size(); ++q) {
     const auto [s, j] = pairs_[q];
-    shaderio::EventPairPC pc{};
-    pc.width = f.width;
-    pc.height = f.height;
-    pc.plane_first = s;
-    pc.plane_last = j - 1;
-    pc.theta_pos = options_.theta_pos;
-    pc.theta_neg = options_.theta_neg;
-    pc.eps = options_.eps;
-    pc.norm_floor2 = float(double(options_.norm_floor_rms) * options_.norm_floor_rms * double(hw));
-    pc.grad_scale = weight / float(pairs_.size());
-    pc.value_scale = 1.0f / float(pairs_.size());
-    pc.value_accumulate = q > 0 ? 1u : 0u;
-    pc.value_index = value_offset();
-    pc.pair = q;
-    pc.counts_float = events_.float_planes() ? 1u : 0u;
-    pc.pool = options_.pool;
-    std::vector<gpu::Bind> binds = {{shaderio::kEventPairBindCounts, counted.planes},
-                                    {shaderio::kEventPairBindFrameS, *f.rgb[s]},
-                                    {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
-                                    {shaderio::kEventPairBindScratch, scratch_},
-                                    {shaderio::kEventPairBindPartials, partials_}};
-    if (reversed_fused_) {  // the reversed order's frames t_s, t_j: F-1-s, F-1-j
-      binds.push_back({shaderio::kEventPairBindFrameRS, *f.rgb[F - 1 - s]});
-      binds.push_back({shaderio::kEventPairBindFrameRJ, *f.rgb[F - 1 - j]});
-      binds.push_back({shaderio::kEventPairBindPartialsR, partials_r_});
-    }
-    cmd.dispatch(reversed_fused_ ? "loss/event_pair_quads_rev"
-                 : quads         ? "loss/event_pair_quads"
-                                 : "loss/event_pair",
-                 binds, pc, gc);
+    const shaderio::EventPairPC pc = pair_constants(f, weight, q);
+    cmd.dispatch("loss/event_pair",
+                 {{shaderio::kEventPairBindCounts, counts},
+                  {shaderio::kEventPairBindFrameS, *f.rgb[s]},
+                  {shaderio::kEventPairBindFrameJ, *f.rgb[j]},
+                  {shaderio::kEventPairBindScratch, scratch_},
+                  {shaderio::kEventPairBindPartials, partials_}},
+                 pc, gc);
     record_event_sums(cmd, partials_, sums_, cell_groups, 4 * q);
-    record_pair_tail(cmd, f, pc, cell_groups, g, quads, gradients);
+    if (gradients)
+      cmd.dispatch("loss/event_pair_bwd",
+                   {{shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},
+                    {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
+                    {shaderio::kEventPairBwdBindScratch, scratch_},
+                    {shaderio::kEventPairBwdBindSums, sums_},
+                    {shaderio::kEventPairBwdBindGradS, *f.grad[s]},
+                    {shaderio::kEventPairBwdBindGradJ, *f.grad[j]},
+                    {shaderio::kEventPairBwdBindValues, value_buffer()}},
+                   pc, g);
+    else
+      cmd.dispatch("loss/event_pair_value",
+                   {{shaderio::kEventPairValueBindSums, sums_}, {shaderio::kEventPairValueBindValues, value_buffer()}},
+                   pc, gpu::Groups{1, 1, 1});
   }
 }
 
-void EventLoss::record_pair_tail(gpu::Commands& cmd, const ExposureFrames& f, const shaderio::EventPairPC& pc,
-                                 uint32_t cell_groups, gpu::Groups g, bool quads, bool gradients) {
-  const auto [s, j] = pairs_[pc.pair];
-  if (reversed_fused_) {
-    record_event_sums(cmd, partials_r_, sums_r_, cell_groups, 4 * pc.pair);
-    shaderio::EventPairPC r = pc;
-    r.value_index = reversed_index_;
-    cmd.dispatch("loss/event_pair_value",
-                 {{shaderio::kEventPairValueBindSums, sums_r_}, {shaderio::kEventPairValueBindValues, *reversed_out_}},
-                 r, gpu::Groups{1, 1, 1});
-  }
-  if (gradients) {
-    std::vector<gpu::Bind> binds = {
-        {shaderio::kEventPairBwdBindFrameS, *f.rgb[s]},     {shaderio::kEventPairBwdBindFrameJ, *f.rgb[j]},
-        {shaderio::kEventPairBwdBindScratch, scratch_},     {shaderio::kEventPairBwdBindSums, sums_},
-        {shaderio::kEventPairBwdBindGradS, *f.grad[s]},     {shaderio::kEventPairBwdBindGradJ, *f.grad[j]},
-        {shaderio::kEventPairBwdBindValues, value_buffer()}};
-    // The quads build reads what it adds to through texel views of the same buffers.
-    if (quads)
-      binds.insert(binds.end(), {{shaderio::kEventPairBwdBindGradSIn, *f.grad[s]},
-                                 {shaderio::kEventPairBwdBindGradJIn, *f.grad[j]}});
-    cmd.dispatch(quads ? "loss/event_pair_quads_bwd" : "loss/event_pair_bwd", binds, pc, g);
-  } else
-    cmd.dispatch("loss/event_pair_value",
-                 {{shaderio::kEventPairValueBindSums, sums_}, {shaderio::kEventPairValueBindValues, value_buffer()}},
-                 pc, gpu::Groups{1, 1, 1});
+void EventLoss::record_fused(gpu::Commands& cmd, const ExposureFrames& f, float weight, bool gradients) {
+  const gpu::Buffer& counts = counted_planes(cmd, f, gradients);
+  const uint32_t F = uint32_t(f.u.size()), P = F - 1;
+  const uint64_t quads = uint64_t(f.width) * f.height / 4;
+  const uint32_t groups = gpu::Commands::div_up(quads, shaderio::kEventPairsGroupSize);
+  const uint32_t columns = (shaderio::kEventPairsSumsPerPair * P + 3) / 4;
+  partials_.ensure(uint64_t(columns) * groups * 16);
+  sums_.ensure(uint64_t(columns) * 16);
+  shaderio::EventPairsPC pc{};
+  pc.width = f.width;
+  pc.height = f.height;
+  pc.pairs = P;
+  for (uint32_t q = 0; q < P; ++q) pc.s_packed |= pairs_[q].first << (4 * q);
+  pc.theta_pos = options_.theta_pos;
+  pc.theta_neg = options_.theta_neg;
+  pc.eps = options_.eps;
+  pc.norm_floor2 = norm_floor2(f);
+  pc.grad_scale = weight / float(P);
+  pc.value_scale = 1.0f / float(P);
+  pc.value_index = value_offset();
+  pc.reversed = reversed_out_ ? 1u : 0u;
+  pc.reversed_index = reversed_index_;
+  pc.counts_float = events_.float_planes() ? 1u : 0u;
+  pc.groups = groups;
+  const std::string suffix = "_f" + std::to_string(F);
+  std::vector<gpu::Bind> binds = {{shaderio::kEventPairsBindCounts, counts},
+                                  {shaderio::kEventPairsBindPartials, partials_}};
+  for (uint32_t k = 0; k < F; ++k) binds.push_back({shaderio::kEventPairsBindFrames[k], *f.rgb[k]});
+  cmd.dispatch("loss/event_pairs" + suffix, binds, pc, cmd.linear_groups(groups));
+
+  shaderio::ReducePC r{};
+  r.coeff0 = glm::vec4(1, 0, 0, 0);
+  r.coeff1 = glm::vec4(0, 1, 0, 0);
+  r.coeff2 = glm::vec4(0, 0, 1, 0);
+  r.coeff3 = glm::vec4(0, 0, 0, 1);
+  r.n_partials = groups;
+  r.n_out = 4;
+  cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}}, r,
+               gpu::Groups{columns, 1, 1});
+  cmd.dispatch("loss/event_pairs_value",
+               {{shaderio::kEventPairsValueBindSums, sums_},
+                {shaderio::kEventPairsValueBindValues, value_buffer()},
+                {shaderio::kEventPairsValueBindReversed, reversed_out_ ? *reversed_out_ : value_buffer()}},
+               pc, gpu::Groups{1, 1, 1});
+  if (!gradients) return;
+  binds = {{shaderio::kEventPairsBindCounts, counts}, {shaderio::kEventPairsBwdBindSums, sums_}};
+  for (uint32_t k = 0; k < F; ++k)
+    binds.insert(binds.end(), {{shaderio::kEventPairsBindFrames[k], *f.rgb[k]},
+                               {shaderio::kEventPairsBwdBindGrads[k], *f.grad[k]},
+                               {shaderio::kEventPairsBwdBindGradIns[k], *f.grad[k]}});
+  cmd.dispatch("loss/event_pairs_bwd" + suffix, binds, pc, cmd.linear_groups(groups));
 }
 
 }  // namespace evflow

@@ -14,7 +14,10 @@
 //
 // GPU work per record: the events of each of the 2N frame intervals are counted into their own
 // plane (integer atomics, exact), and each pair sums its planes; every reduction is in a fixed
-// order, so the value and the gradients are reproducible on a device. A view's planes are kept
+// order, so the value and the gradients are reproducible on a device. Per pixel (and H·W a
+// multiple of 4) one pass takes every pair at once, reading each plane and frame once, and one
+// backward pass adds each frame's gradient once (event_pairs kernels); otherwise each pair has
+// its own passes. A view's planes are kept
 // for its next records (its frame times and events rarely change), up to count_cache_bytes in all.
 #pragma once
 #include <cstdint>
@@ -52,15 +55,19 @@ class EventLoss : public ExposureLossTerm {
   // way with pooled cells).
   void record_value(gpu::Commands& cmd, const ExposureFrames& frames);
   // At the next record() only: also the value record_value() would write for the same frames in
-  // the time-reversed order, into out[index] (floats). With per-pixel pairs (pool 1, H·W a
-  // multiple of 4) it comes from the forward order's own pass over the counts; otherwise from a
-  // record_value() of its own first. The trainer's direction check uses it.
+  // the time-reversed order, into out[index] (floats). Where every pair is taken in one pass
+  // (takes_pairs_at_once) it comes from the forward order's own pass; otherwise from a record_value()
+  // of its own first. The trainer's direction check uses it.
   void score_reversed_next(const gpu::Buffer& out, uint32_t index);
 
   // The pairs (s, j = i + 1) for F frames and a seed: s uniform in {0..i} (deterministic).
   static std::vector<std::pair<uint32_t, uint32_t>> sample_pairs(uint32_t frames, uint64_t seed);
   const std::vector<std::pair<uint32_t, uint32_t>>& last_pairs() const { return pairs_; }
   const EventLossOptions& options() const { return options_; }
+  // Whether a record of these frames takes every pair in one pass (loss/event_pairs_f<F> ...): per
+  // pixel, H*W a multiple of 4, up to kEventPairsMaxFrames frames, on a device that binds them
+  // all in one kernel; else a pass per pair.
+  bool takes_pairs_at_once(const ExposureFrames& frames) const;
   // Per-pixel counts of the last record, 2 * H * W values per interval plane: uints, or floats
   // when the events' float_planes() (for viewers and tests).
   const gpu::Buffer& counts() const { return *last_counts_; }
@@ -78,23 +85,21 @@ class EventLoss : public ExposureLossTerm {
     std::vector<double> times;
     uint64_t generation = 0;
   };
+  // Checks the frames, counts the view's events unless its planes hold them, draws the pairs.
+  const gpu::Buffer& counted_planes(gpu::Commands& cmd, const ExposureFrames& frames, bool gradients);
+  // Any pooling and size: per pair, a pass over the cells (loss/event_pair ...).
   void record_pairs(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
-  // Per pixel with H*W a multiple of 4: four pixels per invocation (the quad kernels' vec4 accesses).
-  bool quad_kernels(const ExposureFrames& frames) const;
-  // The pair's dispatches after its forward pass: the reversed order's sums and value (fused
-  // direction check), then the forward order's backward or value.
-  void record_pair_tail(gpu::Commands& cmd, const ExposureFrames& f, const shaderio::EventPairPC& pc,
-                        uint32_t cell_groups, gpu::Groups g, bool quads, bool gradients);
+  shaderio::EventPairPC pair_constants(const ExposureFrames& frames, float weight, uint32_t pair) const;
+  void record_fused(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
+  float norm_floor2(const ExposureFrames& frames) const;
   CountPlanes& planes_for(uint32_t view, uint64_t bytes);
 
   const IntervalEvents& events_;
   EventLossOptions options_;
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
   gpu::Buffer scratch_, partials_, sums_;
-  gpu::Buffer partials_r_, sums_r_;            // the reversed order's (fused direction check)
   const gpu::Buffer* reversed_out_ = nullptr;  // score_reversed_next's request, for one record
   uint32_t reversed_index_ = 0;
-  bool reversed_fused_ = false;    // this record sums the reversed order too
   std::vector<CountPlanes> kept_;  // per view, when all fit options_.count_cache_bytes
   CountPlanes shared_;             // every view past them
   const gpu::Buffer* last_counts_ = &shared_.planes;

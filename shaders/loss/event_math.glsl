@@ -18,10 +18,8 @@ vec4 event_log_luma_grad(vec4 y, float w, float eps) {
   return mix(vec4(0.0), w / (eps + y), greaterThan(y, vec4(0.0)));
 }
 
-// The pooling grid of a shader whose push constants `pc` hold width, height and pool: cells of
-// pool x pool pixels, the last row and column cut by the image border.
-uint event_cells_x() { return (pc.width + pc.pool - 1u) / pc.pool; }
-uint event_cells_y() { return (pc.height + pc.pool - 1u) / pc.pool; }
+// Cells of pool x pool pixels along a side of `size` pixels, the last one cut by the border.
+uint event_cells(uint size, uint pool) { return (size + pool - 1u) / pool; }
 
 // A pair's norms from its sums ED, DD, EE (norms below the floor are held at it).
 float event_norm(float sq, float floor2) { return sqrt(max(sq, floor2)); }

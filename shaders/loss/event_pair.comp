@@ -30,7 +30,7 @@ float event_level(uint p, uint hw) {
 }
 
 void main() {
-  uint hw = pc.width * pc.height, cw = event_cells_x(), cells = cw * event_cells_y();
+  uint hw = pc.width * pc.height, cw = event_cells(pc.width, pc.pool), cells = cw * event_cells(pc.height, pc.pool);
   uint c = evf_linear_invocation(kLossGroupSize);
   vec4 v = vec4(0.0);
   if (c < cells) {

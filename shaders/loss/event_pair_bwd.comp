@@ -25,7 +25,7 @@ void main() {
     values[pc.value_index] = pc.value_accumulate != 0u ? values[pc.value_index] + v : v;
   }
   if (p >= hw) return;
-  uint cw = event_cells_x(), cells = cw * event_cells_y();
+  uint cw = event_cells(pc.width, pc.pool), cells = cw * event_cells(pc.height, pc.pool);
   uint c = (p / pc.width / pc.pool) * cw + (p % pc.width) / pc.pool;
   float g = event_pair_dl_dd(scratch[c], scratch[cells + c], ed, dd, ee, pc.norm_floor2);
   g *= pc.grad_scale;

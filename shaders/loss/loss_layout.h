@@ -62,7 +62,8 @@ struct SsimPC {
 
 // loss/reduce: s = sum over g < n_partials of partials[g] (vec4), in a fixed order; then for
 // j < n_out: out[dst + j] = dot(coeff[j], s) + offset[j], and -10 log10(that) where bit j of
-// log_mask is set (PSNR from MSE).
+// log_mask is set (PSNR from MSE). Workgroup c of a dispatch of several does the same for column
+// c: partials[c * n_partials + g] into out[dst + c * n_out + j].
 struct ReducePC {
   vec4 coeff0;
   vec4 coeff1;
@@ -89,8 +90,17 @@ struct ReducePC {
 //   l = || E / nE - D / nD ||^2, grad_j (+)= grad_scale * dl/drgb_j, grad_s (+)= grad_scale * dl/drgb_s,
 // and invocation 0 writes (value_accumulate: adds) value_scale * l into values[value_index].
 // loss/event_pair_value: that value alone (one invocation; no gradients).
-// loss/event_pair_quads and loss/event_pair_quads_bwd: the same at pool 1 when H*W is a multiple
-// of 4, four pixels per invocation (the planes read as vec4 / uvec4; partials per group of quads).
+//
+// Every pair of an exposure of F = 2..kEventPairsMaxFrames frames in one pass, at pool 1 when H*W
+// is a multiple of 4 (engine/loss/event_loss.h), four pixels per invocation (vec4 / uvec4 reads):
+// loss/event_pairs_f<F>: per pair q (j = q + 1, s from s_packed) the sums over the group's pixels of
+// E*D, D*D, E*E and, for the time-reversed frame order, E*D', D'*D' (D' = L_{F-1-j} - L_{F-1-s})
+// at sum index 5 q + 0..4, packed four to a vec4 column: partials[c * groups + group] holds sums
+// 4 c .. 4 c + 3; loss/reduce (one workgroup per column) stores them at sums[4 c ..].
+// loss/event_pairs_value: the forward order's value (sum over pairs of value_scale * l) into
+// values[value_index] and, with `reversed`, the reversed order's into reversed_values[reversed_index].
+// loss/event_pairs_bwd_f<F>: grad_f += grad_scale * dl/drgb_f for every frame, from all pairs at
+// once (E, D recomputed; no scratch planes).
 struct EventPairPC {
   uint width;
   uint height;
@@ -137,6 +147,28 @@ struct WarpedEventPC {
 };
 
 
+EVF_CONST(uint, kEventPairsGroupSize, 64u)
+EVF_CONST(uint, kEventPairsMaxFrames, 9u)
+EVF_CONST(uint, kEventPairsSumsPerPair, 5u)
+struct EventPairsPC {
+  uint width;
+  uint height;
+  uint pairs;     // F - 1
+  uint s_packed;  // pair q's earlier frame s in bits 4 q .. 4 q + 3
+  float theta_pos;
+  float theta_neg;
+  float eps;
+  float norm_floor2;
+  float grad_scale;
+  float value_scale;
+  uint value_index;
+  uint reversed;  // event_pairs_value: also the time-reversed order's value
+  uint reversed_index;
+  uint counts_float;  // the count planes hold floats (binned events), else uints
+  uint groups;  // event_pairs: the dispatch's workgroups (partials per column)
+  uint pad0;
+};
+
 // loss/residual (the residual loss L_res, engine/loss/residual_loss.h), one dispatch per
 // non-middle frame i: d = (F_i - F_N) - R_i per element; partials[partial_base + group].x = sum
 // of d^2 over the group; grad_i += grad_scale * 2d and grad_N -= grad_scale * 2d.
@@ -154,10 +186,6 @@ EVF_BIND(kEventPairBindFrameS, 1u, FrameS)
 EVF_BIND(kEventPairBindFrameJ, 2u, FrameJ)
 EVF_BIND(kEventPairBindScratch, 3u, Scratch)
 EVF_BIND(kEventPairBindPartials, 4u, Partials)
-// loss/event_pair_quads_rev only: the time-reversed order's two frames and partial sums.
-EVF_BIND(kEventPairBindFrameRS, 5u, FrameRS)
-EVF_BIND(kEventPairBindFrameRJ, 6u, FrameRJ)
-EVF_BIND(kEventPairBindPartialsR, 7u, PartialsR)
 // loss/event_pair_bwd
 EVF_BIND(kEventPairBwdBindFrameS, 0u, FrameS)
 EVF_BIND(kEventPairBwdBindFrameJ, 1u, FrameJ)
@@ -166,13 +194,46 @@ EVF_BIND(kEventPairBwdBindSums, 3u, Sums)
 EVF_BIND(kEventPairBwdBindGradS, 4u, GradS)
 EVF_BIND(kEventPairBwdBindGradJ, 5u, GradJ)
 EVF_BIND(kEventPairBwdBindValues, 6u, Values)
-// loss/event_pair_quads_bwd only: texel views of GradS and GradJ (the same buffers), for the
-// values it adds to.
-EVF_BIND(kEventPairBwdBindGradSIn, 7u, GradSIn)
-EVF_BIND(kEventPairBwdBindGradJIn, 8u, GradJIn)
 // loss/event_pair_value
 EVF_BIND(kEventPairValueBindSums, 0u, Sums)
 EVF_BIND(kEventPairValueBindValues, 1u, Values)
+// loss/event_pairs_f<F> and loss/event_pairs_bwd_f<F>: the counts and frame k's render
+// (texels), then the forward's partial sums, the backward's sums (texels), frame k's gradient and
+// a texel view of it (the same buffer: what it adds to).
+EVF_BIND(kEventPairsBindCounts, 0u, Counts)
+EVF_BIND(kEventPairsBindPartials, 1u, Partials)
+EVF_BIND(kEventPairsBwdBindSums, 1u, Sums)
+EVF_BIND(kEventPairsBindFrame0, 2u, Frame0)
+EVF_BIND(kEventPairsBindFrame1, 3u, Frame1)
+EVF_BIND(kEventPairsBindFrame2, 4u, Frame2)
+EVF_BIND(kEventPairsBindFrame3, 5u, Frame3)
+EVF_BIND(kEventPairsBindFrame4, 6u, Frame4)
+EVF_BIND(kEventPairsBindFrame5, 7u, Frame5)
+EVF_BIND(kEventPairsBindFrame6, 8u, Frame6)
+EVF_BIND(kEventPairsBindFrame7, 9u, Frame7)
+EVF_BIND(kEventPairsBindFrame8, 10u, Frame8)
+EVF_BIND(kEventPairsBwdBindGrad0, 11u, Grad0)
+EVF_BIND(kEventPairsBwdBindGrad1, 12u, Grad1)
+EVF_BIND(kEventPairsBwdBindGrad2, 13u, Grad2)
+EVF_BIND(kEventPairsBwdBindGrad3, 14u, Grad3)
+EVF_BIND(kEventPairsBwdBindGrad4, 15u, Grad4)
+EVF_BIND(kEventPairsBwdBindGrad5, 16u, Grad5)
+EVF_BIND(kEventPairsBwdBindGrad6, 17u, Grad6)
+EVF_BIND(kEventPairsBwdBindGrad7, 18u, Grad7)
+EVF_BIND(kEventPairsBwdBindGrad8, 19u, Grad8)
+EVF_BIND(kEventPairsBwdBindGradIn0, 20u, GradIn0)
+EVF_BIND(kEventPairsBwdBindGradIn1, 21u, GradIn1)
+EVF_BIND(kEventPairsBwdBindGradIn2, 22u, GradIn2)
+EVF_BIND(kEventPairsBwdBindGradIn3, 23u, GradIn3)
+EVF_BIND(kEventPairsBwdBindGradIn4, 24u, GradIn4)
+EVF_BIND(kEventPairsBwdBindGradIn5, 25u, GradIn5)
+EVF_BIND(kEventPairsBwdBindGradIn6, 26u, GradIn6)
+EVF_BIND(kEventPairsBwdBindGradIn7, 27u, GradIn7)
+EVF_BIND(kEventPairsBwdBindGradIn8, 28u, GradIn8)
+// loss/event_pairs_value
+EVF_BIND(kEventPairsValueBindSums, 0u, Sums)
+EVF_BIND(kEventPairsValueBindValues, 1u, Values)
+EVF_BIND(kEventPairsValueBindReversed, 2u, Reversed)
 // loss/warped_event
 EVF_BIND(kWarpedEventBindPlanes, 0u, Planes)
 EVF_BIND(kWarpedEventBindFrame, 1u, Frame)
@@ -219,6 +280,22 @@ EVF_BIND(kResidualBindPrior, 2u, Prior)
 EVF_BIND(kResidualBindGradFrame, 3u, GradFrame)
 EVF_BIND(kResidualBindGradMid, 4u, GradMid)
 EVF_BIND(kResidualBindPartials, 5u, Partials)
+
+#ifdef __cplusplus
+// Frame k's bindings, by k.
+inline constexpr BindSlot kEventPairsBindFrames[] = {
+    kEventPairsBindFrame0, kEventPairsBindFrame1, kEventPairsBindFrame2, kEventPairsBindFrame3, kEventPairsBindFrame4,
+    kEventPairsBindFrame5, kEventPairsBindFrame6, kEventPairsBindFrame7, kEventPairsBindFrame8};
+inline constexpr BindSlot kEventPairsBwdBindGrads[] = {
+    kEventPairsBwdBindGrad0, kEventPairsBwdBindGrad1, kEventPairsBwdBindGrad2, kEventPairsBwdBindGrad3,
+    kEventPairsBwdBindGrad4, kEventPairsBwdBindGrad5, kEventPairsBwdBindGrad6, kEventPairsBwdBindGrad7,
+    kEventPairsBwdBindGrad8};
+inline constexpr BindSlot kEventPairsBwdBindGradIns[] = {
+    kEventPairsBwdBindGradIn0, kEventPairsBwdBindGradIn1, kEventPairsBwdBindGradIn2, kEventPairsBwdBindGradIn3,
+    kEventPairsBwdBindGradIn4, kEventPairsBwdBindGradIn5, kEventPairsBwdBindGradIn6, kEventPairsBwdBindGradIn7,
+    kEventPairsBwdBindGradIn8};
+static_assert(sizeof(kEventPairsBindFrames) / sizeof(BindSlot) == kEventPairsMaxFrames);
+#endif
 
 EVF_NAMESPACE_END
 #endif

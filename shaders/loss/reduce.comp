@@ -1,7 +1,8 @@
 #version 450
 // Fixed-order sum of the per-workgroup partials (one workgroup: invocation t sums partials
 // t, t + 256, ... in order, then a tree in shared memory), then up to four affine outputs
-// out[dst + j] = dot(coeff_j, s) + offset_j, optionally -10 log10(.) (PSNR).
+// out[dst + j] = dot(coeff_j, s) + offset_j, optionally -10 log10(.) (PSNR). Workgroup c: column c
+// (loss_layout.h).
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 layout(local_size_x = kReduceGroupSize) in;
@@ -11,9 +12,9 @@ layout(push_constant) uniform PC { ReducePC pc; };
 shared vec4 red[kReduceGroupSize];
 
 void main() {
-  uint lid = gl_LocalInvocationIndex;
+  uint lid = gl_LocalInvocationIndex, first = gl_WorkGroupID.x * pc.n_partials;
   vec4 s = vec4(0.0);
-  for (uint g = lid; g < pc.n_partials; g += kReduceGroupSize) s += partials[g];
+  for (uint g = lid; g < pc.n_partials; g += kReduceGroupSize) s += partials[first + g];
   red[lid] = s;
   barrier();
   // Each level's add as a loop of one trip in the invocations that add and none elsewhere: on CPU
@@ -28,6 +29,6 @@ void main() {
     vec4 coeff = lid == 0u ? pc.coeff0 : lid == 1u ? pc.coeff1 : lid == 2u ? pc.coeff2 : pc.coeff3;
     float v = dot(coeff, total) + pc.offset[lid];
     if ((pc.log_mask & (1u << lid)) != 0u) v = v > 0.0 ? -10.0 * log(v) / log(10.0) : uintBitsToFloat(0x7f800000u);
-    values[pc.dst + lid] = v;
+    values[pc.dst + gl_WorkGroupID.x * pc.n_out + lid] = v;
   }
 }

@@ -67,30 +67,3 @@ vec4 loss_group_sum(vec4 v) {
   for (uint k = 0u; k < n; ++k) total += evf_loss_red[k * 16u];
   return total;
 }
-#ifdef EVF_LOSS_GROUP_SUM2
-// Two sums at once, each in the order above, behind the same two barriers.
-shared vec4 evf_loss_red2[kLossGroupSize];
-void loss_group_sum2(vec4 a, vec4 b, out vec4 total_a, out vec4 total_b) {
-  uint lid = gl_LocalInvocationIndex;
-  evf_loss_red[lid] = a;
-  evf_loss_red2[lid] = b;
-  barrier();
-  uint n = lid < 16u ? 16u : 0u;
-  vec4 sa = vec4(0.0), sb = vec4(0.0);
-  for (uint k = 0u; k < n; ++k) {
-    sa += evf_loss_red[lid * 16u + k];
-    sb += evf_loss_red2[lid * 16u + k];
-  }
-  if (n != 0u) {
-    evf_loss_red[lid * 16u] = sa;
-    evf_loss_red2[lid * 16u] = sb;
-  }
-  barrier();
-  total_a = total_b = vec4(0.0);
-  n = lid == 0u ? 16u : 0u;
-  for (uint k = 0u; k < n; ++k) {
-    total_a += evf_loss_red[k * 16u];
-    total_b += evf_loss_red2[k * 16u];
-  }
-}
-#endif

@@ -22,7 +22,7 @@ float mp, pp, mm;  // the interval's sums
 // dl/dP at pixel (x, y): its cell's, 0 outside the interior.
 float dl_dp(uint x, uint y) {
   if (!warped_interior(x, y)) return 0.0;
-  uint cw = event_cells_x(), cells = cw * event_cells_y(), c = (y / pc.pool) * cw + x / pc.pool;
+  uint cw = event_cells(pc.width, pc.pool), cells = cw * event_cells(pc.height, pc.pool), c = (y / pc.pool) * cw + x / pc.pool;
   return event_pair_dl_dd(scratch[c], scratch[cells + c], mp, pp, mm, pc.norm_floor2);
 }
 
