@@ -90,17 +90,6 @@ struct ReducePC {
 //   l = || E / nE - D / nD ||^2, grad_j (+)= grad_scale * dl/drgb_j, grad_s (+)= grad_scale * dl/drgb_s,
 // and invocation 0 writes (value_accumulate: adds) value_scale * l into values[value_index].
 // loss/event_pair_value: that value alone (one invocation; no gradients).
-//
-// Every pair of an exposure of F = 2..kEventPairsMaxFrames frames in one pass, at pool 1 when H*W
-// is a multiple of 4 (engine/loss/event_loss.h), four pixels per invocation (vec4 / uvec4 reads):
-// loss/event_pairs_f<F>: per pair q (j = q + 1, s from s_packed) the sums over the group's pixels of
-// E*D, D*D, E*E and, for the time-reversed frame order, E*D', D'*D' (D' = L_{F-1-j} - L_{F-1-s})
-// at sum index 5 q + 0..4, packed four to a vec4 column: partials[c * groups + group] holds sums
-// 4 c .. 4 c + 3; loss/reduce (one workgroup per column) stores them at sums[4 c ..].
-// loss/event_pairs_value: the forward order's value (sum over pairs of value_scale * l) into
-// values[value_index] and, with `reversed`, the reversed order's into reversed_values[reversed_index].
-// loss/event_pairs_bwd_f<F>: grad_f += grad_scale * dl/drgb_f for every frame, from all pairs at
-// once (E, D recomputed; no scratch planes).
 struct EventPairPC {
   uint width;
   uint height;
@@ -118,6 +107,38 @@ struct EventPairPC {
   uint counts_float;  // the count planes hold floats (binned events), else uints
   uint pool;          // side of the square pooling cells E and D are summed over (1: per pixel)
   uint pad2;
+};
+
+// Every pair of an exposure of F = 2..kEventPairsMaxFrames frames in one pass, at pool 1 when H*W
+// is a multiple of 4 (engine/loss/event_loss.h), four pixels per invocation (vec4 / uvec4 reads):
+// loss/event_pairs_f<F>: per pair q (j = q + 1, s from s_packed) the sums over the group's pixels of
+// E*D, D*D, E*E and, for the time-reversed frame order, E*D', D'*D' (D' = L_{F-1-j} - L_{F-1-s})
+// at sum index 5 q + 0..4, packed four to a vec4 column: partials[c * groups + group] holds sums
+// 4 c .. 4 c + 3; loss/reduce (one workgroup per column) stores them at sums[4 c ..].
+// loss/event_pairs_value: the forward order's value (sum over pairs of value_scale * l) into
+// values[value_index] and, with `reversed`, the reversed order's into reversed_values[reversed_index].
+// loss/event_pairs_bwd_f<F>: grad_f += grad_scale * dl/drgb_f for every frame, from all pairs at
+// once (E, D recomputed; no scratch planes).
+EVF_CONST(uint, kEventPairsGroupSize, 64u)
+EVF_CONST(uint, kEventPairsMaxFrames, 9u)
+EVF_CONST(uint, kEventPairsSumsPerPair, 5u)
+struct EventPairsPC {
+  uint width;
+  uint height;
+  uint pairs;     // F - 1
+  uint s_packed;  // pair q's earlier frame s in bits 4 q .. 4 q + 3
+  float theta_pos;
+  float theta_neg;
+  float eps;
+  float norm_floor2;
+  float grad_scale;
+  float value_scale;
+  uint value_index;
+  uint reversed;  // event_pairs_value: also the time-reversed order's value
+  uint reversed_index;
+  uint counts_float;  // the count planes hold floats (binned events), else uints
+  uint groups;        // event_pairs: the dispatch's workgroups (partials per column)
+  uint pad0;
 };
 
 // Warped-event loss (paper Eq. 6-7, engine/loss/warped_event_loss.h). One record per interval i
@@ -146,28 +167,6 @@ struct WarpedEventPC {
   uint pad1, pad2;
 };
 
-
-EVF_CONST(uint, kEventPairsGroupSize, 64u)
-EVF_CONST(uint, kEventPairsMaxFrames, 9u)
-EVF_CONST(uint, kEventPairsSumsPerPair, 5u)
-struct EventPairsPC {
-  uint width;
-  uint height;
-  uint pairs;     // F - 1
-  uint s_packed;  // pair q's earlier frame s in bits 4 q .. 4 q + 3
-  float theta_pos;
-  float theta_neg;
-  float eps;
-  float norm_floor2;
-  float grad_scale;
-  float value_scale;
-  uint value_index;
-  uint reversed;  // event_pairs_value: also the time-reversed order's value
-  uint reversed_index;
-  uint counts_float;  // the count planes hold floats (binned events), else uints
-  uint groups;  // event_pairs: the dispatch's workgroups (partials per column)
-  uint pad0;
-};
 
 // loss/residual (the residual loss L_res, engine/loss/residual_loss.h), one dispatch per
 // non-middle frame i: d = (F_i - F_N) - R_i per element; partials[partial_base + group].x = sum
