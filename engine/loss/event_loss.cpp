@@ -189,14 +189,8 @@ void EventLoss::record_pairs(gpu::Commands& cmd, const ExposureFrames& f, float 
   }
 }
 
-void EventLoss::record_fused(gpu::Commands& cmd, const ExposureFrames& f, float weight, bool gradients) {
-  const gpu::Buffer& counts = counted_planes(cmd, f, gradients);
-  const uint32_t F = uint32_t(f.u.size()), P = F - 1;
-  const uint64_t quads = uint64_t(f.width) * f.height / 4;
-  const uint32_t groups = gpu::Commands::div_up(quads, shaderio::kEventPairsGroupSize);
-  const uint32_t columns = (shaderio::kEventPairsSumsPerPair * P + 3) / 4;
-  partials_.ensure(uint64_t(columns) * groups * 16);
-  sums_.ensure(uint64_t(columns) * 16);
+shaderio::EventPairsPC EventLoss::pairs_constants(const ExposureFrames& f, float weight, uint32_t groups) const {
+  const uint32_t P = uint32_t(pairs_.size());
   shaderio::EventPairsPC pc{};
   pc.width = f.width;
   pc.height = f.height;
@@ -213,21 +207,25 @@ void EventLoss::record_fused(gpu::Commands& cmd, const ExposureFrames& f, float 
   pc.reversed_index = reversed_index_;
   pc.counts_float = events_.float_planes() ? 1u : 0u;
   pc.groups = groups;
+  return pc;
+}
+
+void EventLoss::record_fused(gpu::Commands& cmd, const ExposureFrames& f, float weight, bool gradients) {
+  const gpu::Buffer& counts = counted_planes(cmd, f, gradients);
+  const uint32_t F = uint32_t(f.u.size()), P = F - 1;
+  const uint64_t quads = uint64_t(f.width) * f.height / 4;
+  const uint32_t groups = gpu::Commands::div_up(quads, shaderio::kEventPairsGroupSize);
+  const uint32_t columns = (shaderio::kEventPairsSumsPerPair * P + 3) / 4;
+  partials_.ensure(uint64_t(columns) * groups * 16);
+  sums_.ensure(uint64_t(columns) * 16);
+  const shaderio::EventPairsPC pc = pairs_constants(f, weight, groups);
   const std::string suffix = "_f" + std::to_string(F);
   std::vector<gpu::Bind> binds = {{shaderio::kEventPairsBindCounts, counts},
                                   {shaderio::kEventPairsBindPartials, partials_}};
   for (uint32_t k = 0; k < F; ++k) binds.push_back({shaderio::kEventPairsBindFrames[k], *f.rgb[k]});
   cmd.dispatch("loss/event_pairs" + suffix, binds, pc, cmd.linear_groups(groups));
 
-  shaderio::ReducePC r{};
-  r.coeff0 = glm::vec4(1, 0, 0, 0);
-  r.coeff1 = glm::vec4(0, 1, 0, 0);
-  r.coeff2 = glm::vec4(0, 0, 1, 0);
-  r.coeff3 = glm::vec4(0, 0, 0, 1);
-  r.n_partials = groups;
-  r.n_out = 4;
-  cmd.dispatch("loss/reduce", {{shaderio::kReduceBindPartials, partials_}, {shaderio::kReduceBindOut, sums_}}, r,
-               gpu::Groups{columns, 1, 1});
+  record_event_columns(cmd, partials_, sums_, groups, columns);
   cmd.dispatch("loss/event_pairs_value",
                {{shaderio::kEventPairsValueBindSums, sums_},
                 {shaderio::kEventPairsValueBindValues, value_buffer()},

@@ -31,7 +31,8 @@
 namespace evflow {
 namespace shaderio {
 struct EventPairPC;
-}
+struct EventPairsPC;
+}  // namespace shaderio
 
 struct EventLossOptions {
   float theta_pos = 0.2f, theta_neg = 0.2f;  // log units per positive / negative event
@@ -91,6 +92,7 @@ class EventLoss : public ExposureLossTerm {
   void record_pairs(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
   shaderio::EventPairPC pair_constants(const ExposureFrames& frames, float weight, uint32_t pair) const;
   void record_fused(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
+  shaderio::EventPairsPC pairs_constants(const ExposureFrames& frames, float weight, uint32_t groups) const;
   float norm_floor2(const ExposureFrames& frames) const;
   CountPlanes& planes_for(uint32_t view, uint64_t bytes);
 
