@@ -262,6 +262,56 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
   test::require_no_validation_messages();
 }
 
+// Gaussians one behind the other along the viewing ray, farthest first by index, their depths a
+// few ulps apart: every sort key quantises them alike, so only the depths themselves can order
+// them. A pair at the centre, six to the right (a run longer than two).
+TEST_CASE("splat depth order: Gaussians whose depths share a sort key blend in the order of their depths",
+          "[gpu][splat]") {
+  auto& ctx = test::gpu_context();
+  const Camera cam = Camera::look_at(160, 120, 60.0, {0, 0, 0}, {0, 0, 1}, {0, 1, 0});
+  GaussianCloud cloud;
+  const int groups[2] = {2, 6};
+  cloud.resize(groups[0] + groups[1], 0);
+  size_t g = 0;
+  for (int group = 0; group < 2; ++group)
+    for (int k = 0; k < groups[group]; ++k, ++g) {
+      const float z = 3.0f + 4.8e-7f * float(groups[group] - 1 - k);  // two ulps apart at 3
+      const float mean[3] = {group == 0 ? 0.0f : 0.6f, 0.05f * float(group), z};
+      for (int c = 0; c < 3; ++c) {
+        cloud.means[g * 3 + c] = mean[c];
+        cloud.log_scales[g * 3 + c] = std::log(0.25f);
+        // Colours apart from each other, so that any two in the wrong order show.
+        const double rgb = c == 0 ? 0.1 + 0.8 * (k % 2) : c == 1 ? 0.15 * k : 0.9 - 0.12 * k;
+        cloud.sh[g * 3 + c] = float((rgb - 0.5) / reference::kShC0);
+      }
+      cloud.quats[g * 4] = 1.0f;
+      for (int c = 1; c < 4; ++c) cloud.quats[g * 4 + c] = 0.0f;
+      cloud.opacity_logits[g] = 0.4f;
+    }
+  RenderSettings settings;
+  settings.background = {0.2f, 0.5f, 0.9f};
+  auto ref = reference::render(cloud, cam, settings);
+  GaussianBuffers params(ctx, cloud.size(), 0, "p_");
+  params.upload(cloud);
+  const size_t hw = size_t(cam.width) * cam.height;
+  for (bool block : {false, true}) {
+    INFO((block ? "block" : "pixel"));
+    RasterKernels k = RasterKernels::for_context(ctx);
+    k.block = block;
+    Rasterizer r(ctx, k);
+    RenderState rs(ctx);
+    r.forward(params, cam, settings, rs);
+    auto rgb = rs.outputs().rgb.read<float>(3 * hw);
+    double worst = 0;
+    for (size_t i = 0; i < 3 * hw; ++i) worst = std::max(worst, std::abs(double(rgb[i]) - ref.rgb[i]));
+    std::printf("depth order (%s kernels): %u intersections, max |rgb - ref| %.3g\n", block ? "block" : "pixel",
+                rs.num_intersections(), worst);
+    REQUIRE(rs.num_intersections() > 8);
+    REQUIRE(worst <= (ctx.caps().cpu_driver ? 1e-4 : 1e-3));
+  }
+  test::require_no_validation_messages();
+}
+
 TEST_CASE("splat render without depth: the same image, state and gradients, the depth plane untouched",
           "[gpu][splat]") {
   Scene s = make_scene(37, 600, 1, 96, 80, false);

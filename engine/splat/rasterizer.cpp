@@ -159,7 +159,9 @@ void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const 
   if (tile_bits > 24 || tiles_x > 0xFFFF || tiles_y > 0xFFFF)
     throw gpu::Error("render: image of " + std::to_string(st.width_) + "x" + std::to_string(st.height_) +
                      " has too many tiles");
-  const uint32_t depth_bits = std::min(23u, 32u - tile_bits);
+  // Keys of whole 8-bit digits (the sort's passes), with at least kDepthKeyBitsMin depth bits:
+  // 3 passes up to 512 tiles (346x260: 374). Equal keys are put in depth order after the sort.
+  const uint32_t depth_bits = std::min(23u, (tile_bits + kDepthKeyBitsMin + 7) / 8 * 8 - tile_bits);
   st.sort_bits_ = tile_bits + depth_bits;
   const int degree = s.sh_degree < 0 ? params.sh_degree : std::min(s.sh_degree, params.sh_degree);
 
@@ -283,6 +285,15 @@ void Rasterizer::record_raster(RenderState& st) {
   auto [sorted_keys, sorted_slots] =
       sort_.record_order(cmd_, st.keys_, st.slot_from_isect_, st.keys_alt_, st.slots_alt_, m, st.sort_bits_);
   st.sorted_in_alt_ = sorted_slots == &st.slots_alt_;
+  if (m > 1) {
+    std::vector<gpu::Bind> runs = {{kDepthRunsBindKeys, *sorted_keys},
+                                   {kDepthRunsBindSlots, st.sorted_slots()},
+                                   {kDepthRunsBindGid, st.gaussian_id_from_slot_},
+                                   {kDepthRunsBindProjB, st.proj_misc_}};
+    if (!block_suffix_.empty()) runs.push_back({kDepthRunsBindSlotsIn, st.sorted_slots()});
+    cmd_.dispatch("splat/depth_runs" + block_suffix_, runs, st.raster_pc_,
+                  cmd_.linear_groups(gpu::Commands::div_up(m, kDepthRunsGroupSize * kDepthRunsSpan)));
+  }
   cmd_.mark("sort");
   // The block forward finds each tile's range itself, in the sorted keys.
   if (block_suffix_.empty()) {

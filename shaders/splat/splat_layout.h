@@ -13,6 +13,11 @@ EVF_CONST(uint, kIsectGroupSize, 256u)
 EVF_CONST(uint, kPoseReduceGroupSize, 256u)
 EVF_CONST(uint, kFlagAntialiased, 1u)
 EVF_CONST(uint, kFlagAccumulate, 2u)   // set when backward accumulates (the shader is the project_bwd_acc build)
+// Sort keys: tile << depth_bits | the depth's top depth_bits bits, at least kDepthKeyBitsMin of
+// them (so that equal keys are rare: splat/depth_runs orders those by the depths themselves).
+EVF_CONST(uint, kDepthKeyBitsMin, 15u)
+EVF_CONST(uint, kDepthRunsGroupSize, 64u)
+EVF_CONST(uint, kDepthRunsSpan, 32u)  // sorted positions per invocation of splat/depth_runs (<= 32)
 
 struct ProjectPC {   // project, tile count, emit, project backward
   CameraPC cam;
@@ -131,6 +136,12 @@ EVF_BIND(kRasterizeBwdBindG0, 10u, G0)
 EVF_BIND(kRasterizeBwdBindG1, 11u, G1)
 EVF_BIND(kRasterizeBwdBindG2, 12u, G2)
 EVF_BIND(kRasterizeBwdBindInBlocks, 13u, InBlocks)  // block kernel only (kRasterizeBindOutBlocks)
+// splat/depth_runs
+EVF_BIND(kDepthRunsBindKeys, 0u, Keys)
+EVF_BIND(kDepthRunsBindSlots, 1u, Slots)
+EVF_BIND(kDepthRunsBindGid, 2u, Gid)
+EVF_BIND(kDepthRunsBindProjB, 3u, ProjB)
+EVF_BIND(kDepthRunsBindSlotsIn, 4u, SlotsIn)  // "_block" build: a texel view of Slots
 // splat/tile_ranges
 EVF_BIND(kTileRangesBindKeys, 0u, Keys)
 EVF_BIND(kTileRangesBindRanges, 1u, Ranges)
