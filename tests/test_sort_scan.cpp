@@ -16,10 +16,11 @@ TEST_CASE("scan: exclusive prefix sum with total, across block levels", "[gpu][s
   PrefixSum scan(ctx);
   std::mt19937 rng(3);
   // Both workgroup shapes whatever the device (16 x 256 elements on CPU drivers, 256 x 16 on
-  // GPUs), lengths that end inside a group of four and across block levels, into another buffer
-  // with the total and in place.
+  // GPUs), lengths that end inside a group of four and across block levels (the wide scan: in
+  // one workgroup up to kScanSingleMax elements), into another buffer with the total and in place.
   for (bool wide : {false, true})
-    for (uint32_t n : {1u, 5u, 1023u, 1024u, 1025u, 4095u, 4097u, 4099u, 300000u, 1100000u})
+    for (uint32_t n :
+         {1u, 5u, 1023u, 1024u, 1025u, 4095u, 4097u, 4099u, 30001u, 65535u, 65536u, 65537u, 300000u, 1100000u})
       for (bool in_place : {false, true}) {
         scan.set_wide(wide);
         std::vector<uint32_t> in(n);

@@ -1,5 +1,6 @@
 #include "scan/prefix_sum.h"
 
+#include <algorithm>
 #include <string>
 
 #include "scan/scan_layout.h"
@@ -29,6 +30,13 @@ void PrefixSum::record_level(gpu::Commands& cmd, const gpu::Buffer& in, const gp
   const gpu::Buffer& sums = sums_[level];  // sized by reserve()
   shaderio::ScanPC pc{n_out, n_in, 0, 0};
   const char* suffix = wide_ ? "_wide" : "";
+  if (wide_ && level == 0 && blocks > 1 && std::max(n_in, n_out) <= shaderio::kScanSingleMax) {
+    cmd.dispatch(
+        "scan/scan_block_wide_single",
+        {{shaderio::kScanBlockBindIn, in}, {shaderio::kScanBlockBindOut, out}, {shaderio::kScanBlockBindSums, sums}},
+        pc, gpu::Groups{1, 1, 1});
+    return;
+  }
   cmd.dispatch(
       std::string("scan/scan_block") + suffix,
       {{shaderio::kScanBlockBindIn, in}, {shaderio::kScanBlockBindOut, out}, {shaderio::kScanBlockBindSums, sums}}, pc,

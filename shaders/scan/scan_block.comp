@@ -3,6 +3,9 @@
 // consecutive elements; the workgroup combines the partial sums in shared memory; the block total
 // goes to sums[]. Two builds of one block size (scan_layout.h): 256 invocations of 16 elements
 // (GPUs), and "_wide", 16 invocations of 256 read and written four at a time (CPU drivers).
+// EVF_SCAN_SINGLE (the "_wide_single" build, CPU drivers, up to kScanSingleMax elements): one
+// workgroup scans everything, each invocation a sixteenth (a multiple of 4), so that no second
+// level and no add pass follow (on lavapipe each dispatch has a fixed cost of about 0.1 ms).
 #extension GL_GOOGLE_include_directive : require
 #include "scan/scan_layout.h"
 #include "scan/scan_build.glsl"
@@ -50,11 +53,16 @@ void store4(uint i, uvec4 v) {
 }
 
 void main() {
-  uint block = evf_linear_group();
   uint lid = gl_LocalInvocationIndex;
+#ifdef EVF_SCAN_SINGLE
+  uint block = 0u, items = (max(pc.n_in, pc.n_out) + 4u * EVF_SCAN_GROUP - 1u) / (4u * EVF_SCAN_GROUP) * 4u;
+  uint base = lid * items;
+#else
+  uint block = evf_linear_group(), items = EVF_SCAN_ITEMS;
   uint base = block * kScanBlock + lid * EVF_SCAN_ITEMS;
+#endif
   uint sum = 0;
-  for (uint k = 0; k < EVF_SCAN_ITEMS && base + k < pc.n_in; k += 4u) {
+  for (uint k = 0; k < items && base + k < pc.n_in; k += 4u) {
     uvec4 v = load4(base + k);
     sum += (v.x + v.y) + (v.z + v.w);
   }
@@ -69,7 +77,7 @@ void main() {
     barrier();
   }
   uint run = partial[src][lid] - sum;  // exclusive prefix of this invocation
-  for (uint k = 0; k < EVF_SCAN_ITEMS && base + k < pc.n_out; k += 4u) {
+  for (uint k = 0; k < items && base + k < pc.n_out; k += 4u) {
     uvec4 v = load4(base + k);  // the inputs read again (in and out may alias)
     uvec4 out4 = uvec4(run, run + v.x, run + v.x + v.y, run + v.x + v.y + v.z);
     store4(base + k, out4);

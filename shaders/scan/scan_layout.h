@@ -13,6 +13,9 @@ EVF_CONST(uint, kScanBlock, 4096u)  // kScanGroupSize * kScanItems
 // its 8 barriers, and one of 16 scans a block about 0.1 ms faster.
 EVF_CONST(uint, kScanGroupSizeWide, 16u)
 EVF_CONST(uint, kScanItemsWide, 256u)  // kScanGroupSizeWide * kScanItemsWide = kScanBlock
+// Up to this many elements the wide scan is one dispatch of one workgroup ("_wide_single"):
+// 64k elements, about 0.1 ms of work on lavapipe, where two more dispatches cost about 0.2.
+EVF_CONST(uint, kScanSingleMax, 65536u)
 struct ScanPC {
   uint n_out;   // elements written: out[i] = sum(in[0..i)) for i < n_out
   uint n_in;    // elements read: in[i] for i < n_in, zero beyond
