@@ -125,7 +125,6 @@ Rasterizer::Rasterizer(gpu::Context& ctx, const RasterKernels& kernels)
       sort_(ctx),
       grad2d_norm_(ctx, 16, "grad2d_norm"),
       pose_partial_(ctx, 16, "pose_partial"),
-      pose_(ctx, 32, "pose_gradient"),
       poses_(ctx, 32, "pose_gradients"),
       counts_(ctx, 16, "isect_counts"),
       subgroup_reduce_(kernels.subgroup_reduce),
@@ -397,7 +396,8 @@ std::string Rasterizer::block_bwd_suffix() const {
 
 // The compositing's backward and the projection's, for one render.
 void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
-                                 const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate) {
+                                 const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate,
+                                 uint32_t pose_slot) {
   const uint32_t groups = gpu::Commands::div_up(params.count, kProjectGroupSize);
   auto plane = [&](int k) { return gpu::BufferRef(isect_grad_[k]); };
   // The block kernel adds no floats in shared memory; the per-pixel one needs the
@@ -460,8 +460,8 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
                                {kProjectBwdBindGrad2dIn, grad2d_norm_}});
   cmd_.dispatch((accumulate ? "splat/project_bwd_acc" : "splat/project_bwd") + block_suffix_, binds, pp,
                 cmd_.linear_groups(groups));
-  ReducePC rp{pose_partials(params.count), 0, 0, 0};
-  cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, pose_}}, rp,
+  ReducePC rp{pose_partials(params.count), pose_slot, 0, 0};
+  cmd_.dispatch("splat/pose_reduce", {{kPoseReduceBindPartials, pose_partial_}, {kPoseReduceBindPose, poses_}}, rp,
                 gpu::Groups{1, 1, 1});
   cmd_.mark("project backward");
 }
@@ -476,8 +476,10 @@ void Rasterizer::backward(const RenderState& st, const GaussianBuffers& params, 
                           const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate) {
   check_backward(st, params, v_rgb, v_alpha, grads);
   ensure_backward_buffers(params.count, st.num_isects_);
+  poses_.ensure(24);
   drop_backward_stages();
-  record_backward(st, params, v_rgb, v_alpha, grads, accumulate);
+  record_backward(st, params, v_rgb, v_alpha, grads, accumulate, 0);
+  last_pose_ = 0;
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
 }
@@ -495,10 +497,9 @@ std::vector<std::array<float, 6>> Rasterizer::backward(const std::vector<const R
   ensure_backward_buffers(params.count, most);
   poses_.ensure(std::max<uint64_t>(states.size(), 1) * 24);
   drop_backward_stages();
-  for (size_t i = 0; i < states.size(); ++i) {
-    record_backward(*states[i], params, *v_rgb[i], v_alpha, grads, i > 0);
-    cmd_.copy(pose_, poses_, 24, 0, i * 24);
-  }
+  for (size_t i = 0; i < states.size(); ++i)
+    record_backward(*states[i], params, *v_rgb[i], v_alpha, grads, i > 0, uint32_t(i));
+  last_pose_ = uint32_t(std::max<size_t>(states.size(), 1) - 1);
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);
   std::vector<std::array<float, 6>> out(states.size());
@@ -508,7 +509,7 @@ std::vector<std::array<float, 6>> Rasterizer::backward(const std::vector<const R
 
 std::array<float, 6> Rasterizer::pose_gradient() const {
   std::array<float, 6> g;
-  pose_.download(g.data(), 24);
+  poses_.download(g.data(), 24, uint64_t(last_pose_) * 24);
   return g;
 }
 

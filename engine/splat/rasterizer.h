@@ -120,7 +120,7 @@ class Rasterizer {
                       const gpu::Buffer& v_alpha, const GaussianBuffers& grads) const;
   void ensure_backward_buffers(size_t n, uint64_t isects);
   void record_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
-                       const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate);
+                       const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate, uint32_t pose_slot);
   void drop_backward_stages();
   gpu::Context& ctx_;
   gpu::Commands cmd_;
@@ -130,8 +130,9 @@ class Rasterizer {
   // red, green) as vec4 planes, blue as a float plane (splat_layout.h), a buffer each:
   // GPU-assisted validation checks accesses against whole buffers.
   std::vector<gpu::Buffer> isect_grad_;
-  gpu::Buffer grad2d_norm_, pose_partial_, pose_;
-  gpu::Buffer poses_;                      // a batched backward's pose gradients, one per render
+  gpu::Buffer grad2d_norm_, pose_partial_;
+  gpu::Buffer poses_;                      // a backward's pose gradients, one per render (pose_reduce's slots)
+  uint32_t last_pose_ = 0;                 // the last render's slot in poses_
   gpu::Buffer counts_;                     // a batch's intersection counts, one per render: one download
   bool subgroup_reduce_ = false;           // backward: subgroupAdd before the shared add
   std::string block_suffix_;               // "" (one pixel per invocation) or "_block" (RasterKernels::block)

@@ -45,7 +45,8 @@ struct RasterPC {    // tile ranges, rasterize, rasterize backward
 
 struct ReducePC {
   uint count;        // number of 6-vectors to sum
-  uint pad0, pad1, pad2;
+  uint slot;         // where the sum goes: Pose[6 slot .. 6 slot + 6)
+  uint pad0, pad1;
 };
 
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
