@@ -158,9 +158,10 @@ void Rasterizer::set_pc(const GaussianBuffers& params, const Camera& cam, const 
   if (tile_bits > 24 || tiles_x > 0xFFFF || tiles_y > 0xFFFF)
     throw gpu::Error("render: image of " + std::to_string(st.width_) + "x" + std::to_string(st.height_) +
                      " has too many tiles");
-  // Keys of whole 8-bit digits (the sort's passes), with at least kDepthKeyBitsMin depth bits:
-  // 3 passes up to 512 tiles (346x260: 374). Equal keys are put in depth order after the sort.
-  const uint32_t depth_bits = std::min(23u, (tile_bits + kDepthKeyBitsMin + 7) / 8 * 8 - tile_bits);
+  // Keys of whole 8-bit digits (the sort's passes), with at least kDepthKeyBitsMin depth bits
+  // where 32 bits leave room: 3 passes up to 512 tiles (346x260: 374). Equal keys are put in
+  // depth order after the sort, so fewer depth bits cost time, not exactness.
+  const uint32_t depth_bits = std::min({23u, 32u - tile_bits, (tile_bits + kDepthKeyBitsMin + 7) / 8 * 8 - tile_bits});
   st.sort_bits_ = tile_bits + depth_bits;
   const int degree = s.sh_degree < 0 ? params.sh_degree : std::min(s.sh_degree, params.sh_degree);
 
