@@ -1,6 +1,7 @@
 #version 450
-// Sums the per-workgroup pose partials into one se(3) gradient (a render's slot of the batch's): a single workgroup, each
-// invocation summing a strided share, then a tree in shared memory (deterministic order).
+// Sums the per-workgroup pose partials into one se(3) gradient, a render's slot of the batch's
+// (ReducePC::slot): a single workgroup, each invocation summing a strided share, then a tree in
+// shared memory (deterministic order).
 #extension GL_GOOGLE_include_directive : require
 #include "splat/splat_layout.h"
 layout(local_size_x = kPoseReduceGroupSize) in;
