@@ -54,7 +54,7 @@ TEST_CASE("sort: stable radix sort on the low bits matches std::stable_sort", "[
   // narrower, and junk above `bits` must not be sorted on) and several block sizes (16 keys per
   // invocation on GPUs, up to 4096 on CPU drivers; 7, not a multiple of the four keys a vector
   // read takes, for the one-by-one path) whatever the device, and the device's own choice
-  // (smaller blocks for short inputs).
+  // (on CPU drivers blocks in whole rounds of the CPU threads, as long as the keys allow).
   for (uint32_t digit_bits : {4u, 8u, 0u})
     for (uint32_t items : {16u, 128u, 7u, 4096u, 0u})
       for (auto [n, bits] : std::vector<std::pair<uint32_t, uint32_t>>{{1, 8},

@@ -1,13 +1,24 @@
 #include "sort/radix_sort.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <string>
+#include <thread>
 
 #include "sort/sort_layout.h"
 
 namespace evflow {
 
 using namespace shaderio;
+
+// The CPU threads a CPU driver runs workgroups on: lavapipe's LP_NUM_THREADS, else one per core.
+static uint32_t cpu_threads() {
+  if (const char* v = std::getenv("LP_NUM_THREADS")) {
+    const long t = std::strtol(v, nullptr, 10);
+    if (t > 0) return uint32_t(std::min<long>(t, 64));
+  }
+  return std::max(1u, std::thread::hardware_concurrency());
+}
 
 RadixSort::RadixSort(gpu::Context& ctx)
     : ctx_(ctx),
@@ -16,7 +27,8 @@ RadixSort::RadixSort(gpu::Context& ctx)
       values_tmp_(ctx, 16, "sort_values_tmp"),
       counts_(ctx, 16, "sort_counts"),
       items_(ctx.options().sort_items),
-      wide_(ctx.caps().cpu_driver) {}
+      wide_(ctx.caps().cpu_driver),
+      threads_(cpu_threads()) {}
 
 void RadixSort::set_items(uint32_t items) { items_ = items ? std::clamp<uint32_t>(items, 1u, kSortItemsMax) : 0u; }
 
@@ -32,11 +44,15 @@ uint32_t RadixSort::bins() const { return wide_ ? kSortBinsWide : kSortBins; }
 
 uint32_t RadixSort::items_for(uint32_t n) const {
   if (items_) return items_;
-  uint32_t items = wide_ ? kSortItemsCpu : kSortItemsGpu;
-  // Short inputs: smaller blocks so that at least two workgroups share the work (a single block
-  // runs on one CPU thread). More than two made medium sizes slower (bench train's sort).
-  while (items > kSortItemsGpu && uint64_t(n) < uint64_t(2) * group_size() * items) items /= 2;
-  return items;
+  if (!wide_) return kSortItemsGpu;
+  // CPU drivers run one workgroup per thread at a time, so a pass lasts as long as its busiest
+  // thread: blocks come in whole rounds of the threads, each block as long as the keys allow
+  // (the per-invocation work over the 256 digits is a fixed cost), up to kSortItemsCpu keys an
+  // invocation. Whole uvec4s per invocation: a multiple of 4.
+  const uint64_t round = uint64_t(threads_) * group_size() * kSortItemsCpu;
+  const uint64_t blocks = threads_ * std::max<uint64_t>(1, (uint64_t(n) + round - 1) / round);
+  const uint64_t items = (uint64_t(n) + blocks * group_size() - 1) / (blocks * group_size());
+  return uint32_t(std::clamp<uint64_t>((items + 3) / 4 * 4, 4, kSortItemsCpu));
 }
 
 void RadixSort::reserve(uint32_t n) {

@@ -51,7 +51,8 @@ class RadixSort {
   PrefixSum scan_;
   gpu::Buffer keys_tmp_, values_tmp_, counts_;
   uint32_t items_ = 0;
-  bool wide_ = false;  // 8-bit digits
+  bool wide_ = false;     // 8-bit digits
+  uint32_t threads_ = 1;  // CPU threads (items_for on CPU drivers)
 };
 
 }  // namespace evflow

@@ -11,8 +11,8 @@ EVF_CONST(uint, kSortBins, 16u)  // 4-bit digits
 EVF_CONST(uint, kSortGroupSizeWide, 16u)
 EVF_CONST(uint, kSortBinsWide, 256u)  // 8-bit digits
 // Consecutive elements per invocation (SortPC.items): GPUs 16 (more workgroups in flight), CPU
-// drivers 4096 in the wide build (the per-invocation work over the 256 digits, a fixed cost, is
-// spread over more keys).
+// drivers up to 4096 in the wide build (the per-invocation work over the 256 digits, a fixed cost,
+// is spread over more keys; RadixSort sizes the blocks to whole rounds of the CPU threads).
 EVF_CONST(uint, kSortItemsGpu, 16u)
 EVF_CONST(uint, kSortItemsCpu, 4096u)
 EVF_CONST(uint, kSortItemsMax, 4096u)
