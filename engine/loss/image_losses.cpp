@@ -60,8 +60,8 @@ void SsimPipeline::record(gpu::Commands& cmd, const ImageShape& shape, const gpu
   const uint64_t strips = gpu::Commands::div_up(shape.height, shaderio::kSsimStrip);
   const uint32_t h_groups = gpu::Commands::div_up(uint64_t(shape.channels) * shape.height * segs, kLossGroupSize);
   const uint32_t v_groups = gpu::Commands::div_up(uint64_t(shape.channels) * strips * shape.width, kLossGroupSize);
-  h_.ensure(5 * n * 4);
-  d_.ensure(5 * n * 4);
+  h_.ensure(4 * n * 4);  // a vec4 a pixel (loss_layout.h)
+  d_.ensure(5 * n * 4);  // a vec4 a pixel, then the SSIM map
   partials_.ensure(uint64_t(v_groups) * 16);
   ctx_.check_binding_size(5 * n * 4, "ssim scratch");
 

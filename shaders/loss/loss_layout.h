@@ -39,12 +39,11 @@ struct PixelPC {
 };
 
 // loss/ssim_h, ssim_v, ssim_bwd_h, ssim_bwd_v.
-//   H: count vec4s (horizontally filtered A, B, A^2, B^2 of element i in H[i]), then a plane of
-//      count floats (filtered AB, float 4 count + i); the backward reuses H[i].xyz for the
-//      horizontally filtered partial derivatives
-//   D: count vec4s (dS/dmu_A, dS/d(E[A^2]), dS/d(E[AB]), 0 of element i in D[i]), then the SSIM
+//   H: count vec4s (horizontally filtered A, B, A^2 + B^2, AB of element i in H[i]); the backward
+//      reuses H[i].xyz for the horizontally filtered partial derivatives
+//   D: count vec4s (dS/dmu_A, dS/d(E[A^2 + B^2]), dS/d(E[AB]), 0 of element i in D[i]), then the SSIM
 //      map (optional) as a plane of count floats (float 4 count + i)
-//   Interleaved, a tap reads one vec4 where it read four floats (CPU drivers: one lane loop).
+//   Interleaved, a tap reads one vec4 where it would read four floats (CPU drivers: one lane loop).
 // ssim_v partials[g] = (sum of the per-pixel term e, sum of SSIM, 0, 0).
 // ssim_bwd_v: grad (+)= ssim_grad_scale * dSSIM_sum/dA + pixel_grad_scale * de/dA.
 struct SsimPC {

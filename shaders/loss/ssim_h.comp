@@ -1,5 +1,5 @@
 #version 450
-// SSIM forward, horizontal pass: the 11-tap filter of A, B, A^2, B^2, AB along x (zero padding).
+// SSIM forward, horizontal pass: the 11-tap filter of A, B, A^2 + B^2, AB along x (zero padding).
 // One invocation: a row segment of kSsimStrip pixels (channel c, row y, x in [x0, x0 + strip)).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
@@ -25,27 +25,20 @@ void main() {
   int x0 = int(seg * kSsimStrip);
   int w = int(pc.width);
   vec4 m[kCols];
-  float mab[kCols];
-  [[unroll]] for (int o = 0; o < kCols; ++o) { m[o] = vec4(0.0); mab[o] = 0.0; }
+  [[unroll]] for (int o = 0; o < kCols; ++o) m[o] = vec4(0.0);
   // Columns in increasing order: each output receives its taps in the order k = 0..10.
   [[unroll]] for (int r = 0; r < kSpan; ++r) {
     int xx = x0 - kSsimRadius + r;
     if (xx < 0 || xx >= w) continue;
     float a = evf_texel_float(A, row + uint(xx)), b = evf_texel_float(B, row + uint(xx));
-    vec4 v = vec4(a, b, a * a, b * b);
-    float ab = a * b;
+    vec4 v = vec4(a, b, a * a + b * b, a * b);
     [[unroll]] for (int o = 0; o < kCols; ++o) {
       int k = r - o;
-      if (k >= 0 && k <= 2 * kSsimRadius) {
-        m[o] += kSsimG[k] * v;
-        mab[o] += kSsimG[k] * ab;
-      }
+      if (k >= 0 && k <= 2 * kSsimRadius) m[o] += kSsimG[k] * v;
     }
   }
   [[unroll]] for (int o = 0; o < kCols; ++o) {
     if (x0 + o >= w) break;
-    uint i = row + uint(x0 + o);
-    hmap[i] = m[o];
-    hmap[pc.count + (i >> 2u)][i & 3u] = mab[o];
+    hmap[row + uint(x0 + o)] = m[o];
   }
 }

@@ -7,9 +7,11 @@
 // and the remaining weights are NOT renormalised (what F.conv2d(padding=5) computes in 3DGS).
 //   mu_A = E[A], mu_B = E[B], s_AA = E[A^2] - mu_A^2, s_BB = E[B^2] - mu_B^2, s_AB = E[AB] - mu_A mu_B
 //   SSIM(p) = (2 mu_A mu_B + C1)(2 s_AB + C2) / ((mu_A^2 + mu_B^2 + C1)(s_AA + s_BB + C2))
+// SSIM needs s_AA and s_BB only as their sum, so the forward filters four moments, A, B, A^2 + B^2
+// and AB: one vec4 a pixel.
 // The window is separable and symmetric, so E[] is a horizontal then a vertical 11-tap pass.
 //
-// Backward: with m1 = E[A], m3 = E[A^2], m5 = E[AB] and d_k(p) = dSSIM(p)/dm_k(p),
+// Backward: with m1 = E[A], m3 = E[A^2 + B^2], m5 = E[AB] and d_k(p) = dSSIM(p)/dm_k(p),
 //   d(sum_p SSIM(p))/dA(q) = E[d1](q) + 2 A(q) E[d3](q) + B(q) E[d5](q)
 // because the adjoint of the zero-padded symmetric convolution is the same convolution.
 
@@ -20,24 +22,24 @@ const float kSsimG[11] = float[11](1.028380084e-03, 7.598758135e-03, 3.600077213
 struct SsimPixel {
   float ssim;
   float d1;  // dSSIM/dE[A]   (total: through mu_A, s_AA and s_AB)
-  float d3;  // dSSIM/dE[A^2]
+  float d3;  // dSSIM/dE[A^2 + B^2]
   float d5;  // dSSIM/dE[AB]
 };
 
-// m = (E[A], E[B], E[A^2], E[B^2]), mab = E[AB].
-SsimPixel ssim_eval(vec4 m, float mab, float c1, float c2) {
+// m = (E[A], E[B], E[A^2 + B^2], E[AB]).
+SsimPixel ssim_eval(vec4 m, float c1, float c2) {
   float mu_a = m.x, mu_b = m.y;
-  float s_aa = m.z - mu_a * mu_a;
-  float s_bb = m.w - mu_b * mu_b;
-  float s_ab = mab - mu_a * mu_b;
+  float mu2 = mu_a * mu_a + mu_b * mu_b;
+  float s_sum = m.z - mu2;  // s_AA + s_BB
+  float s_ab = m.w - mu_a * mu_b;
   float n1 = 2.0 * mu_a * mu_b + c1;
   float n2 = 2.0 * s_ab + c2;
-  float den1 = mu_a * mu_a + mu_b * mu_b + c1;
-  float den2 = s_aa + s_bb + c2;
+  float den1 = mu2 + c1;
+  float den2 = s_sum + c2;
   float inv = 1.0 / (den1 * den2);
   SsimPixel r;
   r.ssim = n1 * n2 * inv;
-  // Partials w.r.t. mu_a, s_aa, s_ab, then chained to m1, m3, m5.
+  // Partials w.r.t. mu_a, s_AA (the same as w.r.t. s_AA + s_BB), s_ab, then chained to m1, m3, m5.
   float d_mu_a = 2.0 * mu_b * n2 * inv - 2.0 * mu_a * r.ssim / den1;
   float d_s_aa = -r.ssim / den2;
   float d_s_ab = 2.0 * n1 * inv;

@@ -1,5 +1,5 @@
 #version 450
-// SSIM forward, vertical pass: finishes the five windowed moments, evaluates SSIM per pixel,
+// SSIM forward, vertical pass: finishes the four windowed moments, evaluates SSIM per pixel,
 // stores its partial derivatives for the backward (kLossWriteGrad) and the map
 // (kLossWriteSsimMap), and sums (pixel term, SSIM) per workgroup. One invocation: a column strip
 // of kSsimStrip pixels (channel c, rows [y0, y0 + kSsimStrip), column x).
@@ -33,27 +33,21 @@ void main() {
     int h = int(pc.height);
     uint col = c * pc.height * pc.width + x;
     vec4 m[kRows];
-    float mab[kRows];
-    [[unroll]] for (int o = 0; o < kRows; ++o) { m[o] = vec4(0.0); mab[o] = 0.0; }
+    [[unroll]] for (int o = 0; o < kRows; ++o) m[o] = vec4(0.0);
     // Rows in increasing order: each output receives its taps in the order k = 0..10.
     [[unroll]] for (int r = 0; r < kSpan; ++r) {
       int yy = y0 - kSsimRadius + r;
       if (yy < 0 || yy >= h) continue;
-      uint q = col + uint(yy) * pc.width;
-      vec4 hv = texelFetch(H, int(q));
-      float hab = evf_texel_float(H, 4u * pc.count + q);
+      vec4 hv = texelFetch(H, int(col + uint(yy) * pc.width));
       [[unroll]] for (int o = 0; o < kRows; ++o) {
         int k = r - o;
-        if (k >= 0 && k <= 2 * kSsimRadius) {
-          m[o] += kSsimG[k] * hv;
-          mab[o] += kSsimG[k] * hab;
-        }
+        if (k >= 0 && k <= 2 * kSsimRadius) m[o] += kSsimG[k] * hv;
       }
     }
     [[unroll]] for (int o = 0; o < kRows; ++o) {
       if (y0 + o >= h) break;
       uint i = col + uint(y0 + o) * pc.width;
-      SsimPixel s = ssim_eval(m[o], mab[o], pc.c1, pc.c2);
+      SsimPixel s = ssim_eval(m[o], pc.c1, pc.c2);
       float diff = evf_texel_float(A, i) - evf_texel_float(B, i);
       float e = (pc.flags & kLossPixelL2) != 0u ? diff * diff : abs(diff);
       contrib += vec4(e, s.ssim, 0.0, 0.0);
