@@ -133,6 +133,99 @@ TEST_CASE("sim renderer: quad coverage (pixel centres), depth and texture lookup
   test::require_no_validation_messages();
 }
 
+// The shading's trilinear lookup in double: the renderer's mip chain (2 x 2 box in linear light,
+// re-encoded to sRGB bytes), bilinear taps with repeat (s) and mirrored repeat (t) wrapping.
+struct TrilinearReference {
+  std::vector<std::vector<uint32_t>> levels;
+  std::vector<int> w, h;
+  explicit TrilinearReference(const sim::Texture& t) {
+    levels.push_back(t.rgba);
+    w.push_back(int(t.width));
+    h.push_back(int(t.height));
+    while (w.back() > 1 || h.back() > 1) {
+      const int pw = w.back(), ph = h.back(), nw = std::max(1, pw / 2), nh = std::max(1, ph / 2);
+      std::vector<uint32_t> next(size_t(nw) * nh);
+      for (int y = 0; y < nh; ++y)
+        for (int x = 0; x < nw; ++x)
+          for (int k = 0; k < 3; ++k) {
+            float acc = 0;
+            for (int d = 0; d < 4; ++d) {
+              const int sx = std::min(2 * x + (d & 1), pw - 1), sy = std::min(2 * y + (d >> 1), ph - 1);
+              acc += io::srgb_to_linear(((levels.back()[size_t(sy) * pw + sx] >> (8 * k)) & 255u) / 255.f);
+            }
+            const float v = std::clamp(io::linear_to_srgb(0.25f * acc), 0.f, 1.f);
+            next[size_t(y) * nw + x] |= uint32_t(std::lround(v * 255.f)) << (8 * k);
+          }
+      levels.push_back(next);
+      w.push_back(nw);
+      h.push_back(nh);
+    }
+  }
+  double texel(int l, int x, int y, int c) const {
+    auto mod = [](int i, int n) { return ((i % n) + n) % n; };
+    x = mod(x, w[l]);
+    y = mod(y, 2 * h[l]);
+    if (y >= h[l]) y = 2 * h[l] - 1 - y;
+    return io::srgb_to_linear(((levels[l][size_t(y) * w[l] + x] >> (8 * c)) & 255u) / 255.f);
+  }
+  double bilinear(int l, double u, double v, int c) const {
+    const double fx = u * w[l] - 0.5, fy = v * h[l] - 0.5, x0 = std::floor(fx), y0 = std::floor(fy);
+    const double ax = fx - x0, ay = fy - y0;
+    const int x = int(x0), y = int(y0);
+    const double top = (1 - ax) * texel(l, x, y, c) + ax * texel(l, x + 1, y, c);
+    const double bottom = (1 - ax) * texel(l, x, y + 1, c) + ax * texel(l, x + 1, y + 1, c);
+    return (1 - ay) * top + ay * bottom;
+  }
+  // footprint: texels per sample
+  double trilinear(double u, double v, double footprint, int c) const {
+    const double lod = std::clamp(std::log2(footprint), 0.0, double(levels.size() - 1));
+    const int l0 = int(std::floor(lod)), l1 = std::min(l0 + 1, int(levels.size()) - 1);
+    const double t = lod - l0;
+    return (1 - t) * bilinear(l0, u, v, c) + t * bilinear(l1, u, v, c);
+  }
+};
+
+TEST_CASE("sim renderer: four rays a pixel on a minified texture blend two mip levels as a trilinear reference",
+          "[sim][gpu]") {
+  auto& ctx = test::gpu_context();
+  const uint32_t W = 96, H = 72;
+  const Camera cam = identity_camera(W, H);
+  sim::Scene s;
+  s.source = "minified quad";
+  // A 60 x 60 texture on pixels [20, 40) x [10, 30): 3 texels a pixel, 1.5 a ray of four, so the
+  // lookup blends levels 0 and 1 (lod log2 1.5).
+  sim::Texture t;
+  t.width = t.height = 60;
+  t.wrap_t = sim::Texture::Mirror;
+  for (int j = 0; j < 60; ++j)
+    for (int i = 0; i < 60; ++i)
+      t.rgba.push_back(uint32_t((4 * i) & 255) | uint32_t((4 * j) & 255) << 8 | uint32_t((17 * (i ^ j)) & 255) << 16 |
+                       0xFF000000u);
+  s.textures.push_back(t);
+  s.materials.push_back(sim::Material{"tex", {1, 1, 1, 1}, 0});
+  push_tri(s, at_pixel(cam, 20, 10, 2), at_pixel(cam, 40, 10, 2), at_pixel(cam, 40, 30, 2), {0, 0, 1, 0, 1, 1}, 0);
+  push_tri(s, at_pixel(cam, 20, 10, 2), at_pixel(cam, 40, 30, 2), at_pixel(cam, 20, 30, 2), {0, 0, 1, 1, 0, 1}, 0);
+  sim::ShadingParams sh;
+  sh.ambient = 1.0f;
+  sh.texture_samples = 4;
+  const sim::Frame f = sim::MeshRenderer(ctx, s, sh).render(cam);
+  const TrilinearReference ref(t);
+  REQUIRE(ref.levels.size() == 6);
+  double worst = 0;
+  for (uint32_t y = 10; y < 30; ++y)
+    for (uint32_t x = 20; x < 40; ++x)
+      for (int c = 0; c < 3; ++c) {
+        double want = 0;
+        for (int r = 0; r < 4; ++r) {
+          const double px = x + 0.5 + ((r & 1) ? 0.25 : -0.25), py = y + 0.5 + ((r & 2) ? 0.25 : -0.25);
+          want += 0.25 * ref.trilinear((px - 20) / 20, (py - 10) / 20, 1.5, c);
+        }
+        worst = std::max(worst, std::abs(f.rgb[(size_t(y) * W + x) * 3 + c] - want));
+      }
+  CHECK(worst < 1e-4);
+  test::require_no_validation_messages();
+}
+
 TEST_CASE("sim renderer: a triangle through the near plane and a screen-filling triangle", "[sim][gpu]") {
   auto& ctx = test::gpu_context();
   const uint32_t W = 96, H = 72;

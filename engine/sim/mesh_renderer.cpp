@@ -86,6 +86,10 @@ MeshRenderer::MeshRenderer(gpu::Context& ctx, const Scene& scene, const ShadingP
   materials_.write(mats);
   texels_ = gpu::Buffer(ctx, texels.size() * 4, "sim_texels");
   texels_.write(texels);
+  std::vector<float> decode(kSimDecodeEntries);  // sim/shade's sRGB decode of the 8-bit codes
+  for (uint32_t c = 0; c < kSimDecodeEntries; ++c) decode[c] = io::srgb_to_linear(float(c) / 255.f);
+  decode_ = gpu::Buffer(ctx, decode.size() * 4, "sim_srgb_decode");
+  decode_.write(decode);
   cam_ = gpu::Buffer(ctx, T * 48, "sim_cam_verts");
   boxes_ = gpu::Buffer(ctx, T * 16, "sim_boxes");
   counts_ = gpu::Buffer(ctx, T * 4, "sim_counts");
@@ -159,7 +163,8 @@ Frame MeshRenderer::render(const Camera& c) {
                  {kSimShadeBindIds, ids_},
                  {kSimShadeBindMaterials, materials_},
                  {kSimShadeBindTexels, texels_},
-                 {kSimShadeBindOut, image_}},
+                 {kSimShadeBindOut, image_},
+                 {kSimShadeBindDecode, decode_}},
                 pc, cmd_.linear_groups(gpu::Commands::div_up(P, kSimShadeGroupSize)));
   cmd_.mark("shade");
   cmd_.submit();

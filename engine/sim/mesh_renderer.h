@@ -52,7 +52,7 @@ class MeshRenderer {
   gpu::Commands cmd_;
   PrefixSum scan_;
   std::vector<std::pair<std::string, double>> stage_ms_;
-  gpu::Buffer tris_, materials_, texels_, cam_, boxes_, counts_, offsets_, depth_, ids_, image_;
+  gpu::Buffer tris_, materials_, texels_, decode_, cam_, boxes_, counts_, offsets_, depth_, ids_, image_;
 };
 
 }  // namespace evflow::sim

@@ -20,12 +20,6 @@ bool sim_hit(vec3 d, vec3 v0, vec3 v1, vec3 v2, float near, out vec3 lambda, out
   z = lambda.x * v0.z + lambda.y * v1.z + lambda.z * v2.z;
   return z > near;
 }
-// Barycentrics of the ray's intersection with the triangle's plane (may lie outside it).
-vec3 sim_plane_lambda(vec3 d, vec3 v0, vec3 v1, vec3 v2) {
-  vec3 e = vec3(dot(d, cross(v1, v2)), dot(d, cross(v2, v0)), dot(d, cross(v0, v1)));
-  float s = e.x + e.y + e.z;
-  return s != 0.0 ? e / s : vec3(1.0 / 3.0);
-}
 // A triangle whose pixel box (x0 y0 x1 y1, inclusive) spans at most `limit` pixels each way
 // (pc.misc.z) is rasterized by sim/raster_small and gets no 16x16 tiles. An empty box is not small.
 bool sim_small_box(uvec4 box, float limit) {

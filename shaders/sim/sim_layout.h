@@ -15,6 +15,7 @@ EVF_NAMESPACE_BEGIN
 EVF_CONST(uint, kSimSetupGroupSize, 64u)
 EVF_CONST(uint, kSimTile, 16u)              // raster tile edge (pixels); one workgroup per tile
 EVF_CONST(uint, kSimShadeGroupSize, 64u)
+EVF_CONST(uint, kSimDecodeEntries, 256u)  // sim/shade's sRGB decode table, four values a texel
 EVF_CONST(uint, kSimSmallGroupSize, 64u)
 // Default of SimPC.misc.z: triangles whose pixel box is at most this many pixels wide and high get
 // one invocation each (sim/raster_small) instead of a workgroup per tile.
@@ -63,8 +64,9 @@ EVF_BIND(kSimShadeBindTris, 0u, Tris)
 EVF_BIND(kSimShadeBindCamVerts, 1u, CamVerts)
 EVF_BIND(kSimShadeBindIds, 2u, Ids)
 EVF_BIND(kSimShadeBindMaterials, 3u, Materials)
-EVF_BIND(kSimShadeBindTexels, 4u, Texels)
+EVF_BIND(kSimShadeBindTexels, 4u, Texels)  // packed sRGB RGBA8 texels, read as R32UI texels
 EVF_BIND(kSimShadeBindOut, 5u, Out)
+EVF_BIND(kSimShadeBindDecode, 6u, Decode)  // kSimDecodeEntries linear values of the 8-bit sRGB codes
 // sim/tri_setup
 EVF_BIND(kSimTriSetupBindTris, 0u, Tris)
 EVF_BIND(kSimTriSetupBindCamVerts, 1u, CamVerts)
