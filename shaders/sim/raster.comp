@@ -1,11 +1,13 @@
 #version 450
 // One workgroup = one 16x16 tile of one triangle's pixel range (work items are enumerated by the
-// prefix sum of the per-triangle tile counts; small triangles have none: sim/raster_small).
+// prefix sum of the per-triangle tile counts; small triangles have none: sim/raster_small). Each
+// invocation tests kSimTileRows pixels of a column: CPU drivers pay per invocation of a workgroup
+// that meets a barrier, and the triangle's edges are found once for them all.
 #extension GL_GOOGLE_include_directive : require
 #include "sim/sim_layout.h"
 #include "common/dispatch.glsl"
 #include "sim/raster_common.glsl"
-layout(local_size_x = kSimTile, local_size_y = kSimTile) in;
+layout(local_size_x = kSimTile, local_size_y = kSimTile / kSimTileRows) in;
 #include "sim/raster_pixel.glsl"
 layout(std430, binding = kSimRasterBindOffsets) readonly buffer Offsets { uint offsets[]; };  // n + 1 (exclusive scan)
 shared uint s_tri;
@@ -29,7 +31,11 @@ void main() {
   uint tx0 = box.x / kSimTile, ntx = box.z / kSimTile - tx0 + 1u;
   uint local = item - offsets[tri];
   uint tx = tx0 + local % ntx, ty = box.y / kSimTile + local / ntx;
-  uint x = tx * kSimTile + gl_LocalInvocationID.x, y = ty * kSimTile + gl_LocalInvocationID.y;
-  if (x < box.x || x > box.z || y < box.y || y > box.w) return;
-  sim_raster_pixel(tri, cam[3u * tri].xyz, cam[3u * tri + 1u].xyz, cam[3u * tri + 2u].xyz, x, y);
+  uint x = tx * kSimTile + gl_LocalInvocationID.x;
+  if (x < box.x || x > box.z) return;
+  SimEdges t = sim_edges(cam[3u * tri].xyz, cam[3u * tri + 1u].xyz, cam[3u * tri + 2u].xyz);
+  for (uint r = 0u; r < kSimTileRows; ++r) {
+    uint y = ty * kSimTile + gl_LocalInvocationID.y + r * (kSimTile / kSimTileRows);
+    if (y >= box.y && y <= box.w) sim_raster_pixel(tri, t, x, y);
+  }
 }

@@ -6,14 +6,13 @@ layout(std430, binding = kSimRasterBindDepth) buffer Depth { uint depth[]; };
 layout(std430, binding = kSimRasterBindIds) buffer Ids { uint ids[]; };
 layout(push_constant) uniform PC { SimPC pc; };
 
-// Pixel (x, y) against triangle `tri` whose camera-space vertices are v0, v1, v2 (read once by the
-// caller). Mode 0 (pc.dims.w): atomicMin of the depth bits (positive floats order like uints).
+// Pixel (x, y) against triangle `tri` (its edges found once by the caller). Mode 0 (pc.dims.w): atomicMin of the depth bits (positive floats order like uints).
 // Mode 1: atomicMin of the triangle id where the depth is the minimum.
-void sim_raster_pixel(uint tri, vec3 v0, vec3 v1, vec3 v2, uint x, uint y) {
+void sim_raster_pixel(uint tri, SimEdges t, uint x, uint y) {
   vec3 lambda;
   float z;
   vec3 d = sim_ray(pc, vec2(x, y) + 0.5);
-  if (!sim_hit(d, v0, v1, v2, pc.misc.x, lambda, z)) return;
+  if (!sim_hit(d, t, pc.misc.x, lambda, z)) return;
   uint p = y * pc.dims.x + x;
   uint bits = floatBitsToUint(z);
   if (pc.dims.w == 0u) atomicMin(depth[p], bits);

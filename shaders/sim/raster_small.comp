@@ -14,7 +14,7 @@ void main() {
   uvec4 box = boxes[tri];
   if (!sim_small_box(box, pc.misc.z)) return;
   // The vertices are read once: inside the loop each read would be one per pixel.
-  vec3 v0 = cam[3u * tri].xyz, v1 = cam[3u * tri + 1u].xyz, v2 = cam[3u * tri + 2u].xyz;
+  SimEdges t = sim_edges(cam[3u * tri].xyz, cam[3u * tri + 1u].xyz, cam[3u * tri + 2u].xyz);
   for (uint y = box.y; y <= box.w; ++y)
-    for (uint x = box.x; x <= box.z; ++x) sim_raster_pixel(tri, v0, v1, v2, x, y);
+    for (uint x = box.x; x <= box.z; ++x) sim_raster_pixel(tri, t, x, y);
 }
