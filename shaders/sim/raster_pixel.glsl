@@ -6,7 +6,8 @@ layout(std430, binding = kSimRasterBindDepth) buffer Depth { uint depth[]; };
 layout(std430, binding = kSimRasterBindIds) buffer Ids { uint ids[]; };
 layout(push_constant) uniform PC { SimPC pc; };
 
-// Pixel (x, y) against triangle `tri` (its edges found once by the caller). Mode 0 (pc.dims.w): atomicMin of the depth bits (positive floats order like uints).
+// Pixel (x, y) against triangle `tri` (its edges found once by the caller). Mode 0 (pc.dims.w):
+// atomicMin of the depth bits (positive floats order like uints).
 // Mode 1: atomicMin of the triangle id where the depth is the minimum.
 void sim_raster_pixel(uint tri, SimEdges t, uint x, uint y) {
   vec3 lambda;

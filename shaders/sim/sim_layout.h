@@ -14,7 +14,7 @@
 EVF_NAMESPACE_BEGIN
 EVF_CONST(uint, kSimSetupGroupSize, 64u)
 EVF_CONST(uint, kSimTile, 16u)              // raster tile edge (pixels); one workgroup per tile
-EVF_CONST(uint, kSimTileRows, 8u)           // sim/raster: pixels of a tile column an invocation tests
+EVF_CONST(uint, kSimTileRows, 8u)           // sim/raster: pixels a tile-column invocation tests (divides kSimTile)
 EVF_CONST(uint, kSimShadeGroupSize, 64u)
 EVF_CONST(uint, kSimDecodeEntries, 256u)  // sim/shade's sRGB decode table, four values a texel
 EVF_CONST(uint, kSimSmallGroupSize, 64u)
