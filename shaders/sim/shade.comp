@@ -110,7 +110,7 @@ vec3 lambda_at(vec2 pix, mat3 c) {
 }
 
 void main() {
-  uint p = evf_linear_invocation(64u);
+  uint p = evf_linear_invocation(kSimShadeGroupSize);
   uint W = pc.dims.x;
   if (p >= W * pc.dims.y) return;
   uint tri = texelFetch(Ids, int(p)).x;
@@ -118,18 +118,17 @@ void main() {
   vec2 pix = vec2(p % W, p / W) + 0.5;
   int c3 = int(3u * tri), t5 = int(5u * tri);
   vec3 v0 = texelFetch(CamVerts, c3).xyz, v1 = texelFetch(CamVerts, c3 + 1).xyz, v2 = texelFetch(CamVerts, c3 + 2).xyz;
-  SimTriangle T;  // p0.w (the material), uv01, uv2: what shading reads
-  T.p0 = texelFetch(Tris, t5);
-  T.uv01 = texelFetch(Tris, t5 + 3);
-  T.uv2 = texelFetch(Tris, t5 + 4);
-  SimMaterial m = material(uint(T.p0.w));
+  // Of the SimTriangle, shading reads p0.w (the material), uv01 and uv2.
+  SimMaterial m = material(uint(texelFetch(Tris, t5).w));
+  vec4 uv01 = texelFetch(Tris, t5 + 3);
+  vec2 uv2 = texelFetch(Tris, t5 + 4).xy;
   const mat3 c = mat3(cross(v1, v2), cross(v2, v0), cross(v0, v1));  // columns: e = d * c
   vec3 lc = lambda_at(pix, c);
   float z = lc.x * v0.z + lc.y * v1.z + lc.z * v2.z;
   // UV derivatives per pixel from the plane barycentrics one pixel to the right and below.
   vec3 lx = lambda_at(pix + vec2(1.0, 0.0), c);
   vec3 ly = lambda_at(pix + vec2(0.0, 1.0), c);
-  const mat3x2 uvs = mat3x2(T.uv01.xy, T.uv01.zw, T.uv2.xy);
+  const mat3x2 uvs = mat3x2(uv01.xy, uv01.zw, uv2);
   vec2 uvc = uvs * lc;
   vec2 dx = uvs * lx - uvc;
   vec2 dy = uvs * ly - uvc;
