@@ -16,9 +16,13 @@
 #include "events/gpu_events.h"
 #include "gpu/commands.h"
 #include "gpu_fixture.h"
+#include "io/image.h"
 #include "loss/event_loss.h"
 #include "plot/curve_plot.h"
 #include "reference/event_reference.h"
+#include "train/image_model.h"
+#include "train/loss_terms.h"
+#include "train/train_layout.h"
 
 using namespace evflow;
 
@@ -205,6 +209,115 @@ TEST_CASE("event loss value and frame gradients match the double reference (fini
   }
   SECTION("per pixel over a pixel count that is not a multiple of 4") {
     check_against_reference(random_events(23, 15, 4000, 4), random_frames(23, 15, 7, 16, false), 22);
+  }
+  test::require_no_validation_messages();
+}
+
+namespace {
+
+// Frame gradients through the event loss from a common starting gradient (the image terms'
+// share), then to the sRGB renders: once as the trainer did it without the folded plumbing (the
+// share copied into each frame's gradient, the term adding to it, train/colour_decode_bwd per
+// frame) and once through LossTerms with grad_in and render_grad. Returns both renders'
+// gradients, and whether LossTerms said the term wrote them.
+struct FoldRun {
+  std::vector<std::vector<float>> plain, folded;
+  bool folded_rendered = false;
+  std::vector<std::vector<float>> frame_grad_after;  // the folded run's frame gradients afterwards
+};
+
+FoldRun run_fold(uint32_t W, uint32_t H, uint32_t F, uint32_t pool, uint32_t seed) {
+  auto& ctx = test::gpu_context();
+  const size_t n = size_t(3) * W * H;
+  const EventStream ev = random_events(W, H, 3000, seed);
+  GpuEvents gev(ctx, ev, {EventWindow{0.0, 1.0}}, "test events");
+  EventLossOptions opt;
+  opt.pool = pool;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f), g(-1.0f, 1.0f);
+  std::vector<float> share(n), poison(n, 123.0f);
+  for (auto& v : share) v = 0.05f * g(rng);
+  gpu::Buffer share_buf(ctx, n * 4, "share");
+  share_buf.write(share);
+  std::vector<gpu::Buffer> render, linear, grad, out_plain, out_folded;
+  for (uint32_t i = 0; i < F; ++i) {
+    std::vector<float> x(n), y(n);
+    for (size_t k = 0; k < n; ++k) x[k] = u(rng), y[k] = io::srgb_to_linear(x[k]);  // some below the knee
+    render.emplace_back(ctx, n * 4, "render"), render.back().write(x);
+    linear.emplace_back(ctx, n * 4, "linear"), linear.back().write(y);
+    grad.emplace_back(ctx, n * 4, "frame_grad");
+    out_plain.emplace_back(ctx, n * 4, "render_grad_plain");
+    out_folded.emplace_back(ctx, n * 4, "render_grad_folded");
+  }
+  ExposureFrames f;
+  f.width = W, f.height = H, f.t0 = 0.0, f.t1 = 1.0, f.seed = seed;
+  f.u = ExposureTrajectory::virtual_times(int(F - 1) / 2);
+  for (uint32_t i = 0; i < F; ++i) f.rgb.push_back(&linear[i]), f.grad.push_back(&grad[i]);
+  FoldRun r;
+  {
+    EventLoss loss(ctx, gev, 0.7f, opt);
+    gpu::Commands cmd(ctx);
+    for (uint32_t i = 0; i < F; ++i) cmd.copy(share_buf, grad[i], n * 4);
+    loss.record(cmd, f);
+    for (uint32_t i = 0; i < F; ++i)
+      record_colour(cmd, shaderio::kColourDecodeBwd, n, render[i], grad[i], out_plain[i]);
+    cmd.submit();
+    for (uint32_t i = 0; i < F; ++i) r.plain.push_back(out_plain[i].read<float>(n));
+  }
+  LossTerms terms;
+  terms.add(std::make_unique<EventLoss>(ctx, gev, 0.7f, opt));
+  for (uint32_t i = 0; i < F; ++i) {
+    grad[i].write(poison), out_folded[i].write(poison);
+    f.grad_in.push_back(&share_buf), f.render.push_back(&render[i]), f.render_grad.push_back(&out_folded[i]);
+  }
+  gpu::Commands cmd(ctx);
+  r.folded_rendered = terms.record_exposure_terms(cmd, f);
+  if (!r.folded_rendered)  // the frames' gradients are in grad: the image model decodes them
+    for (uint32_t i = 0; i < F; ++i)
+      record_colour(cmd, shaderio::kColourDecodeBwd, n, render[i], grad[i], out_folded[i]);
+  cmd.submit();
+  for (uint32_t i = 0; i < F; ++i) {
+    r.folded.push_back(out_folded[i].read<float>(n));
+    r.frame_grad_after.push_back(grad[i].read<float>(n));
+  }
+  return r;
+}
+
+void require_close(const std::vector<std::vector<float>>& a, const std::vector<std::vector<float>>& b) {
+  REQUIRE(a.size() == b.size());
+  double max_abs = 0;
+  for (auto& v : a)
+    for (float x : v) max_abs = std::max(max_abs, double(std::abs(x)));
+  REQUIRE(max_abs > 0);
+  int bad = 0;
+  for (size_t i = 0; i < a.size(); ++i)
+    for (size_t k = 0; k < a[i].size(); ++k)
+      if (std::abs(double(a[i][k]) - b[i][k]) > 1e-5 * std::abs(double(a[i][k])) + 1e-7 * max_abs) {
+        if (++bad <= 5) UNSCOPED_INFO("frame " << i << " element " << k << ": " << a[i][k] << " against " << b[i][k]);
+      }
+  REQUIRE(bad == 0);
+}
+
+}  // namespace
+
+TEST_CASE("event loss: the renders' gradients from a starting gradient in one pass equal copy, add and decode",
+          "[events][loss]") {
+  SECTION("one pass per pixel: the term writes the renders' gradients, the frame gradients stay untouched") {
+    FoldRun r = run_fold(24, 16, 7, 1, 47);
+    REQUIRE(r.folded_rendered);
+    require_close(r.plain, r.folded);
+    for (auto& g : r.frame_grad_after)
+      for (float v : g) REQUIRE(v == 123.0f);
+  }
+  SECTION("nine frames: the renders' gradients where the device binds 29 texel buffers, else the image model's") {
+    FoldRun r = run_fold(24, 16, 9, 1, 49);
+    REQUIRE(r.folded_rendered == test::gpu_context().caps().fits_bindings(9, 29));
+    require_close(r.plain, r.folded);
+  }
+  SECTION("pooled cells, a pass per pair: LossTerms copies the share first, the image model decodes") {
+    FoldRun r = run_fold(24, 16, 5, 2, 50);
+    REQUIRE_FALSE(r.folded_rendered);
+    require_close(r.plain, r.folded);
   }
   test::require_no_validation_messages();
 }

@@ -51,6 +51,9 @@ class EventLoss : public ExposureLossTerm {
   EventLoss(gpu::Context& ctx, const IntervalEvents& events, float weight, EventLossOptions options = {});
   using ExposureLossTerm::record;
   void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) override;
+  // Where every pair is taken in one pass (takes_pairs_at_once); with render_grad, where the device
+  // also binds every render in that pass (2 + 3 F texel buffers).
+  bool folds(const ExposureFrames& frames) const override;
   // The value alone, for the same frames and seed (frames.grad is not read and may be empty):
   // what record() writes into the value slot, at a fraction of the cost (score_reversed_next's
   // way with pooled cells).
@@ -92,6 +95,7 @@ class EventLoss : public ExposureLossTerm {
   void record_pairs(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
   shaderio::EventPairPC pair_constants(const ExposureFrames& frames, float weight, uint32_t pair) const;
   void record_fused(gpu::Commands& cmd, const ExposureFrames& frames, float weight, bool gradients);
+  void check_folded(const ExposureFrames& frames) const;
   shaderio::EventPairsPC pairs_constants(const ExposureFrames& frames, float weight, uint32_t groups) const;
   float norm_floor2(const ExposureFrames& frames) const;
   CountPlanes& planes_for(uint32_t view, uint64_t bytes);

@@ -76,8 +76,8 @@ class ImageLossTerm : public LossTerm {
 };
 
 // One exposure of a training step, as an exposure-level term sees it: 2N+1 virtual frames at
-// times u in [0, 1] over [t0, t1] (the events' clock), each frame's planar RGB render and the
-// buffer its gradient is added into.
+// times u in [0, 1] over [t0, t1] (the events' clock), each frame's planar RGB render (linear
+// light) and the buffer its gradient is added into.
 struct ExposureFrames {
   uint32_t view = 0;
   uint32_t width = 0, height = 0;
@@ -86,16 +86,26 @@ struct ExposureFrames {
   std::vector<const gpu::Buffer*> rgb;
   std::vector<const gpu::Buffer*> grad;
   uint64_t seed = 0;  // the step's random stream (terms that sample, e.g. the event loss's t_s)
+  // Optional gradient plumbing, for terms that fold it (ExposureLossTerm::folds); LossTerms hands
+  // each part only to the term it concerns. grad_in: what frame i's gradient starts from instead
+  // of grad[i]'s contents (the image terms' share), for the first term. render, render_grad: the
+  // frames' sRGB renders and where the last term writes d(loss)/d(render i), its frame gradient
+  // times decode'(render i), instead of writing grad[i].
+  std::vector<const gpu::Buffer*> grad_in, render, render_grad;
   double time_at(size_t i) const { return t0 + u[i] * (t1 - t0); }
 };
 
 class ExposureLossTerm : public LossTerm {
  public:
   using LossTerm::LossTerm;
-  // Records forward and backward: grad[i] += weight * dL/d rgb[i] for every frame, and the
-  // unweighted value L into the value slot.
+  // Records forward and backward: grad[i] += weight * dL/d rgb[i] for every frame (or, where the
+  // term folds and the frames ask, grad[i] = grad_in[i] + ..., render_grad[i] = grad[i] *
+  // decode'(render[i])), and the unweighted value L into the value slot.
   virtual void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) = 0;
   void record(gpu::Commands& cmd, const ExposureFrames& frames) { record(cmd, frames, weight()); }
+  // Whether record() honours grad_in, render and render_grad for these frames; without it the
+  // term only adds into grad.
+  virtual bool folds(const ExposureFrames&) const { return false; }
 };
 
 }  // namespace evflow

@@ -67,9 +67,12 @@ class ImageModel {
   // recorded before): a copy of it, plus its sub-frames' adjoint when upsampling.
   void frame_share(gpu::Commands& cmd, uint32_t i, const gpu::Buffer& out);
   // Records each render's gradient. frame_grads: per frame d(loss)/d(L_i) with the mean's share
-  // already in it (exposure terms on), or empty (then every frame takes the mean's share).
+  // already in it (exposure terms on), or empty (then every frame takes the mean's share). Not
+  // needed when the exposure terms wrote render_grad() themselves (LossTerms::record_exposure_terms).
   void render_grads(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads);
   const gpu::Buffer& render_grad(uint32_t i) const { return identity_ ? v_prediction_ : v_render_[i]; }
+  // The last forward's render of frame i (sRGB).
+  const gpu::Buffer& render(uint32_t i) const { return *renders_.at(i); }
 
  private:
   void colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y) {

@@ -1,5 +1,6 @@
 #include "train/loss_terms.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace evflow {
@@ -41,11 +42,33 @@ void LossTerms::record_image_terms(gpu::Commands& cmd, const ImageModel& m, cons
   }
 }
 
-void LossTerms::record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames, double scale) const {
-  for (auto& t : exposure_) {
-    t->record(cmd, frames, float(t->weight() * scale));
-    cmd.mark(t->name());
+namespace {
+
+void copy_grad_in(gpu::Commands& cmd, const ExposureFrames& f, size_t i) {
+  cmd.copy(*f.grad_in.at(i), *f.grad[i], std::min(f.grad_in[i]->size(), f.grad[i]->size()));
+}
+
+}  // namespace
+
+bool LossTerms::record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames, double scale) const {
+  ExposureFrames f = frames;
+  bool rendered = false;
+  for (size_t k = 0; k < exposure_.size(); ++k) {
+    ExposureLossTerm& t = *exposure_[k];
+    // The renders' gradients are the last term's to write, where it can.
+    if (k + 1 < exposure_.size() || !t.folds(f)) f.render.clear(), f.render_grad.clear();
+    if (!f.grad_in.empty() && !t.folds(f)) {  // the term adds into grad: start it from grad_in
+      for (size_t i = 0; i < f.grad.size(); ++i) copy_grad_in(cmd, f, i);
+      f.grad_in.clear();
+    }
+    t.record(cmd, f, float(t.weight() * scale));
+    cmd.mark(t.name());
+    f.grad_in.clear();  // from here on the frames' gradients are in grad
+    rendered = !f.render_grad.empty();
   }
+  if (!f.grad_in.empty())  // no exposure term: the gradients are the shares
+    for (size_t i = 0; i < f.grad.size(); ++i) copy_grad_in(cmd, f, i);
+  return rendered;
 }
 
 LossValues LossTerms::read(bool exposure_recorded, bool branches_recorded, double exposure_scale) const {

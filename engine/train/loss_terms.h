@@ -35,8 +35,11 @@ class LossTerms {
   // (1/mean_count of it) already applied.
   void record_image_terms(gpu::Commands& cmd, const ImageModel& image_model, const gpu::Buffer& target) const;
   // Exposure terms add their per-frame gradients into frames.grad, each with its weight times
-  // `scale` (the run's schedule of the event terms; the weights themselves stay as set).
-  void record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames, double scale = 1.0) const;
+  // `scale` (the run's schedule of the event terms; the weights themselves stay as set). With
+  // frames.grad_in, the gradients start from it: the first term reads it where it folds, else it
+  // is copied into grad first. With frames.render_grad, returns true when the last term wrote
+  // the renders' gradients there (it folds), false when grad holds the frames' gradients.
+  bool record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& frames, double scale = 1.0) const;
   // After the submit: every term's value (exposure terms only when `exposure_recorded`, counted
   // in the total with their weight times `exposure_scale`; branch terms only when
   // `branches_recorded`). A term not recorded reads 0.

@@ -366,7 +366,10 @@ void Trainer::render_exposure(uint32_t view) {
 void Trainer::record_losses(StepStats& st, bool exposure_on) {
   terms_.record_image_terms(cmd_, *image_model_, targets_[st.view]);
   const bool check = exposure_on && direction_ && direction_->active(step_);
-  image_model_->render_grads(cmd_, exposure_on ? record_exposure_terms(st, check) : std::vector<const gpu::Buffer*>{});
+  if (!exposure_on)
+    image_model_->render_grads(cmd_, {});
+  else if (const std::vector<const gpu::Buffer*> frame_grads = record_exposure_terms(st, check); !frame_grads.empty())
+    image_model_->render_grads(cmd_, frame_grads);
   cmd_.mark("render gradients");
   cmd_.submit();
   if (check && direction_->prefers_reversed()) {
@@ -377,7 +380,9 @@ void Trainer::record_losses(StepStats& st, bool exposure_on) {
 }
 
 // Exposure terms add their per-frame gradients on top of each frame's share of the image terms'.
-// Returns the frames' gradient buffers they add into.
+// Without upsampling every frame's share is the mean's gradient itself, which the first term reads
+// as its starting point (no copy per frame where it folds). Returns the frames' gradient buffers,
+// or nothing when the last term wrote the renders' gradients itself.
 std::vector<const gpu::Buffer*> Trainer::record_exposure_terms(const StepStats& st, bool check) {
   const io::View& view = data_.train[st.view];
   const uint32_t frames = exposure_->frames();
@@ -395,15 +400,20 @@ std::vector<const gpu::Buffer*> Trainer::record_exposure_terms(const StepStats& 
                     cfg_.seed * 0x100000001B3ull + step_};
   for (uint32_t i = 0; i < frames; ++i) ef.rgb.push_back(&image_model_->linear_frame(i));
   if (check) direction_->score_reversed_next();
-  image_model_->mean_grad(cmd_);
+  const gpu::Buffer& share = image_model_->mean_grad(cmd_);
   for (uint32_t i = 0; i < frames; ++i) {
-    image_model_->frame_share(cmd_, i, frame_grad_[i]);
+    if (image_model_->upsample() == 1)
+      ef.grad_in.push_back(&share);
+    else
+      image_model_->frame_share(cmd_, i, frame_grad_[i]);
     ef.grad.push_back(&frame_grad_[i]);
+    ef.render.push_back(&image_model_->render(i));
+    ef.render_grad.push_back(&image_model_->render_grad(i));
   }
   cmd_.mark("frame shares");
-  terms_.record_exposure_terms(cmd_, ef, event_schedule());
+  const bool rendered = terms_.record_exposure_terms(cmd_, ef, event_schedule());
   if (check) direction_->keep_forward(cmd_);
-  return ef.grad;
+  return rendered ? std::vector<const gpu::Buffer*>{} : ef.grad;
 }
 
 // The event terms' weight factor at this step: 1 until the direction check ends

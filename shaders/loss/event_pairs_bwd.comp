@@ -3,6 +3,10 @@
 // its sums (loss_layout.h, EventPairsPC): each frame's dl/dL from all the pairs it takes part in,
 // then one addition into each frame's gradient image, four pixels per invocation. E and D are
 // recomputed as the forward computed them.
+// EVF_DECODE_RENDER (the "_decode" builds, when this term is the last to add to the frames'
+// gradients): the sum is also taken through the sRGB decode of each frame's render, so that the
+// output is the render's gradient and the image model's decode_bwd pass over every frame is not
+// needed (same operations, same values).
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
@@ -12,12 +16,20 @@ layout(push_constant) uniform PC { EventPairsPC pc; };
 #include "loss/event_math.glsl"
 #include "loss/event_pairs.glsl"
 layout(binding = kEventPairsBwdBindSums) uniform samplerBuffer Sums;  // the pairs' sums (floats)
-// Frame k's gradient image, written, and read through a texel view of the same buffer (each
-// element read, then written, by its own invocation alone).
+// Frame k's gradient image, written, and what it adds to, read as texels: a view of the same
+// buffer (each element read, then written, by its own invocation alone) or another image.
 #define EVF_GRAD_BINDING(k)                                                                  \
   layout(std430, binding = kEventPairsBwdBindGrad##k) writeonly buffer Grad##k { vec4 grad##k[]; }; \
   layout(binding = kEventPairsBwdBindGradIn##k) uniform samplerBuffer GradIn##k;
 EVF_FRAMES(EVF_GRAD_BINDING)
+#ifdef EVF_DECODE_RENDER
+#include "common/srgb.glsl"
+#define EVF_RENDER_BINDING(k) layout(binding = kEventPairsBwdBindRender##k) uniform samplerBuffer Render##k;
+EVF_FRAMES(EVF_RENDER_BINDING)
+#define EVF_OUT(k, i, v) grad##k[i] = (v) * evf_srgb_decode_deriv_from(texelFetch(Render##k, int(i)), texelFetch(Frame##k, int(i)));
+#else
+#define EVF_OUT(k, i, v) grad##k[i] = (v);
+#endif
 
 #define EVF_INTERVAL(k) e[k] = interval_amount(k, q4, quads);
 #define EVF_LUMA(k)                                                                               \
@@ -38,12 +50,12 @@ EVF_FRAMES(EVF_GRAD_BINDING)
     G[q + 1] += g;                                                                            \
     for (uint f = 0u; f <= q; ++f) G[f] -= s == f ? g : vec4(0.0);                            \
   }
-#define EVF_FRAME_GRAD(k)                                                                               \
-  grad##k[q4] = texelFetch(GradIn##k, int(q4)) + G[k] * event_log_luma_grad(y[k], kEventLuma.r, pc.eps); \
-  grad##k[quads + q4] =                                                                                 \
-      texelFetch(GradIn##k, int(quads + q4)) + G[k] * event_log_luma_grad(y[k], kEventLuma.g, pc.eps);  \
-  grad##k[2u * quads + q4] =                                                                            \
-      texelFetch(GradIn##k, int(2u * quads + q4)) + G[k] * event_log_luma_grad(y[k], kEventLuma.b, pc.eps);
+#define EVF_FRAME_GRAD(k)                                                                                   \
+  EVF_OUT(k, q4, texelFetch(GradIn##k, int(q4)) + G[k] * event_log_luma_grad(y[k], kEventLuma.r, pc.eps))   \
+  EVF_OUT(k, quads + q4,                                                                                    \
+          texelFetch(GradIn##k, int(quads + q4)) + G[k] * event_log_luma_grad(y[k], kEventLuma.g, pc.eps))  \
+  EVF_OUT(k, 2u * quads + q4,                                                                               \
+          texelFetch(GradIn##k, int(2u * quads + q4)) + G[k] * event_log_luma_grad(y[k], kEventLuma.b, pc.eps))
 
 void main() {
   uint quads = pc.width * pc.height / 4u, q4 = evf_linear_invocation(kEventPairsGroupSize);

@@ -116,8 +116,9 @@ struct EventPairPC {
 // 4 c .. 4 c + 3; loss/reduce (one workgroup per column) stores them at sums[4 c ..].
 // loss/event_pairs_value: the forward order's value (sum over pairs of value_scale * l) into
 // values[value_index] and, with `reversed`, the reversed order's into reversed_values[reversed_index].
-// loss/event_pairs_bwd_f<F>: grad_f += grad_scale * dl/drgb_f for every frame, from all pairs at
-// once (E, D recomputed; no scratch planes).
+// loss/event_pairs_bwd_f<F>: grad_f = grad_in_f + grad_scale * dl/drgb_f for every frame, from all
+// pairs at once (E, D recomputed; no scratch planes); loss/event_pairs_bwd_f<F>_decode: that times
+// decode'(sRGB render f), the render's gradient (what train/colour_decode_bwd would make of it).
 EVF_CONST(uint, kEventPairsGroupSize, 64u)
 EVF_CONST(uint, kEventPairsMaxFrames, 9u)
 EVF_CONST(uint, kEventPairsSumsPerPair, 5u)
@@ -197,7 +198,8 @@ EVF_BIND(kEventPairValueBindSums, 0u, Sums)
 EVF_BIND(kEventPairValueBindValues, 1u, Values)
 // loss/event_pairs_f<F> and loss/event_pairs_bwd_f<F>: the counts and frame k's render
 // (texels), then the forward's partial sums, the backward's sums (texels), frame k's gradient and
-// a texel view of it (the same buffer: what it adds to).
+// what it adds to (texels: a view of the same buffer, or the image terms' share of the frame);
+// the _decode builds also frame k's sRGB render (texels), and write the render's gradient.
 EVF_BIND(kEventPairsBindCounts, 0u, Counts)
 EVF_BIND(kEventPairsBindPartials, 1u, Partials)
 EVF_BIND(kEventPairsBwdBindSums, 1u, Sums)
@@ -228,6 +230,15 @@ EVF_BIND(kEventPairsBwdBindGradIn5, 25u, GradIn5)
 EVF_BIND(kEventPairsBwdBindGradIn6, 26u, GradIn6)
 EVF_BIND(kEventPairsBwdBindGradIn7, 27u, GradIn7)
 EVF_BIND(kEventPairsBwdBindGradIn8, 28u, GradIn8)
+EVF_BIND(kEventPairsBwdBindRender0, 29u, Render0)
+EVF_BIND(kEventPairsBwdBindRender1, 30u, Render1)
+EVF_BIND(kEventPairsBwdBindRender2, 31u, Render2)
+EVF_BIND(kEventPairsBwdBindRender3, 32u, Render3)
+EVF_BIND(kEventPairsBwdBindRender4, 33u, Render4)
+EVF_BIND(kEventPairsBwdBindRender5, 34u, Render5)
+EVF_BIND(kEventPairsBwdBindRender6, 35u, Render6)
+EVF_BIND(kEventPairsBwdBindRender7, 36u, Render7)
+EVF_BIND(kEventPairsBwdBindRender8, 37u, Render8)
 // loss/event_pairs_value
 EVF_BIND(kEventPairsValueBindSums, 0u, Sums)
 EVF_BIND(kEventPairsValueBindValues, 1u, Values)
@@ -292,6 +303,10 @@ inline constexpr BindSlot kEventPairsBwdBindGradIns[] = {
     kEventPairsBwdBindGradIn0, kEventPairsBwdBindGradIn1, kEventPairsBwdBindGradIn2, kEventPairsBwdBindGradIn3,
     kEventPairsBwdBindGradIn4, kEventPairsBwdBindGradIn5, kEventPairsBwdBindGradIn6, kEventPairsBwdBindGradIn7,
     kEventPairsBwdBindGradIn8};
+inline constexpr BindSlot kEventPairsBwdBindRenders[] = {
+    kEventPairsBwdBindRender0, kEventPairsBwdBindRender1, kEventPairsBwdBindRender2, kEventPairsBwdBindRender3,
+    kEventPairsBwdBindRender4, kEventPairsBwdBindRender5, kEventPairsBwdBindRender6, kEventPairsBwdBindRender7,
+    kEventPairsBwdBindRender8};
 static_assert(sizeof(kEventPairsBindFrames) / sizeof(BindSlot) == kEventPairsMaxFrames);
 #endif
 
