@@ -1,11 +1,13 @@
 // The image model of blur mode (engine/train/image_model.h) at sizes whose planes are not a whole
 // number of vec4s: its kernels read their inputs as texels four floats at a time, so the last,
 // partly used texel of every buffer must hold the last elements. The mean of the decoded frames
-// (decode and mean in one pass) and the renders' gradients against the double reference.
+// (every frame in one pass, or decode and mean in one pass a frame) and the renders' gradients
+// against the double reference.
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <random>
+#include <tuple>
 
 #include "gpu/commands.h"
 #include "gpu_fixture.h"
@@ -22,9 +24,11 @@ TEST_CASE(
     "multiple of 4",
     "[train]") {
   auto& ctx = test::gpu_context();
-  for (const auto& [W, H] : {std::pair<uint32_t, uint32_t>{7, 5}, {9, 6}, {3, 1}}) {
-    const uint32_t F = 5, n = 3 * W * H;
-    INFO(W << "x" << H << ": " << n << " values, " << n % 4 << " in the last vec4");
+  // 5 and 9 frames: one pass decodes them all (train/decode_mean_f<F>); 11: a pass per frame.
+  for (const auto& [W, H, F] :
+       {std::tuple<uint32_t, uint32_t, uint32_t>{7, 5, 5}, {9, 6, 5}, {3, 1, 5}, {7, 5, 9}, {7, 5, 11}, {3, 1, 11}}) {
+    const uint32_t n = 3 * W * H;
+    INFO(W << "x" << H << ", " << F << " frames: " << n << " values, " << n % 4 << " in the last vec4");
     std::mt19937 rng(W * 31 + H);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     std::vector<std::vector<float>> renders(F, std::vector<float>(n));

@@ -1,6 +1,7 @@
 #include "train/image_model.h"
 
 #include <stdexcept>
+#include <string>
 
 #include "train/train_layout.h"
 
@@ -82,14 +83,33 @@ void ImageModel::forward(gpu::Commands& cmd, const std::vector<const gpu::Buffer
   renders_ = renders;
   flow_ = flow;
   if (identity_) return;
-  for (uint32_t i = 0; i < frames_; ++i)
-    if (frames_ > 1)
-      record_decode_mean(cmd, values_, 1.0f / float(mean_count()), i > 0, *renders[i], linear_[i], mean_);
-    else
-      colour(cmd, shaderio::kColourDecode, *renders[i], *renders[i], linear_[i]);
+  if (decodes_at_once())
+    record_decode_mean_all(cmd);
+  else
+    for (uint32_t i = 0; i < frames_; ++i)
+      if (frames_ > 1)
+        record_decode_mean(cmd, values_, 1.0f / float(mean_count()), i > 0, *renders[i], linear_[i], mean_);
+      else
+        colour(cmd, shaderio::kColourDecode, *renders[i], *renders[i], linear_[i]);
   if (upsample_ > 1) upsample_forward(cmd, *flow);
   const gpu::Buffer& m = frames_ > 1 ? mean_ : linear_[0];
   if (space_ == LossSpace::Srgb) colour(cmd, shaderio::kColourEncode, m, m, encoded_);
+}
+
+bool ImageModel::decodes_at_once() const {
+  return frames_ >= 2 && frames_ <= shaderio::kDecodeMeanMaxFrames && ctx_.caps().fits_bindings(frames_ + 1, frames_);
+}
+
+// Every frame's decode and the mean in one pass (train/decode_mean_f<F>), the same values as a
+// colour_decode_mean pass per frame.
+void ImageModel::record_decode_mean_all(gpu::Commands& cmd) {
+  shaderio::ColourPC pc{uint32_t(values_), 1.0f / float(mean_count()), 0, 0};
+  std::vector<gpu::Bind> binds = {{shaderio::kDecodeMeanBindMean, mean_}};
+  for (uint32_t k = 0; k < frames_; ++k)
+    binds.insert(binds.end(),
+                 {{shaderio::kDecodeMeanBindXs[k], *renders_[k]}, {shaderio::kDecodeMeanBindYs[k], linear_[k]}});
+  cmd.dispatch("train/decode_mean_f" + std::to_string(frames_), binds, pc,
+               quad_groups(cmd, values_, shaderio::kColourGroupSize));
 }
 
 // The sub-frames of every interval, added into the mean: each target's taps once (kept for the

@@ -79,6 +79,10 @@ class ImageModel {
     record_colour(cmd, op, values_, x, g, y);
   }
   void upsample_forward(gpu::Commands& cmd, const gpu::Buffer& flow);
+  // Whether one pass decodes every frame and makes their mean (2..kDecodeMeanMaxFrames frames, and
+  // the device binds them all), else a pass per frame.
+  bool decodes_at_once() const;
+  void record_decode_mean_all(gpu::Commands& cmd);
   gpu::Context& ctx_;
   uint32_t frames_, width_, height_, upsample_;
   size_t values_;

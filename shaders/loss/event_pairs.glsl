@@ -6,33 +6,9 @@
 #ifndef EVF_EVENT_FRAMES
 #error EVF_EVENT_FRAMES (the exposure's frame count) must be defined
 #endif
-#if EVF_EVENT_FRAMES == 2
-#define EVF_FRAMES(X) X(0) X(1)
-#define EVF_PAIRS(X) X(0)
-#elif EVF_EVENT_FRAMES == 3
-#define EVF_FRAMES(X) X(0) X(1) X(2)
-#define EVF_PAIRS(X) X(0) X(1)
-#elif EVF_EVENT_FRAMES == 4
-#define EVF_FRAMES(X) X(0) X(1) X(2) X(3)
-#define EVF_PAIRS(X) X(0) X(1) X(2)
-#elif EVF_EVENT_FRAMES == 5
-#define EVF_FRAMES(X) X(0) X(1) X(2) X(3) X(4)
-#define EVF_PAIRS(X) X(0) X(1) X(2) X(3)
-#elif EVF_EVENT_FRAMES == 6
-#define EVF_FRAMES(X) X(0) X(1) X(2) X(3) X(4) X(5)
-#define EVF_PAIRS(X) X(0) X(1) X(2) X(3) X(4)
-#elif EVF_EVENT_FRAMES == 7
-#define EVF_FRAMES(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6)
-#define EVF_PAIRS(X) X(0) X(1) X(2) X(3) X(4) X(5)
-#elif EVF_EVENT_FRAMES == 8
-#define EVF_FRAMES(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7)
-#define EVF_PAIRS(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6)
-#elif EVF_EVENT_FRAMES == 9
-#define EVF_FRAMES(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7) X(8)
-#define EVF_PAIRS(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7)
-#else
-#error EVF_EVENT_FRAMES must be 2 .. kEventPairsMaxFrames
-#endif
+#define EVF_FRAME_COUNT EVF_EVENT_FRAMES
+#include "common/frame_list.glsl"
+#define EVF_PAIRS(X) EVF_FRAMES_BUT_LAST(X)
 #define EVF_PAIR_COUNT (EVF_EVENT_FRAMES - 1)
 
 layout(binding = kEventPairsBindCounts) uniform usamplerBuffer Counts;  // R32UI

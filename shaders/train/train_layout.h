@@ -28,6 +28,29 @@ struct ColourPC {
   uint accumulate;
   uint pad0;
 };
+// Every frame of an exposure of F = 2..kDecodeMeanMaxFrames frames decoded and averaged in one
+// pass (train/decode_mean_f<F>, ColourPC without `accumulate`): Y_k = decode(X_k) and Mean =
+// sum over k, in frame order, of scale * Y_k. X_k texels, Y_k and Mean storage.
+EVF_CONST(uint, kDecodeMeanMaxFrames, 9u)
+EVF_BIND(kDecodeMeanBindMean, 0u, Mean)
+EVF_BIND(kDecodeMeanBindX0, 1u, X0)
+EVF_BIND(kDecodeMeanBindX1, 2u, X1)
+EVF_BIND(kDecodeMeanBindX2, 3u, X2)
+EVF_BIND(kDecodeMeanBindX3, 4u, X3)
+EVF_BIND(kDecodeMeanBindX4, 5u, X4)
+EVF_BIND(kDecodeMeanBindX5, 6u, X5)
+EVF_BIND(kDecodeMeanBindX6, 7u, X6)
+EVF_BIND(kDecodeMeanBindX7, 8u, X7)
+EVF_BIND(kDecodeMeanBindX8, 9u, X8)
+EVF_BIND(kDecodeMeanBindY0, 10u, Y0)
+EVF_BIND(kDecodeMeanBindY1, 11u, Y1)
+EVF_BIND(kDecodeMeanBindY2, 12u, Y2)
+EVF_BIND(kDecodeMeanBindY3, 13u, Y3)
+EVF_BIND(kDecodeMeanBindY4, 14u, Y4)
+EVF_BIND(kDecodeMeanBindY5, 15u, Y5)
+EVF_BIND(kDecodeMeanBindY6, 16u, Y6)
+EVF_BIND(kDecodeMeanBindY7, 17u, Y7)
+EVF_BIND(kDecodeMeanBindY8, 18u, Y8)
 
 // Flow-upsampled blur (train/upsample, train/upsample_bwd; engine/train/image_model.h). For
 // interval i of the exposure, its displacement planes dx, dy (H*W each, at flow[2 i H W]) and
@@ -69,6 +92,17 @@ EVF_BIND(kUpsampleBwdBindFlow, 0u, Flow)
 EVF_BIND(kUpsampleBwdBindTaps, 1u, Taps)
 EVF_BIND(kUpsampleBwdBindGrad, 2u, Grad)
 EVF_BIND(kUpsampleBwdBindShare, 3u, Share)
+
+#ifdef __cplusplus
+// Frame k's bindings of train/decode_mean_f<F>, by k.
+inline constexpr BindSlot kDecodeMeanBindXs[] = {kDecodeMeanBindX0, kDecodeMeanBindX1, kDecodeMeanBindX2,
+                                                 kDecodeMeanBindX3, kDecodeMeanBindX4, kDecodeMeanBindX5,
+                                                 kDecodeMeanBindX6, kDecodeMeanBindX7, kDecodeMeanBindX8};
+inline constexpr BindSlot kDecodeMeanBindYs[] = {kDecodeMeanBindY0, kDecodeMeanBindY1, kDecodeMeanBindY2,
+                                                 kDecodeMeanBindY3, kDecodeMeanBindY4, kDecodeMeanBindY5,
+                                                 kDecodeMeanBindY6, kDecodeMeanBindY7, kDecodeMeanBindY8};
+static_assert(sizeof(kDecodeMeanBindXs) / sizeof(BindSlot) == kDecodeMeanMaxFrames);
+#endif
 
 EVF_NAMESPACE_END
 #endif
