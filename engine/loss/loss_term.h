@@ -89,8 +89,8 @@ struct ExposureFrames {
   // Optional gradient plumbing, for terms that fold it (ExposureLossTerm::folds); LossTerms hands
   // each part only to the term it concerns. grad_in: what frame i's gradient starts from instead
   // of grad[i]'s contents (the image terms' share), for the first term. render, render_grad: the
-  // frames' sRGB renders and where the last term writes d(loss)/d(render i), its frame gradient
-  // times decode'(render i), instead of writing grad[i].
+  // frames' sRGB renders (rgb[i] = decode(render[i])) and where the last term writes
+  // d(loss)/d(render i), its frame gradient times decode'(render i), instead of writing grad[i].
   std::vector<const gpu::Buffer*> grad_in, render, render_grad;
   double time_at(size_t i) const { return t0 + u[i] * (t1 - t0); }
 };
