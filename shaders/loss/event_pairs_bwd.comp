@@ -6,7 +6,8 @@
 // EVF_DECODE_RENDER (the "_decode" builds, when this term is the last to add to the frames'
 // gradients): the sum is also taken through the sRGB decode of each frame's render, so that the
 // output is the render's gradient and the image model's decode_bwd pass over every frame is not
-// needed (same operations, same values).
+// needed. decode' comes from the render and its linear frame without a power
+// (evf_srgb_decode_deriv_from): decode_bwd's values up to rounding.
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
