@@ -127,10 +127,6 @@ Rasterizer::Rasterizer(gpu::Context& ctx, const RasterKernels& kernels)
       pose_partial_(ctx, 16, "pose_partial"),
       poses_(ctx, 32, "pose_gradients"),
       counts_(ctx, 16, "isect_counts"),
-      frame_cams_(ctx, 16, "frame_cameras"),
-      frame_offsets_(ctx, 16, "frame_isect_offsets"),
-      frame_color_(ctx, 16, "frame_colors"),
-      frame_dcolor_(ctx, 16, "frame_dcolors"),
       subgroup_reduce_(kernels.subgroup_reduce),
       block_suffix_(kernels.block ? "_block" : "") {
   for (const char* q : {"mean_conic_xy", "conic_z_opacity_rg", "blue"})
@@ -399,13 +395,12 @@ std::string Rasterizer::block_bwd_suffix() const {
   return lanes >= 16 ? "_sg" : lanes == 8 ? "_sg8" : "";
 }
 
-// The compositing backward of one render, its slots' gradients into the planes from slot `base`
-// on (a multiple of the planes' offset alignment, frame_slot_bases), which it fills with zeros first.
-void Rasterizer::record_composite_backward(const RenderState& st, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
-                                           uint64_t base) {
-  auto plane = [&](size_t k) {
-    return gpu::BufferRef(isect_grad_[k], k < 2 ? base * 16 : base * 4, isect_grad_bytes(k, st.num_isects_));
-  };
+// The compositing's backward and the projection's, for one render.
+void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
+                                 const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate,
+                                 uint32_t pose_slot) {
+  const uint32_t groups = gpu::Commands::div_up(params.count, kProjectGroupSize);
+  auto plane = [&](int k) { return gpu::BufferRef(isect_grad_[k]); };
   // The block kernel adds no floats in shared memory; the per-pixel one needs the
   // compare-and-swap build where the device lacks shared float atomics.
   const std::string raster_bwd = block_suffix_.empty() && !ctx_.caps().shared_float_atomic_add
@@ -414,10 +409,7 @@ void Rasterizer::record_composite_backward(const RenderState& st, const gpu::Buf
   // The compositing backward writes only the slots it visits (Gaussians in front of its tile's
   // last blended one); the others keep these zeros. A fill is a sequential write: far cheaper
   // than the kernel's scattered zero stores (lavapipe, bench raster 100k: backward -6 ms).
-  for (size_t k = 0; k < isect_grad_.size(); ++k) {
-    const gpu::BufferRef r = plane(k);
-    cmd_.fill(isect_grad_[k], 0u, r.offset, r.range);
-  }
+  for (size_t k = 0; k < isect_grad_.size(); ++k) cmd_.fill(isect_grad_[k], 0u, 0, isect_grad_bytes(k, st.num_isects_));
   std::vector<gpu::Bind> bindings = {{kRasterBindRanges, st.tile_range_},
                                      {kRasterBindSlots, st.sorted_slots()},
                                      {kRasterBindGid, st.gaussian_id_from_slot_},
@@ -434,15 +426,6 @@ void Rasterizer::record_composite_backward(const RenderState& st, const gpu::Buf
   if (!block_suffix_.empty()) bindings.push_back({kRasterizeBwdBindInBlocks, st.isect_blocks_});
   cmd_.dispatch(raster_bwd, bindings, st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize backward");
-}
-
-// The compositing's backward and the projection's, for one render.
-void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
-                                 const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate,
-                                 uint32_t pose_slot) {
-  const uint32_t groups = gpu::Commands::div_up(params.count, kProjectGroupSize);
-  auto plane = [&](int k) { return gpu::BufferRef(isect_grad_[k]); };
-  record_composite_backward(st, v_rgb, v_alpha, 0);
   ProjectPC pp = st.project_pc_;
   pp.flags = accumulate ? (pp.flags | kFlagAccumulate) : (pp.flags & ~kFlagAccumulate);
   // project_bwd writes the active SH bands only; an overwrite gets zeros in the bands above.
@@ -512,15 +495,11 @@ std::vector<std::array<float, 6>> Rasterizer::backward(const std::vector<const R
     check_backward(*states[i], params, *v_rgb[i], v_alpha, grads);
     most = std::max<uint64_t>(most, states[i]->num_isects_);
   }
-  ensure_backward_buffers(params.count, most);  // record_backward_frames grows them for all frames
+  ensure_backward_buffers(params.count, most);
   poses_.ensure(std::max<uint64_t>(states.size(), 1) * 24);
   drop_backward_stages();
-  const std::vector<uint64_t> bases = frame_slot_bases(states);
-  if (!bases.empty())
-    record_backward_frames(states, bases, params, v_rgb, v_alpha, grads);
-  else
-    for (size_t i = 0; i < states.size(); ++i)
-      record_backward(*states[i], params, *v_rgb[i], v_alpha, grads, i > 0, uint32_t(i));
+  for (size_t i = 0; i < states.size(); ++i)
+    record_backward(*states[i], params, *v_rgb[i], v_alpha, grads, i > 0, uint32_t(i));
   last_pose_ = uint32_t(std::max<size_t>(states.size(), 1) - 1);
   cmd_.submit();
   for (auto& s : cmd_.stage_ms()) stage_ms_.push_back(s);

@@ -121,15 +121,6 @@ class Rasterizer {
   void ensure_backward_buffers(size_t n, uint64_t isects);
   void record_backward(const RenderState& st, const GaussianBuffers& params, const gpu::Buffer& v_rgb,
                        const gpu::Buffer& v_alpha, GaussianBuffers& grads, bool accumulate, uint32_t pose_slot);
-  // The compositing backward of one render into the gradient planes from slot `base` on.
-  void record_composite_backward(const RenderState& st, const gpu::Buffer& v_rgb, const gpu::Buffer& v_alpha,
-                                 uint64_t base);
-  // Several renders' backward with one projection backward for all (frames_backward.cpp):
-  // the slot bases in the gradient planes, or nothing where the device or the sizes rule it out.
-  std::vector<uint64_t> frame_slot_bases(const std::vector<const RenderState*>& states) const;
-  void record_backward_frames(const std::vector<const RenderState*>& states, const std::vector<uint64_t>& bases,
-                              const GaussianBuffers& params, const std::vector<const gpu::Buffer*>& v_rgb,
-                              const gpu::Buffer& v_alpha, GaussianBuffers& grads);
   void drop_backward_stages();
   gpu::Context& ctx_;
   gpu::Commands cmd_;
@@ -140,11 +131,9 @@ class Rasterizer {
   // GPU-assisted validation checks accesses against whole buffers.
   std::vector<gpu::Buffer> isect_grad_;
   gpu::Buffer grad2d_norm_, pose_partial_;
-  gpu::Buffer poses_;       // a backward's pose gradients, one per render (pose_reduce's slots)
-  uint32_t last_pose_ = 0;  // the last render's slot in poses_
-  gpu::Buffer counts_;      // a batch's intersection counts, one per render: one download
-  // record_backward_frames: the renders' cameras, offsets, colours and colour derivatives side by side.
-  gpu::Buffer frame_cams_, frame_offsets_, frame_color_, frame_dcolor_;
+  gpu::Buffer poses_;                      // a backward's pose gradients, one per render (pose_reduce's slots)
+  uint32_t last_pose_ = 0;                 // the last render's slot in poses_
+  gpu::Buffer counts_;                     // a batch's intersection counts, one per render: one download
   bool subgroup_reduce_ = false;           // backward: subgroupAdd before the shared add
   std::string block_suffix_;               // "" (one pixel per invocation) or "_block" (RasterKernels::block)
   std::string block_bwd_suffix() const;    // the block backward's build for this device's subgroups

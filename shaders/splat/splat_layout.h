@@ -44,23 +44,9 @@ struct RasterPC {    // tile ranges, rasterize, rasterize backward
 };
 
 struct ReducePC {
-  uint count;        // number of 6-vectors to sum (workgroup w: the w-th count of them)
-  uint slot;         // where workgroup w's sum goes: Pose[6 (slot + w) .. 6 (slot + w) + 6)
+  uint count;        // number of 6-vectors to sum
+  uint slot;         // where the sum goes: Pose[6 slot .. 6 slot + 6)
   uint pad0, pad1;
-};
-
-// splat/project_bwd_frames_block: the projection backward of an exposure's frames in one pass.
-EVF_CONST(uint, kProjectFramesMax, 9u)
-EVF_CONST(uint, kProjectFrameTexels, 5u)  // a frame's CameraPC as RGBA32F texels (Frames)
-struct ProjectFramesPC {
-  uint num_gaussians;
-  uint frames;       // 2 .. kProjectFramesMax
-  uint sh_degree;    // active degree, <= the buffers' degree
-  uint flags;        // ProjectPC::flags (antialiasing; the buffers' degree in bits 8..9)
-  uint partials;     // pose partials per frame
-  uint pad0, pad1, pad2;
-  uint slot_base[kProjectFramesMax];  // frame f's first slot in the batch's gradient planes
-  uint pad3, pad4, pad5;
 };
 
 // Storage-buffer bindings: EVF_BIND(constant, index, GLSL block name).
@@ -118,10 +104,6 @@ EVF_BIND(kProjectBwdBindVQuatsIn, 33u, VQuatsIn)
 EVF_BIND(kProjectBwdBindVOpacitiesIn, 34u, VOpacitiesIn)
 EVF_BIND(kProjectBwdBindVSh0In, 35u, VSh0In)
 EVF_BIND(kProjectBwdBindGrad2dIn, 36u, Grad2dIn)
-// splat/project_bwd_frames_block only: every frame's camera (kProjectFrameTexels texels each).
-// Offsets, ProjC and DColor then hold the frames' planes one after another ([F][N + 1], [F][N],
-// [F][3N]); G0..G2 the frames' slots from ProjectFramesPC::slot_base.
-EVF_BIND(kProjectBwdBindFrames, 37u, Frames)
 // splat/rasterize, splat/rasterize_block, splat/rasterize_bwd, splat/rasterize_bwd_block
 // (written by splat/tile_ranges, or by splat/rasterize_block itself)
 EVF_BIND(kRasterBindRanges, 0u, Ranges)
