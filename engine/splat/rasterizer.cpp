@@ -97,7 +97,7 @@ RenderState::RenderState(gpu::Context& ctx)
       keys_alt_(ctx, 16, "keys_alt"),
       slots_alt_(ctx, 16, "slots_alt"),
       gaussian_id_from_slot_(ctx, 16, "gaussian_id_from_slot"),
-      isect_blocks_(ctx, 16, "isect_blocks"),
+      block_words_(ctx, 16, "block_words"),
       tile_range_(ctx, 16, "tile_range"),
       final_T_(ctx, 16, "final_T"),
       last_isect_(ctx, 16, "last_isect"),
@@ -311,8 +311,9 @@ void Rasterizer::record_raster(RenderState& st) {
   const bool depth_free = !st.depth_ && !block_suffix_.empty();
   if (!depth_free) bindings.push_back({kRasterizeBindOutDepth, st.out_.depth});
   if (!block_suffix_.empty()) {
-    st.isect_blocks_.ensure(uint64_t(m) * 4);
-    bindings.push_back({kRasterizeBindOutBlocks, st.isect_blocks_});
+    const uint64_t tiles = uint64_t(st.raster_pc_.tiles_x) * st.raster_pc_.tiles_y;
+    st.block_words_.ensure((uint64_t(m) / 32 + tiles + 1) * kForwardBlocks * 4);
+    bindings.push_back({kRasterizeBindOutBlocks, st.block_words_});
     bindings.push_back({kRasterizeBindSortedKeys, *sorted_keys});
   }
   cmd_.dispatch("splat/rasterize" + block_suffix_ + (depth_free ? "_nodepth" : ""), bindings, st.raster_pc_,
@@ -423,7 +424,7 @@ void Rasterizer::record_backward(const RenderState& st, const GaussianBuffers& p
                                      {kRasterizeBwdBindG0, plane(0)},
                                      {kRasterizeBwdBindG1, plane(1)},
                                      {kRasterizeBwdBindG2, plane(2)}};
-  if (!block_suffix_.empty()) bindings.push_back({kRasterizeBwdBindInBlocks, st.isect_blocks_});
+  if (!block_suffix_.empty()) bindings.push_back({kRasterizeBwdBindInBlocks, st.block_words_});
   cmd_.dispatch(raster_bwd, bindings, st.raster_pc_, cmd_.linear_groups(st.raster_pc_.tiles_x * st.raster_pc_.tiles_y));
   cmd_.mark("rasterize backward");
   ProjectPC pp = st.project_pc_;

@@ -53,7 +53,7 @@ class RenderState {
   gpu::Buffer proj_mean_conic_, proj_misc_, proj_color_, proj_dcolor_, tile_rect_, tiles_touched_, isect_offset_;
   // Per intersection (the sort ping-pongs between the two key/slot pairs).
   gpu::Buffer keys_, slot_from_isect_, keys_alt_, slots_alt_, gaussian_id_from_slot_;
-  gpu::Buffer isect_blocks_;  // block kernels: the blocks each loaded intersection reaches (splat_layout.h)
+  gpu::Buffer block_words_;  // block kernels: each loaded word's bit sets per block (splat_layout.h)
   bool sorted_in_alt_ = false;
   // Per tile / pixel.
   gpu::Buffer tile_range_, final_T_, last_isect_;

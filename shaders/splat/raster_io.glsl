@@ -46,9 +46,10 @@ void load_batch_entry(uint local, uint isect) {
 #else
 // Block kernels (rasterize_block, rasterize_bwd_block): the tile is split into EVF_BLOCKS blocks
 // of 4 x EVF_ROWS pixels, one per invocation. Each batch of the tile's Gaussians comes with the
-// blocks each one's support reaches (support_blocks: computed by the forward, kept per
-// intersection for the backward), so that each invocation visits only those; a visit fetches the
-// Gaussian's projection itself (gaussian_of_isect, proj_a/b/c).
+// blocks each one's support reaches (support_blocks: computed by the forward, kept as each
+// 32-entry word's bit set per block for the backward, block_word_index), so that each invocation
+// visits only those; a visit fetches the Gaussian's projection itself (gaussian_of_isect,
+// proj_a/b/c).
 #if EVF_BLOCKS > 32
 #error a Gaussian's blocks are one uint
 #endif
@@ -103,6 +104,12 @@ uint support_blocks(vec2 mean, vec3 conic, float q_max) {
   }
   return mask;
 }
+
+// Where the bit sets of the 32-entry word of tile `tile`'s list that starts at sorted position
+// `first` lie in the block-word plane, in units of kForwardBlocks uints (splat_layout.h). Within
+// a tile, first / 32 grows by one a word; the next tile's first word starts past the last one,
+// and the added tile index keeps two tiles' words apart when they share a multiple of 32.
+uint block_word_index(uint first, uint tile) { return (first >> 5u) + tile; }
 
 // The vec4 of the first of block `lid`'s runs in the tile-by-tile planes (final_T, last_isect:
 // splat_layout.h); its run i is 4 i further on.

@@ -49,13 +49,16 @@ layout(std430, binding = kRasterizeBindOutDepth) writeonly buffer OutDepth { flo
 // Tile by tile (splat_layout.h): a run is one vec4.
 layout(std430, binding = kRasterizeBindOutT) writeonly buffer OutT { vec4 final_T[]; };
 layout(std430, binding = kRasterizeBindOutLast) writeonly buffer OutLast { uvec4 last_isect[]; };
-layout(std430, binding = kRasterizeBindOutBlocks) writeonly buffer OutBlocks { uint isect_blocks[]; };
+layout(std430, binding = kRasterizeBindOutBlocks) writeonly buffer OutBlocks { uvec4 block_words[]; };
 layout(binding = kRasterizeBindSortedKeys) uniform usamplerBuffer SortedKeys;
 layout(push_constant) uniform PC { RasterPC pc; };
 shared uint done_count;
 shared uint block_bits[EVF_BLOCKS][EVF_BATCH / 32];
 #if EVF_BATCH > 32 * EVF_THREADS
 #error a batch is loaded one 32-entry word per invocation
+#endif
+#if EVF_BLOCKS != 16 || EVF_BATCH % 32 != 0
+#error the block-word plane holds kForwardBlocks blocks of 4 x 4 a word, words of 32 from each batch's start
 #endif
 
 // The first sorted position whose key is at least `key` (pc.num_isects if none). The same index in
@@ -81,25 +84,25 @@ uvec2 find_tile_range(uint tile, uint lid) {
 }
 
 // Finds the blocks of the batch's entries [32 w, min(32 w + 32, n)), the tile's Gaussians from
-// `start` on, keeps them for the backward (isect_blocks) and writes word w of every block's bit
-// set. One invocation builds a whole word in registers and stores it: no shared atomics (each is
-// a loop over the SIMD lanes on lavapipe), EVF_BLOCKS stores per 32 entries instead of one
-// atomic per entry and block.
-void load_batch_word(uint w, uint start, uint n, vec2 tile_origin) {
+// `start` on, and writes word w of every block's bit set, to shared memory and, for the backward,
+// to the block-word plane (block_word_index). One invocation builds a whole word in registers and
+// stores it: no shared atomics (each is a loop over the SIMD lanes on lavapipe), EVF_BLOCKS / 4
+// vec4 stores per 32 entries to the plane instead of one per entry.
+void load_batch_word(uint w, uint start, uint n, vec2 tile_origin, uint tile) {
   uvec4 q[EVF_BLOCKS / 4];  // q[i][k]: block 4 i + k
   for (uint i = 0u; i < EVF_BLOCKS / 4; ++i) q[i] = uvec4(0u);
   uint e_end = min(32u, n - 32u * w);
   for (uint e = 0u; e < e_end; ++e) {
-    uint isect = start + 32u * w + e;
-    uint g = gaussian_of_isect(isect);
+    uint g = gaussian_of_isect(start + 32u * w + e);
     vec4 a = proj_a(g), b = proj_b(g);
-    uint blocks = support_blocks(a.xy - tile_origin, vec3(a.zw, b.x), b.w);
-    isect_blocks[isect] = blocks;
-    uvec4 m = uvec4(blocks);
+    uvec4 m = uvec4(support_blocks(a.xy - tile_origin, vec3(a.zw, b.x), b.w));
     for (uint i = 0u; i < EVF_BLOCKS / 4; ++i) q[i] |= ((m >> (4u * i + uvec4(0u, 1u, 2u, 3u))) & 1u) << e;
   }
-  for (uint i = 0u; i < EVF_BLOCKS / 4; ++i)
+  uint plane = block_word_index(start + 32u * w, tile) * (kForwardBlocks / 4u);
+  for (uint i = 0u; i < EVF_BLOCKS / 4; ++i) {
+    block_words[plane + i] = q[i];
     for (uint k = 0u; k < 4u; ++k) block_bits[4u * i + k][w] = q[i][k];
+  }
 }
 
 struct Run {     // 4 horizontally adjacent pixels
@@ -175,7 +178,8 @@ void main() {
   vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
   float cy = float(p0.y) + 0.5;
   vec2 tile_origin = vec2(tile * int(kTileSize));
-  uvec2 range = find_tile_range(uint(tile.y) * pc.tiles_x + uint(tile.x), lid);
+  uint tile_index = uint(tile.y) * pc.tiles_x + uint(tile.x);
+  uvec2 range = find_tile_range(tile_index, lid);
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x);
   EVF_RUNS(EVF_INIT)
 #define EVF_DONE(i) && run_done(r##i)
@@ -203,7 +207,7 @@ void main() {
     if (lid == 0) done_count = 0;
     bool done = true EVF_RUNS(EVF_DONE);
     barrier();
-    if (32u * lid < n) load_batch_word(lid, start, n, tile_origin);
+    if (32u * lid < n) load_batch_word(lid, start, n, tile_origin, tile_index);
     if (done) atomicAdd(done_count, 1u);
     barrier();
     if (done_count == EVF_THREADS) break;

@@ -12,7 +12,7 @@
 // workgroup's barriers are subgroup barriers. lavapipe suspends the kernel's coroutine at every
 // workgroup barrier (two per batch here), a subgroup barrier it does not: about a tenth of this
 // kernel. The "_sg8" build takes blocks of 4 x 8 pixels, a tile in 8 invocations, for 8-lane
-// subgroups; the forward's blocks of 4 x 4 are then merged two by two (blocks_of_isect).
+// subgroups; the forward's blocks of 4 x 4 are then merged two by two (block_word).
 #extension GL_GOOGLE_include_directive : require
 #ifdef EVF_SUBGROUP_BARRIERS
 #extension GL_KHR_shader_subgroup_basic : require
@@ -64,15 +64,18 @@ layout(binding = kRasterizeBwdBindVAlpha) uniform samplerBuffer VAlpha;   // [H]
 layout(std430, binding = kRasterizeBwdBindG0) writeonly buffer G0 { vec4 slot_grad_a[]; };
 layout(std430, binding = kRasterizeBwdBindG1) writeonly buffer G1 { vec4 slot_grad_b[]; };
 layout(std430, binding = kRasterizeBwdBindG2) writeonly buffer G2 { float slot_grad_c[]; };
-// Each intersection's blocks, as the forward found them (splat_layout.h).
-layout(binding = kRasterizeBwdBindInBlocks) uniform usamplerBuffer InBlocks;  // texels: see raster_io.glsl
+// Each loaded word's bit sets per block, as the forward found them (splat_layout.h,
+// block_word_index), as R32UI texels.
+layout(binding = kRasterizeBwdBindInBlocks) uniform usamplerBuffer InBlocks;
+uint forward_word(uint word, uint b) { return texelFetch(InBlocks, int(kForwardBlocks * word + b)).x; }
 #if EVF_ROWS == 4
-uint blocks_of_isect(uint isect) { return texelFetch(InBlocks, int(isect)).x; }
+uint block_word(uint word, uint b) { return forward_word(word, b); }
 #elif EVF_ROWS == 8
-// Block (R, c) of 4 x 8 pixels holds the forward's blocks (2R, c) and (2R + 1, c) of 4 x 4.
-uint blocks_of_isect(uint isect) {
-  uint m = texelFetch(InBlocks, int(isect)).x, rows = m | (m >> 4u);
-  return (rows & 0xFu) | ((rows >> 4u) & 0xF0u);
+// Block (R, c) of 4 x 8 pixels, b = 4 R + c, holds the forward's blocks (2R, c) and (2R + 1, c)
+// of 4 x 4: 8 R + c and 8 R + 4 + c.
+uint block_word(uint word, uint b) {
+  uint f = b + 4u * (b / 4u);
+  return forward_word(word, f) | forward_word(word, f + 4u);
 }
 #else
 #error the forward's blocks are 4 x 4: the backward's are 4 x 4 or 4 x 8
@@ -177,7 +180,8 @@ void main() {
   ivec2 p0 = tile * int(kTileSize) + ivec2(int(lid % 4u) * 4, int(lid / 4u) * EVF_ROWS);
   vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
   float cy = float(p0.y) + 0.5;
-  uvec2 range = tile_range[tile.y * pc.tiles_x + tile.x];
+  uint tile_index = uint(tile.y) * pc.tiles_x + uint(tile.x);
+  uvec2 range = tile_range[tile_index];
   uint last = range.x;
   uint q0 = block_run_vec4(tile, pc.tiles_x, lid);
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), q0 + 4u * i, range.x); last = max(last, run_last(r##i));
@@ -202,10 +206,11 @@ void main() {
     uint n_load = start < visit_end ? min(n, visit_end - start) : 0u;
     uint n_visit = start < last ? min(n, last - start) : 0u;  // n_visit <= n_load
     EVF_GROUP_BARRIER();  // the previous batch's read-out is done with the partial sums
-    // This block's entries below its last blended one. Every entry below visit_end was loaded by
-    // the forward, which kept its blocks.
-    uint bits = 0u;
-    for (uint e = 0u; e < n_load; ++e) bits |= ((blocks_of_isect(start + e) >> lid) & 1u) << e;
+    // This block's entries below its last blended one. A word with an entry below visit_end was
+    // loaded by the forward, which kept its bit sets; another one's (n_load 0) may hold anything,
+    // and nothing of it is used: no bit survives the masks, the read-out runs no trip.
+    uint word = block_word_index(start, tile_index);
+    uint bits = block_word(word, lid);
     if (n_visit < 32u) bits &= (1u << n_visit) - 1u;
     // Back to front.
     while (bits != 0u) {
@@ -228,10 +233,12 @@ void main() {
       part_c[lid][j] = gc;
     }
     EVF_GROUP_BARRIER();
+    // Each block's bit set, for the blocks that visited each entry.
+    uint words[EVF_BLOCKS];
+    for (uint b = 0u; b < EVF_BLOCKS; ++b) words[b] = block_word(word, b);
     for (uint k = lid; k < n_load; k += EVF_THREADS) {
       uint visited = 0u;  // the blocks that visited entry k
-      for (uint b = 0u; b < EVF_BLOCKS; ++b) visited |= uint(start + k < lasts[b]) << b;
-      visited &= blocks_of_isect(start + k);
+      for (uint b = 0u; b < EVF_BLOCKS; ++b) visited |= uint(start + k < lasts[b]) * ((words[b] >> k) & 1u) << b;
       vec4 sa = vec4(0.0), sb = vec4(0.0);
       float sc = 0.0;
       while (visited != 0u) {

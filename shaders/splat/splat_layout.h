@@ -121,10 +121,14 @@ EVF_BIND(kRasterizeBindOutDepth, 8u, OutDepth)
 // t * 256 + y * 16 + x, so a block's row of 4 is one vec4), tiles_x * tiles_y * 256 entries.
 EVF_BIND(kRasterizeBindOutT, 9u, OutT)
 EVF_BIND(kRasterizeBindOutLast, 10u, OutLast)
-// Block kernels only: the blocks of its tile each loaded intersection's support reaches
-// (support_blocks, one uint by sorted position), written by the forward, read by the backward,
-// which loads only intersections the forward loaded (those before its tile's last blended one).
+// Block kernels only: for each 32-entry word of a tile's list that the forward loaded (entries
+// range.x + 32 w ... + 31), the bit set of its entries in each of the forward's kForwardBlocks
+// blocks of 4 x 4 pixels (support_blocks): kForwardBlocks uints from kForwardBlocks *
+// ((range.x + 32 w) / 32 + tile), distinct for every word of every tile, so the plane holds
+// kForwardBlocks * (entries / 32 + tiles + 1) uints. Written by the forward, read by the backward,
+// which reads only words the forward loaded (those before its tile's last blended entry).
 EVF_BIND(kRasterizeBindOutBlocks, 11u, OutBlocks)
+EVF_CONST(uint, kForwardBlocks, 16u)
 // Block forward only: the sorted keys, in which each tile's workgroup finds its own range (a
 // binary search) and writes it to Ranges for the backward, in place of splat/tile_ranges.
 EVF_BIND(kRasterizeBindSortedKeys, 12u, SortedKeys)
