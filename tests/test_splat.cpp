@@ -213,19 +213,21 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
     r.backward(rs, params, vr, va, grads);
     return Result{grads.download(), rs.outputs().rgb.read<float>(3 * hw), rs.outputs().alpha.read<float>(hw)};
   };
+  // The block kernels take exp(power) of a block's pixels from factors (block_exp): each a few
+  // ulps off exp, a float's rounding of power's own terms, so colours agree within 3e-6.
   auto same = [](const Result& a, const Result& b) {
-    for (size_t i = 0; i < a.rgb.size(); ++i) REQUIRE(a.rgb[i] == Approx(b.rgb[i]).margin(1e-6));
-    for (size_t i = 0; i < a.alpha.size(); ++i) REQUIRE(a.alpha[i] == Approx(b.alpha[i]).margin(1e-6));
-    // Each gradient a sum over pixels, added in another order by each path, the block kernels'
-    // exp(power) from a recurrence over four rows (rows_exp: a few ulps off exp): within 5e-4 of
-    // itself, or on GPUs (whose adds come in any order) of its array's largest magnitude.
+    for (size_t i = 0; i < a.rgb.size(); ++i) REQUIRE(a.rgb[i] == Approx(b.rgb[i]).margin(3e-6));
+    for (size_t i = 0; i < a.alpha.size(); ++i) REQUIRE(a.alpha[i] == Approx(b.alpha[i]).margin(3e-6));
+    // Each gradient a sum over pixels, added in another order by each path, with those
+    // exponentials: within 1e-3 of itself, or on GPUs (whose adds come in any order) of its
+    // array's largest magnitude.
     auto near = [](const std::vector<float>& x, const std::vector<float>& y) {
       REQUIRE(x.size() == y.size());
       if (!test::bit_reproducible()) {
         REQUIRE(test::same_values(x, y));
         return;
       }
-      for (size_t i = 0; i < x.size(); ++i) REQUIRE(x[i] == Approx(y[i]).margin(1e-6).epsilon(5e-4));
+      for (size_t i = 0; i < x.size(); ++i) REQUIRE(x[i] == Approx(y[i]).margin(1e-6).epsilon(1e-3));
     };
     near(a.grads.means, b.grads.means);
     near(a.grads.quats, b.grads.quats);

@@ -19,7 +19,7 @@
 #endif
 // 4 rows measured best on lavapipe (bench raster 100k: 2 and 8 rows slower or equal).
 // EVF_RUNS(X) expands X(i) for each row i of the block; EVF_QUADS(X) X(k) for each group of four
-// rows (rows_exp).
+// rows (block_exp).
 #if EVF_ROWS == 4
 #define EVF_RUNS(X) X(0) X(1) X(2) X(3)
 #define EVF_QUADS(X) X(0)
@@ -128,7 +128,7 @@ Run run_init(ivec2 p0, uint first) {
 }
 
 // Blends Gaussian `idx` (already read) into the run; `G`: its exp(power) at the run's pixels
-// (rows_exp).
+// (block_exp).
 void blend(inout Run r, vec4 G, float opacity, vec3 col, float depth, uint idx) {
   vec4 alpha = min(vec4(kAlphaMax), opacity * G);
   bvec4 use = greaterThan(r.T, vec4(0.0));
@@ -175,7 +175,7 @@ void main() {
   uint lid = gl_LocalInvocationIndex;
   // Block of 4 x EVF_ROWS pixels: 4 blocks per tile row.
   ivec2 p0 = tile * int(kTileSize) + ivec2(int(lid % 4u) * 4, int(lid / 4u) * EVF_ROWS);
-  vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
+  float cxm = float(p0.x) + 2.0;  // the middle of the block's columns
   float cy = float(p0.y) + 0.5;
   vec2 tile_origin = vec2(tile * int(kTileSize));
   uint tile_index = uint(tile.y) * pc.tiles_x + uint(tile.x);
@@ -183,7 +183,7 @@ void main() {
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), range.x);
   EVF_RUNS(EVF_INIT)
 #define EVF_DONE(i) && run_done(r##i)
-#define EVF_EXP(k) rows_exp(rp, a.y - (cy + (4.0 * k + 1.5)), G[4 * k], G[4 * k + 1], G[4 * k + 2], G[4 * k + 3]);
+#define EVF_EXP(k) block_exp(conic, dxm, a.y - (cy + (4.0 * k + 1.5)), G[4 * k], G[4 * k + 1], G[4 * k + 2], G[4 * k + 3]);
 #define EVF_BLEND(i) blend(r##i, G[i], opacity, col, b.z, start + j);
 // Blends the next entry of the bit set into every run; with `found` false, entry 0 with opacity 0.
 // `found` is read once, into `live`, before the entry is taken from `bits` (it may test `bits`).
@@ -196,7 +196,7 @@ void main() {
     vec4 a = proj_a(g), b = proj_b(g);                            \
     vec3 conic = vec3(a.zw, b.x), col = proj_c(g).rgb;            \
     float opacity = live ? b.y : 0.0;                             \
-    RowPower rp = row_power_of(conic, a.x - cx);                  \
+    float dxm = a.x - cxm;                                        \
     vec4 G[EVF_ROWS];                                             \
     EVF_QUADS(EVF_EXP)                                            \
     EVF_RUNS(EVF_BLEND)                                           \

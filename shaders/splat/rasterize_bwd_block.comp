@@ -30,7 +30,7 @@
 #endif
 // 4 rows measured best on lavapipe (bench raster 100k: 2 and 8 rows slower or equal).
 // EVF_RUNS(X) expands X(i) for each row i of the block; EVF_QUADS(X) X(k) for each group of four
-// rows (rows_exp: the forward's groups, so that both take the same exp(power)).
+// rows (block_exp: the forward's groups, so that both take the same exp(power)).
 #if EVF_ROWS == 4
 #define EVF_RUNS(X) X(0) X(1) X(2) X(3)
 #define EVF_QUADS(X) X(0)
@@ -149,7 +149,7 @@ Run run_init(ivec2 p0, uint q, uint first) {
 uint run_last(Run r) { return max(max(r.last.x, r.last.y), max(r.last.z, r.last.w)); }
 
 // Gaussian `idx` (already read) against the run at dy = mean.y - its centres' y, with G its
-// exp(power) there (rows_exp): updates the run's state and adds the run's gradient terms to g
+// exp(power) there (block_exp): updates the run's state and adds the run's gradient terms to g
 // (zeros where no pixel contributed).
 void accumulate(inout Run r, inout Grad g, float dy, vec4 G, float opacity, vec3 col, uint idx) {
   bvec4 live = lessThan(uvec4(idx), r.last);
@@ -178,6 +178,7 @@ void main() {
   ivec2 tile = tile_of_group(pc.tiles_x);
   uint lid = gl_LocalInvocationIndex;
   ivec2 p0 = tile * int(kTileSize) + ivec2(int(lid % 4u) * 4, int(lid / 4u) * EVF_ROWS);
+  float cxm = float(p0.x) + 2.0;  // the middle of the block's columns
   vec4 cx = vec4(p0.x) + vec4(0.5, 1.5, 2.5, 3.5);
   float cy = float(p0.y) + 0.5;
   uint tile_index = uint(tile.y) * pc.tiles_x + uint(tile.x);
@@ -186,7 +187,7 @@ void main() {
   uint q0 = block_run_vec4(tile, pc.tiles_x, lid);
 #define EVF_INIT(i) Run r##i = run_init(p0 + ivec2(0, i), q0 + 4u * i, range.x); last = max(last, run_last(r##i));
   EVF_RUNS(EVF_INIT)
-#define EVF_EXP(k) rows_exp(rp, a.y - (cy + (4.0 * k + 1.5)), G[4 * k], G[4 * k + 1], G[4 * k + 2], G[4 * k + 3]);
+#define EVF_EXP(k) block_exp(conic, dxm, a.y - (cy + (4.0 * k + 1.5)), G[4 * k], G[4 * k + 1], G[4 * k + 2], G[4 * k + 3]);
 #define EVF_ACC(i) accumulate(r##i, g, a.y - (cy + float(i)), G[i], b.y, col, start + j);
   uint count = range.y - range.x;
   // Every invocation keeps every block's `last` in registers, for the read-out. Gaussians at or
@@ -220,7 +221,7 @@ void main() {
       vec4 a = proj_a(gid), b = proj_b(gid);
       vec3 conic = vec3(a.zw, b.x), col = proj_c(gid).rgb;
       vec4 dx = a.x - cx;
-      RowPower rp = row_power_of(conic, dx);
+      float dxm = a.x - cxm;
       vec4 G[EVF_ROWS];
       EVF_QUADS(EVF_EXP)
       Grad g = grad_zero();

@@ -213,41 +213,34 @@ float splat_power(vec3 conic, vec2 d) {
   return -0.5 * (conic.x * d.x * d.x + conic.z * d.y * d.y) - conic.y * d.x * d.y;
 }
 
-// The same exponent over a run of 4 horizontally adjacent pixels, in the pieces the rows of a
-// block share (the block kernels): with dx = mean.x - centre.x (the run's 4 columns) and
-// dy = mean.y - centre.y (the run's row), power = (A + C dy^2) + B dy, A = -conic.x dx^2 / 2,
-// B = -conic.y dx, C = -conic.z / 2. A and B are worked out once a visit, for every row
-// (rows_exp).
-struct RowPower {
-  vec4 A, B;
-  float C;
-};
-RowPower row_power_of(vec3 conic, vec4 dx) {
-  RowPower p;
-  p.A = -0.5 * conic.x * dx * dx;
-  p.B = -conic.y * dx;
-  p.C = -0.5 * conic.z;
-  return p;
-}
-
-// exp(power) at four rows of a run, dy = dm + 1.5, dm + 0.5, dm - 0.5, dm - 1.5 (dm: mean.y minus
-// the middle of the four rows' centres), from two exponentials a column instead of four. About
-// the middle, power(dm + o) = power(dm) + s o + C o^2 with s = B + 2 C dm, so with u = exp(s / 2)
-// the rows are exp(power(dm)) times u^3 exp(9C/4), u exp(C/4), u^-1 exp(C/4), u^-3 exp(9C/4).
-// Safe and exact where it matters: |d power / d dy| <= sqrt(2 lambda |power|) for a quadratic form
-// whose largest eigenvalue is lambda <= 1 / kDilation (the conic of a dilated covariance). So
-// with power(dm) < kRowsExpFloor no row within 1.5 reaches power >= -ln 255, which alpha >= 1/255
-// needs (opacity <= 1): the four are then zero. Above the floor |s / 2| <= 7.1, the clamp
-// never acts and nothing overflows; below it the clamp keeps zero times u finite.
+// exp(power) over a block of 4 x 4 pixels (the block kernels) from six exponentials, not one a
+// pixel: with dx = dxm + a, dy = dm + b (dxm, dm: mean minus the block's middle; a, b in
+// {1.5, 0.5, -0.5, -1.5} for columns 0..3 and rows 0..3), the exponent is the quadratic
+// power(dxm, dm) + a px + b py - (conic.x a^2 + conic.z b^2) / 2 - conic.y a b, px and py its
+// slopes at the middle. So pixel (a, b) is exp(power(dxm, dm)) times ux^(2a) exp(-conic.x a^2 / 2)
+// times uy^(2b) exp(-conic.z b^2 / 2) times w^(4ab), with ux = exp(px / 2), uy = exp(py / 2),
+// w = exp(-conic.y / 4): a column factor, a row factor and a cross factor, all worked out once a
+// visit. Safe and exact where it matters: |grad power| <= sqrt(2 lambda |power|) for a quadratic
+// form whose largest eigenvalue is lambda <= 1 / kDilation (the conic of a dilated covariance). So
+// with power(dxm, dm) < kRowsExpFloor no pixel within 1.5 of the middle in x and y reaches power
+// >= -ln 255, which alpha >= 1/255 needs (opacity <= 1): the sixteen are then zero. Above the
+// floor |px / 2|, |py / 2| <= 7.1, the clamps never act and nothing overflows; below it the clamps
+// keep zero times the factors finite (the middle's exponential is taken into the row factor first).
+// e_i: row i (dy = dm + 1.5 - i), its components columns 0..3 (dx = dxm + 1.5 - k).
 const float kRowsExpFloor = -30.0;
-void rows_exp(RowPower p, float dm, out vec4 e0, out vec4 e1, out vec4 e2, out vec4 e3) {
-  vec4 pm = (p.A + p.C * dm * dm) + p.B * dm;
-  vec4 em = mix(vec4(0.0), exp(pm), greaterThanEqual(pm, vec4(kRowsExpFloor)));
-  vec4 u = exp(clamp(0.5 * p.B + p.C * dm, -20.0, 20.0)), v = 1.0 / u;
-  float c1 = exp(0.25 * p.C), c2 = c1 * c1, c4 = c2 * c2, c9 = (c4 * c4) * c1;
-  vec4 near = em * c1, far = em * c9;
-  e0 = (far * u) * (u * u);
-  e1 = near * u;
-  e2 = near * v;
-  e3 = (far * v) * (v * v);
+void block_exp(vec3 conic, float dxm, float dm, out vec4 e0, out vec4 e1, out vec4 e2, out vec4 e3) {
+  float pm = -0.5 * (conic.x * dxm * dxm + conic.z * dm * dm) - conic.y * dxm * dm;
+  float em = pm >= kRowsExpFloor ? exp(pm) : 0.0;
+  float ux = exp(clamp(-0.5 * (conic.x * dxm + conic.y * dm), -20.0, 20.0)), vx = 1.0 / ux;
+  float uy = exp(clamp(-0.5 * (conic.z * dm + conic.y * dxm), -20.0, 20.0)), vy = 1.0 / uy;
+  float kx = exp(-0.125 * conic.x), kx2 = kx * kx, kx4 = kx2 * kx2, kx9 = (kx4 * kx4) * kx;
+  float ky = exp(-0.125 * conic.z), ky2 = ky * ky, ky4 = ky2 * ky2, ky9 = (ky4 * ky4) * ky;
+  float w1 = exp(-0.25 * conic.y), v1 = 1.0 / w1, w3 = (w1 * w1) * w1, v3 = (v1 * v1) * v1;
+  float w9 = (w3 * w3) * w3, v9 = (v3 * v3) * v3;
+  vec4 col = vec4((ux * ux) * (ux * kx9), ux * kx, vx * kx, (vx * vx) * (vx * kx9));
+  float far = em * ky9, near = em * ky;
+  e0 = (col * vec4(w9, w3, v3, v9)) * ((far * uy) * (uy * uy));
+  e1 = (col * vec4(w3, w1, v1, v3)) * (near * uy);
+  e2 = (col * vec4(v3, v1, w1, w3)) * (near * vy);
+  e3 = (col * vec4(v9, v3, w3, w9)) * ((far * vy) * (vy * vy));
 }
