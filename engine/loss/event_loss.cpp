@@ -60,11 +60,8 @@ bool EventLoss::takes_pairs_at_once(const ExposureFrames& f) const {
          F <= shaderio::kEventPairsMaxFrames && ctx_.caps().fits_bindings(F, 2 + 2 * F);
 }
 
-bool EventLoss::folds(const ExposureFrames& f) const {
-  const uint32_t F = uint32_t(f.u.size());
-  // The _decode backward binds each frame's render too.
-  return takes_pairs_at_once(f) && (f.render_grad.empty() || ctx_.caps().fits_bindings(F, 2 + 3 * F));
-}
+// The _decode backward binds what the plain one does (it takes decode' from the linear frames).
+bool EventLoss::folds(const ExposureFrames& f) const { return takes_pairs_at_once(f); }
 
 void EventLoss::record(gpu::Commands& cmd, const ExposureFrames& f, float weight) {
   if ((!f.grad_in.empty() || !f.render_grad.empty()) && !folds(f))
@@ -250,7 +247,6 @@ void EventLoss::record_fused(gpu::Commands& cmd, const ExposureFrames& f, float 
                  {{shaderio::kEventPairsBindFrames[k], *f.rgb[k]},
                   {shaderio::kEventPairsBwdBindGrads[k], decode ? *f.render_grad[k] : *f.grad[k]},
                   {shaderio::kEventPairsBwdBindGradIns[k], f.grad_in.empty() ? *f.grad[k] : *f.grad_in[k]}});
-    if (decode) binds.push_back({shaderio::kEventPairsBwdBindRenders[k], *f.render[k]});
   }
   cmd.dispatch("loss/event_pairs_bwd" + suffix + (decode ? "_decode" : ""), binds, pc, cmd.linear_groups(groups));
 }
@@ -259,16 +255,15 @@ void EventLoss::record_fused(gpu::Commands& cmd, const ExposureFrames& f, float 
 void EventLoss::check_folded(const ExposureFrames& f) const {
   const size_t F = f.u.size();
   const uint64_t bytes = uint64_t(f.width) * f.height * 12;
-  if ((!f.grad_in.empty() && f.grad_in.size() != F) || f.render.size() != f.render_grad.size() ||
-      (!f.render.empty() && f.render.size() != F))
+  if ((!f.grad_in.empty() && f.grad_in.size() != F) || (!f.render_grad.empty() && f.render_grad.size() != F))
     throw std::invalid_argument("event loss: " + std::to_string(F) + " frames but " + std::to_string(f.grad_in.size()) +
-                                " starting gradients, " + std::to_string(f.render.size()) + " renders and " +
-                                std::to_string(f.render_grad.size()) + " render gradients");
+                                " starting gradients and " + std::to_string(f.render_grad.size()) +
+                                " render gradients");
   for (size_t i = 0; i < F; ++i)
     if ((!f.grad_in.empty() && f.grad_in[i]->size() < bytes) ||
-        (!f.render.empty() && (f.render[i]->size() < bytes || f.render_grad[i]->size() < bytes)))
+        (!f.render_grad.empty() && f.render_grad[i]->size() < bytes))
       throw std::invalid_argument("event loss: frame " + std::to_string(i) +
-                                  " starting gradient, render or render gradient holds less than 3 x H x W floats");
+                                  " starting gradient or render gradient holds less than 3 x H x W floats");
 }
 
 }  // namespace evflow

@@ -88,10 +88,10 @@ struct ExposureFrames {
   uint64_t seed = 0;  // the step's random stream (terms that sample, e.g. the event loss's t_s)
   // Optional gradient plumbing, for terms that fold it (ExposureLossTerm::folds); LossTerms hands
   // each part only to the term it concerns. grad_in: what frame i's gradient starts from instead
-  // of grad[i]'s contents (the image terms' share), for the first term. render, render_grad: the
-  // frames' sRGB renders (rgb[i] = decode(render[i])) and where the last term writes
-  // d(loss)/d(render i), its frame gradient times decode'(render i), instead of writing grad[i].
-  std::vector<const gpu::Buffer*> grad_in, render, render_grad;
+  // of grad[i]'s contents (the image terms' share), for the first term. render_grad: where the
+  // last term writes d(loss)/d(render i) of the frames' sRGB renders (rgb[i] = decode(render i)),
+  // its frame gradient times decode'(render i), instead of writing grad[i].
+  std::vector<const gpu::Buffer*> grad_in, render_grad;
   double time_at(size_t i) const { return t0 + u[i] * (t1 - t0); }
 };
 
@@ -103,7 +103,7 @@ class ExposureLossTerm : public LossTerm {
   // decode'(render[i])), and the unweighted value L into the value slot.
   virtual void record(gpu::Commands& cmd, const ExposureFrames& frames, float weight) = 0;
   void record(gpu::Commands& cmd, const ExposureFrames& frames) { record(cmd, frames, weight()); }
-  // Whether record() honours grad_in, render and render_grad for these frames; without it the
+  // Whether record() honours grad_in and render_grad for these frames; without it the
   // term only adds into grad.
   virtual bool folds(const ExposureFrames&) const { return false; }
 };

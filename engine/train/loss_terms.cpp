@@ -56,7 +56,7 @@ bool LossTerms::record_exposure_terms(gpu::Commands& cmd, const ExposureFrames& 
   for (size_t k = 0; k < exposure_.size(); ++k) {
     ExposureLossTerm& t = *exposure_[k];
     // The renders' gradients are the last term's to write, where it can.
-    if (k + 1 < exposure_.size() || !t.folds(f)) f.render.clear(), f.render_grad.clear();
+    if (k + 1 < exposure_.size() || !t.folds(f)) f.render_grad.clear();
     if (!f.grad_in.empty() && !t.folds(f)) {  // the term adds into grad: start it from grad_in
       for (size_t i = 0; i < f.grad.size(); ++i) copy_grad_in(cmd, f, i);
       f.grad_in.clear();

@@ -407,7 +407,6 @@ std::vector<const gpu::Buffer*> Trainer::record_exposure_terms(const StepStats& 
     else
       image_model_->frame_share(cmd_, i, frame_grad_[i]);
     ef.grad.push_back(&frame_grad_[i]);
-    ef.render.push_back(&image_model_->render(i));
     ef.render_grad.push_back(&image_model_->render_grad(i));
   }
   cmd_.mark("frame shares");

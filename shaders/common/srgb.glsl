@@ -9,10 +9,12 @@ float evf_srgb_decode(float x) {
 float evf_srgb_decode_deriv(float x) {
   return x <= 0.04045 ? 1.0 / 12.92 : (2.4 / 1.055) * pow((x + 0.055) / 1.055, 1.4);
 }
-// decode'(x) from x and its decode y = decode(x), without a power: above the knee decode'(x) =
-// 2.4 y / (x + 0.055). Equal to evf_srgb_decode_deriv up to rounding.
-vec4 evf_srgb_decode_deriv_from(vec4 x, vec4 y) {
-  return mix(2.4 * y / (x + 0.055), vec4(1.0 / 12.92), lessThanEqual(x, vec4(0.04045)));
+// decode'(x) from the decode y = decode(x) alone: above the knee (y > decode(0.04045) =
+// 0.04045 / 12.92) decode'(x) = (2.4 / 1.055) y^(1 - 1 / 2.4). Equal to evf_srgb_decode_deriv up to
+// rounding.
+vec4 evf_srgb_decode_deriv_of_linear(vec4 y) {
+  vec4 power = (2.4 / 1.055) * pow(max(y, vec4(1e-30)), vec4(1.4 / 2.4));
+  return mix(power, vec4(1.0 / 12.92), lessThanEqual(y, vec4(0.04045 / 12.92)));
 }
 float evf_srgb_encode(float y) {
   return y <= 0.0031308 ? y * 12.92 : 1.055 * pow(y, 1.0 / 2.4) - 0.055;

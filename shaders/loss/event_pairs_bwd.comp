@@ -6,8 +6,9 @@
 // EVF_DECODE_RENDER (the "_decode" builds, when this term is the last to add to the frames'
 // gradients): the sum is also taken through the sRGB decode of each frame's render, so that the
 // output is the render's gradient and the image model's decode_bwd pass over every frame is not
-// needed. decode' comes from the render and its linear frame without a power
-// (evf_srgb_decode_deriv_from): decode_bwd's values up to rounding.
+// needed. decode' comes from the linear frame alone (evf_srgb_decode_deriv_of_linear): decode_bwd's
+// values up to rounding, and no read of the renders (their planes, read beside the frames', were a
+// sixth of this kernel).
 #extension GL_GOOGLE_include_directive : require
 #include "loss/loss_layout.h"
 #include "common/dispatch.glsl"
@@ -25,9 +26,7 @@ layout(binding = kEventPairsBwdBindSums) uniform samplerBuffer Sums;  // the pai
 EVF_FRAMES(EVF_GRAD_BINDING)
 #ifdef EVF_DECODE_RENDER
 #include "common/srgb.glsl"
-#define EVF_RENDER_BINDING(k) layout(binding = kEventPairsBwdBindRender##k) uniform samplerBuffer Render##k;
-EVF_FRAMES(EVF_RENDER_BINDING)
-#define EVF_OUT(k, i, v) grad##k[i] = (v) * evf_srgb_decode_deriv_from(texelFetch(Render##k, int(i)), texelFetch(Frame##k, int(i)));
+#define EVF_OUT(k, i, v) grad##k[i] = (v) * evf_srgb_decode_deriv_of_linear(texelFetch(Frame##k, int(i)));
 #else
 #define EVF_OUT(k, i, v) grad##k[i] = (v);
 #endif

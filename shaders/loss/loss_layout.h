@@ -199,7 +199,7 @@ EVF_BIND(kEventPairValueBindValues, 1u, Values)
 // loss/event_pairs_f<F> and loss/event_pairs_bwd_f<F>: the counts and frame k's render
 // (texels), then the forward's partial sums, the backward's sums (texels), frame k's gradient and
 // what it adds to (texels: a view of the same buffer, or the image terms' share of the frame);
-// the _decode builds also frame k's sRGB render (texels), and write the render's gradient.
+// the _decode builds write the render's gradient instead.
 EVF_BIND(kEventPairsBindCounts, 0u, Counts)
 EVF_BIND(kEventPairsBindPartials, 1u, Partials)
 EVF_BIND(kEventPairsBwdBindSums, 1u, Sums)
@@ -230,15 +230,6 @@ EVF_BIND(kEventPairsBwdBindGradIn5, 25u, GradIn5)
 EVF_BIND(kEventPairsBwdBindGradIn6, 26u, GradIn6)
 EVF_BIND(kEventPairsBwdBindGradIn7, 27u, GradIn7)
 EVF_BIND(kEventPairsBwdBindGradIn8, 28u, GradIn8)
-EVF_BIND(kEventPairsBwdBindRender0, 29u, Render0)
-EVF_BIND(kEventPairsBwdBindRender1, 30u, Render1)
-EVF_BIND(kEventPairsBwdBindRender2, 31u, Render2)
-EVF_BIND(kEventPairsBwdBindRender3, 32u, Render3)
-EVF_BIND(kEventPairsBwdBindRender4, 33u, Render4)
-EVF_BIND(kEventPairsBwdBindRender5, 34u, Render5)
-EVF_BIND(kEventPairsBwdBindRender6, 35u, Render6)
-EVF_BIND(kEventPairsBwdBindRender7, 36u, Render7)
-EVF_BIND(kEventPairsBwdBindRender8, 37u, Render8)
 // loss/event_pairs_value
 EVF_BIND(kEventPairsValueBindSums, 0u, Sums)
 EVF_BIND(kEventPairsValueBindValues, 1u, Values)
@@ -303,10 +294,6 @@ inline constexpr BindSlot kEventPairsBwdBindGradIns[] = {
     kEventPairsBwdBindGradIn0, kEventPairsBwdBindGradIn1, kEventPairsBwdBindGradIn2, kEventPairsBwdBindGradIn3,
     kEventPairsBwdBindGradIn4, kEventPairsBwdBindGradIn5, kEventPairsBwdBindGradIn6, kEventPairsBwdBindGradIn7,
     kEventPairsBwdBindGradIn8};
-inline constexpr BindSlot kEventPairsBwdBindRenders[] = {
-    kEventPairsBwdBindRender0, kEventPairsBwdBindRender1, kEventPairsBwdBindRender2, kEventPairsBwdBindRender3,
-    kEventPairsBwdBindRender4, kEventPairsBwdBindRender5, kEventPairsBwdBindRender6, kEventPairsBwdBindRender7,
-    kEventPairsBwdBindRender8};
 static_assert(sizeof(kEventPairsBindFrames) / sizeof(BindSlot) == kEventPairsMaxFrames);
 #endif
 
