@@ -213,8 +213,8 @@ TEST_CASE("splat kernels: block and per-pixel, compare-and-swap and subgroup-red
     r.backward(rs, params, vr, va, grads);
     return Result{grads.download(), rs.outputs().rgb.read<float>(3 * hw), rs.outputs().alpha.read<float>(hw)};
   };
-  // The block kernels take exp(power) of a block's pixels from factors (block_exp): each a few
-  // ulps off exp, a float's rounding of power's own terms, so colours agree within 3e-6.
+  // The block kernels take exp(power) of a block's pixels as products of factors (block_exp),
+  // which round differently from one exp a pixel: colours agree within 3e-6.
   auto same = [](const Result& a, const Result& b) {
     for (size_t i = 0; i < a.rgb.size(); ++i) REQUIRE(a.rgb[i] == Approx(b.rgb[i]).margin(3e-6));
     for (size_t i = 0; i < a.alpha.size(); ++i) REQUIRE(a.alpha[i] == Approx(b.alpha[i]).margin(3e-6));

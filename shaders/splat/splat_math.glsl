@@ -222,15 +222,15 @@ float splat_power(vec3 conic, vec2 d) {
 // w = exp(-conic.y / 4): a column factor, a row factor and a cross factor, all worked out once a
 // visit. Safe and exact where it matters: |grad power| <= sqrt(2 lambda |power|) for a quadratic
 // form whose largest eigenvalue is lambda <= 1 / kDilation (the conic of a dilated covariance). So
-// with power(dxm, dm) < kRowsExpFloor no pixel within 1.5 of the middle in x and y reaches power
+// with power(dxm, dm) < kBlockExpFloor no pixel within 1.5 of the middle in x and y reaches power
 // >= -ln 255, which alpha >= 1/255 needs (opacity <= 1): the sixteen are then zero. Above the
 // floor |px / 2|, |py / 2| <= 7.1, the clamps never act and nothing overflows; below it the clamps
 // keep zero times the factors finite (the middle's exponential is taken into the row factor first).
 // e_i: row i (dy = dm + 1.5 - i), its components columns 0..3 (dx = dxm + 1.5 - k).
-const float kRowsExpFloor = -30.0;
+const float kBlockExpFloor = -30.0;
 void block_exp(vec3 conic, float dxm, float dm, out vec4 e0, out vec4 e1, out vec4 e2, out vec4 e3) {
   float pm = -0.5 * (conic.x * dxm * dxm + conic.z * dm * dm) - conic.y * dxm * dm;
-  float em = pm >= kRowsExpFloor ? exp(pm) : 0.0;
+  float em = pm >= kBlockExpFloor ? exp(pm) : 0.0;
   float ux = exp(clamp(-0.5 * (conic.x * dxm + conic.y * dm), -20.0, 20.0)), vx = 1.0 / ux;
   float uy = exp(clamp(-0.5 * (conic.z * dm + conic.y * dxm), -20.0, 20.0)), vy = 1.0 / uy;
   float kx = exp(-0.125 * conic.x), kx2 = kx * kx, kx4 = kx2 * kx2, kx9 = (kx4 * kx4) * kx;
