@@ -71,8 +71,6 @@ class ImageModel {
   // needed when the exposure terms wrote render_grad() themselves (LossTerms::record_exposure_terms).
   void render_grads(gpu::Commands& cmd, const std::vector<const gpu::Buffer*>& frame_grads);
   const gpu::Buffer& render_grad(uint32_t i) const { return identity_ ? v_prediction_ : v_render_[i]; }
-  // The last forward's render of frame i (sRGB).
-  const gpu::Buffer& render(uint32_t i) const { return *renders_.at(i); }
 
  private:
   void colour(gpu::Commands& cmd, uint32_t op, const gpu::Buffer& x, const gpu::Buffer& g, const gpu::Buffer& y) {
